@@ -1,0 +1,35 @@
+#include "solver/multibody/data.hpp"
+
+namespace stride {
+
+Data::Data(const Model& model) {
+  const size_t n = static_cast<size_t>(model.njoints());
+  const int nv = model.nv;
+  liMi.assign(n, SE3::Identity());
+  oMi.assign(n, SE3::Identity());
+  v.assign(n, Vector6d::Zero());
+  a.assign(n, Vector6d::Zero());
+  oMf.assign(static_cast<size_t>(model.nframes()), SE3::Identity());
+  a_gf.assign(n, Vector6d::Zero());
+  f.assign(n, Vector6d::Zero());
+  tau = Eigen::VectorXd::Zero(nv);
+  nle = Eigen::VectorXd::Zero(nv);
+  g = Eigen::VectorXd::Zero(nv);
+  J = Matrix6Xd::Zero(6, nv);
+  oYcrb.assign(n, Inertia::Zero());
+  ov.assign(n, Vector6d::Zero());
+  M = Eigen::MatrixXd::Zero(nv, nv);
+  oYaba.assign(n, Matrix6d::Zero());
+  of.assign(n, Vector6d::Zero());
+  oc.assign(n, Vector6d::Zero());
+  oa.assign(n, Vector6d::Zero());
+  U = Matrix6Xd::Zero(6, nv);
+  Dinv = Eigen::VectorXd::Zero(nv);
+  u = Eigen::VectorXd::Zero(nv);
+  ddq = Eigen::VectorXd::Zero(nv);
+  mass = model.totalMass();
+  Jcom = Eigen::Matrix3Xd::Zero(3, nv);
+  Ag = Matrix6Xd::Zero(6, nv);
+}
+
+}  // namespace stride

@@ -1,0 +1,208 @@
+#include "solver/multibody/urdf.hpp"
+
+#include <console_bridge/console.h>
+#include <tinyxml.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace stride {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+[[noreturn]] void fail(const std::string& source, const std::string& what) {
+  throw UrdfError("URDF '" + source + "': " + what);
+}
+
+std::string where(const TiXmlElement* e) { return " (line " + std::to_string(e->Row()) + ")"; }
+
+// Structural checks on the raw XML before urdfdom sees it, so that every error names the element
+// and its line: urdfdom itself only logs to the console and returns null.
+void validateStructure(const std::string& xml, const std::string& source) {
+  TiXmlDocument doc;
+  doc.Parse(xml.c_str());
+  if (doc.Error()) {
+    fail(source, "malformed XML at line " + std::to_string(doc.ErrorRow()) + ", column " +
+                     std::to_string(doc.ErrorCol()) + ": " + doc.ErrorDesc());
+  }
+  const TiXmlElement* robot = doc.RootElement();
+  if (!robot || std::string(robot->Value()) != "robot")
+    fail(source, "the root element must be <robot>");
+  std::set<std::string> links;
+  for (const TiXmlElement* l = robot->FirstChildElement("link"); l; l = l->NextSiblingElement("link")) {
+    const char* name = l->Attribute("name");
+    if (!name || !*name) fail(source, "<link> without a name" + where(l));
+    if (!links.insert(name).second) fail(source, "link '" + std::string(name) + "' is defined twice" + where(l));
+  }
+  if (links.empty()) fail(source, "no <link> element");
+  std::map<std::string, std::string> parent_joint_of;     // child link -> joint
+  std::map<std::string, std::vector<std::string>> children;  // parent link -> child links
+  std::set<std::string> joints;
+  static const std::set<std::string> kSupported = {"revolute", "continuous", "prismatic", "fixed"};
+  for (const TiXmlElement* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
+    const char* name = j->Attribute("name");
+    if (!name || !*name) fail(source, "<joint> without a name" + where(j));
+    const std::string jn = name;
+    if (!joints.insert(jn).second) fail(source, "joint '" + jn + "' is defined twice" + where(j));
+    const char* type = j->Attribute("type");
+    if (!type) fail(source, "joint '" + jn + "' has no type" + where(j));
+    if (!kSupported.count(type))
+      fail(source, "joint '" + jn + "' has type '" + type + "'" + where(j) +
+                       ", which Stride does not support (revolute, continuous, prismatic, fixed; a "
+                       "floating base is the root joint chosen by the caller)");
+    const TiXmlElement* p = j->FirstChildElement("parent");
+    const TiXmlElement* c = j->FirstChildElement("child");
+    const char* pl = p ? p->Attribute("link") : nullptr;
+    const char* cl = c ? c->Attribute("link") : nullptr;
+    if (!pl) fail(source, "joint '" + jn + "' has no <parent link=...>" + where(j));
+    if (!cl) fail(source, "joint '" + jn + "' has no <child link=...>" + where(j));
+    if (!links.count(pl)) fail(source, "joint '" + jn + "' names a parent link '" + pl + "' that does not exist" + where(j));
+    if (!links.count(cl)) fail(source, "joint '" + jn + "' names a child link '" + cl + "' that does not exist" + where(j));
+    if (parent_joint_of.count(cl))
+      fail(source, "link '" + std::string(cl) + "' is the child of two joints, '" +
+                       parent_joint_of[cl] + "' and '" + jn + "'" + where(j) +
+                       ": kinematic loops are not supported");
+    parent_joint_of[cl] = jn;
+    children[pl].push_back(cl);
+  }
+  std::vector<std::string> roots;
+  for (const auto& l : links)
+    if (!parent_joint_of.count(l)) roots.push_back(l);
+  if (roots.empty())
+    fail(source, "no root link: every link is the child of a joint, so the joints form a loop");
+  if (roots.size() > 1) {
+    std::string names;
+    for (const auto& r : roots) names += (names.empty() ? "'" : ", '") + r + "'";
+    fail(source, "several root links (" + names + "): the links must form one tree");
+  }
+  // Every link must hang from the root; a link on a cycle cannot.
+  std::set<std::string> reached;
+  std::function<void(const std::string&)> visit = [&](const std::string& l) {
+    if (!reached.insert(l).second) return;
+    for (const auto& c : children[l]) visit(c);
+  };
+  visit(roots[0]);
+  for (const auto& l : links)
+    if (!reached.count(l))
+      fail(source, "link '" + l + "' (child of joint '" + parent_joint_of[l] +
+                       "') is not connected to the root link '" + roots[0] + "': kinematic loop");
+}
+
+// Collects urdfdom's console messages while it parses, to put them in our error.
+class CaptureLog : public console_bridge::OutputHandler {
+ public:
+  CaptureLog() { console_bridge::useOutputHandler(this); }
+  ~CaptureLog() override { console_bridge::restorePreviousOutputHandler(); }
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN) messages += (messages.empty() ? "" : "; ") + text;
+  }
+  std::string messages;
+};
+
+SE3 toSE3(const urdf::Pose& pose) {
+  const Eigen::Quaterniond quat(pose.rotation.w, pose.rotation.x, pose.rotation.y, pose.rotation.z);
+  return SE3(quat.normalized().toRotationMatrix(),
+             Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z));
+}
+
+Inertia linkInertia(const urdf::Link& link) {
+  if (!link.inertial) return Inertia::Zero();
+  const urdf::Inertial& in = *link.inertial;
+  Eigen::Matrix3d I;
+  I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+  // The URDF tensor is about the centre of mass, in the <inertial><origin> frame.
+  return Inertia::FromMassComInertia(in.mass, Eigen::Vector3d::Zero(), I).transformedBy(toSE3(in.origin));
+}
+
+struct Builder {
+  Model& model;
+  const std::string& source;
+
+  // Adds `link` carried by joint `joint`, whose frame is at `placement` in that joint's frame.
+  void addLink(const urdf::Link& link, int joint, int parent_frame, const SE3& placement) {
+    model.appendBodyToJoint(joint, linkInertia(link), placement);
+    Frame body;
+    body.name = link.name;
+    body.type = FrameType::Body;
+    body.parentJoint = joint;
+    body.parentFrame = parent_frame;
+    body.placement = placement;
+    const int body_frame = model.addFrame(body);
+    for (const auto& uj : link.child_joints) {  // urdfdom lists them sorted by name
+      const urdf::Link& child = *urdf_model->getLink(uj->child_link_name);
+      const SE3 at = placement * toSE3(uj->parent_to_joint_origin_transform);
+      if (uj->type == urdf::Joint::FIXED) {
+        Frame fj;
+        fj.name = uj->name;
+        fj.type = FrameType::FixedJoint;
+        fj.parentJoint = joint;
+        fj.parentFrame = body_frame;
+        fj.placement = at;
+        addLink(child, joint, model.addFrame(fj), at);
+        continue;
+      }
+      const JointType type =
+          uj->type == urdf::Joint::PRISMATIC ? JointType::Prismatic : JointType::Revolute;
+      const Eigen::Vector3d axis(uj->axis.x, uj->axis.y, uj->axis.z);
+      if (axis.norm() < 1e-9) fail(source, "joint '" + uj->name + "' has a zero <axis>");
+      const int id = model.addJoint(joint, type, at, uj->name, axis);
+      const int jf = model.getFrameId(uj->name);
+      model.frames[jf].parentFrame = body_frame;
+      double lo = -kInf, hi = kInf, vel = kInf, eff = kInf;
+      if (uj->limits) {
+        if (uj->type != urdf::Joint::CONTINUOUS) lo = uj->limits->lower, hi = uj->limits->upper;
+        if (uj->limits->velocity > 0) vel = uj->limits->velocity;
+        if (uj->limits->effort > 0) eff = uj->limits->effort;
+      }
+      if (lo > hi) fail(source, "joint '" + uj->name + "' has lower limit above its upper limit");
+      model.setJointLimits(id, lo, hi, vel, eff);
+      addLink(child, id, jf, SE3::Identity());
+    }
+  }
+  const urdf::ModelInterface* urdf_model = nullptr;
+};
+
+}  // namespace
+
+Model buildModelFromUrdfString(const std::string& xml, RootJoint root, const std::string& source) {
+  validateStructure(xml, source);
+  urdf::ModelInterfaceSharedPtr urdf_model;
+  {
+    CaptureLog capture;
+    urdf_model = urdf::parseURDF(xml);
+    if (!urdf_model) fail(source, "urdfdom could not parse it: " + capture.messages);
+  }
+  Model model;
+  model.name = urdf_model->getName();
+  Builder builder{model, source};
+  builder.urdf_model = urdf_model.get();
+  const urdf::Link& root_link = *urdf_model->getRoot();
+  try {
+    if (root == RootJoint::FreeFlyer) {
+      const int ff = model.addJoint(0, JointType::FreeFlyer, SE3::Identity(), "root_joint");
+      builder.addLink(root_link, ff, model.getFrameId("root_joint"), SE3::Identity());
+    } else {
+      builder.addLink(root_link, 0, 0, SE3::Identity());
+    }
+  } catch (const std::invalid_argument& e) {
+    fail(source, e.what());
+  }
+  return model;
+}
+
+Model buildModelFromUrdf(const std::string& path, RootJoint root) {
+  std::ifstream in(path);
+  if (!in) throw UrdfError("URDF '" + path + "': file does not exist or cannot be read");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return buildModelFromUrdfString(buffer.str(), root, path);
+}
+
+}  // namespace stride

@@ -1,0 +1,252 @@
+// stride-check-dynamics REF.json [--robots-dir DIR]
+//
+// Recomputes, for every sample of a reference file (format: ../shared/reference/README.md), every
+// quantity Stride provides, and prints one line per quantity with the largest error over the
+// samples, max|x - ref| / max(1, max|ref|). Exits 1 when any computed quantity is above its
+// tolerance, 2 when the file or the robot cannot be loaded. Quantities the file holds that Stride
+// does not compute yet are listed as "not yet computed"; keys it does not know are listed too.
+// JSON is read with yaml-cpp (JSON is a subset of YAML 1.2), so no extra dependency is needed.
+
+#include <yaml-cpp/yaml.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "solver/multibody/aba.hpp"
+#include "solver/multibody/center_of_mass.hpp"
+#include "solver/multibody/centroidal.hpp"
+#include "solver/multibody/crba.hpp"
+#include "solver/multibody/frames.hpp"
+#include "solver/multibody/jacobian.hpp"
+#include "solver/multibody/rnea.hpp"
+#include "solver/multibody/urdf.hpp"
+
+namespace fs = std::filesystem;
+using namespace stride;
+
+namespace {
+
+constexpr double kTolerance = 1e-8;
+constexpr double kDerivativeTolerance = 1e-7;
+
+Eigen::VectorXd toVector(const YAML::Node& node) {
+  Eigen::VectorXd v(static_cast<Eigen::Index>(node.size()));
+  for (std::size_t k = 0; k < node.size(); ++k) v[static_cast<Eigen::Index>(k)] = node[k].as<double>();
+  return v;
+}
+
+// max|x - ref| / max(1, max|ref|); +inf when the sizes differ or x is not finite.
+double relativeError(const Eigen::VectorXd& x, const Eigen::VectorXd& ref) {
+  if (x.size() != ref.size() || !x.allFinite()) return std::numeric_limits<double>::infinity();
+  if (ref.size() == 0) return 0.0;
+  return (x - ref).cwiseAbs().maxCoeff() / std::max(1.0, ref.cwiseAbs().maxCoeff());
+}
+
+Eigen::VectorXd rowMajor(const Eigen::MatrixXd& m) {
+  Eigen::VectorXd out(m.size());
+  for (Eigen::Index r = 0; r < m.rows(); ++r)
+    for (Eigen::Index c = 0; c < m.cols(); ++c) out[r * m.cols() + c] = m(r, c);
+  return out;
+}
+
+struct Sample {
+  Eigen::VectorXd q, v, a, tau;
+};
+
+// A quantity Stride computes: the error of one sample, or nullopt when the sample lacks it.
+using Check = std::function<std::optional<double>(const YAML::Node& sample, const Sample& s)>;
+
+struct Quantity {
+  std::string name;
+  double tolerance;
+  Check check;  // empty: not yet computed
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Check Stride's dynamics against reference values from an independent library"};
+  std::string ref_path, robots_dir = "../shared/robots";
+  app.add_option("reference", ref_path, "reference JSON file")->required();
+  app.add_option("--robots-dir", robots_dir,
+                 "folder the reference's `urdf` path is relative to (default ../shared/robots, "
+                 "else the robots/ folder beside the reference's folder)");
+  CLI11_PARSE(app, argc, argv);
+
+  YAML::Node ref;
+  try {
+    ref = YAML::LoadFile(ref_path);
+  } catch (const std::exception& e) {
+    std::cerr << "error: cannot read reference '" << ref_path << "': " << e.what() << "\n";
+    return 2;
+  }
+  for (const char* key : {"robot", "urdf", "root_joint", "nq", "nv", "samples"})
+    if (!ref[key]) {
+      std::cerr << "error: reference '" << ref_path << "' has no '" << key << "' entry\n";
+      return 2;
+    }
+
+  fs::path dir = robots_dir;
+  if (!app.count("--robots-dir") && !fs::exists(dir / ref["urdf"].as<std::string>()))
+    dir = fs::path(ref_path).parent_path() / ".." / "robots";
+  const fs::path urdf = dir / ref["urdf"].as<std::string>();
+  const std::string root = ref["root_joint"].as<std::string>();
+  if (root != "free-flyer" && root != "fixed") {
+    std::cerr << "error: unknown root_joint '" << root << "' (free-flyer or fixed)\n";
+    return 2;
+  }
+
+  Model model;
+  try {
+    model = buildModelFromUrdf(urdf.string(), root == "fixed" ? RootJoint::Fixed : RootJoint::FreeFlyer);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  }
+  if (ref["gravity"]) model.gravity = toVector(ref["gravity"]);
+  Data data(model);
+
+  std::printf("robot %s (%s): nq %d, nv %d, %d joints, %d frames, %zu samples\n",
+              ref["robot"].as<std::string>().c_str(), urdf.string().c_str(), model.nq, model.nv,
+              model.njoints() - 1, model.nframes(), ref["samples"].size());
+
+  // Structure first: a different joint order would make every comparison meaningless.
+  bool structure_ok = model.nq == ref["nq"].as<int>() && model.nv == ref["nv"].as<int>();
+  if (ref["joint_names"]) {
+    std::vector<std::string> ours;
+    for (int i = 1; i < model.njoints(); ++i)
+      if (model.joints[i].type != JointType::FreeFlyer) ours.push_back(model.joints[i].name);
+    const auto theirs = ref["joint_names"].as<std::vector<std::string>>();
+    if (ours != theirs) {
+      std::printf("%-22s FAIL (joint order differs from the reference)\n", "joint_names");
+      structure_ok = false;
+    } else {
+      std::printf("%-22s ok (%zu joints, same order)\n", "joint_names", ours.size());
+    }
+  }
+  if (!structure_ok) {
+    std::printf("FAIL: model dimensions or joint order differ from the reference\n");
+    return 1;
+  }
+  bool all_ok = true;
+  if (ref["total_mass"]) {
+    // The reference sums every body, including those fixed to the world (a fixed base).
+    const double m = model.totalMass() + model.fixedMass();
+    const double err = std::abs(m - ref["total_mass"].as<double>()) / std::max(1.0, m);
+    const bool ok = err <= kTolerance;
+    all_ok &= ok;
+    std::printf("%-22s %.3e  %s\n", "total_mass", err, ok ? "ok" : "FAIL");
+  }
+
+  auto vec = [](const YAML::Node& s, const char* key) { return toVector(s[key]); };
+  std::vector<Quantity> quantities = {
+      {"rnea", kTolerance,
+       [&](const YAML::Node& n, const Sample& s) {
+         return relativeError(rnea(model, data, s.q, s.v, s.a), vec(n, "rnea"));
+       }},
+      {"mass_matrix", kTolerance,
+       [&](const YAML::Node& n, const Sample& s) {
+         return relativeError(rowMajor(crba(model, data, s.q)), vec(n, "mass_matrix"));
+       }},
+      {"nonlinear_effects", kTolerance,
+       [&](const YAML::Node& n, const Sample& s) {
+         return relativeError(nonLinearEffects(model, data, s.q, s.v), vec(n, "nonlinear_effects"));
+       }},
+      {"gravity_torque", kTolerance,
+       [&](const YAML::Node& n, const Sample& s) {
+         return relativeError(computeGeneralizedGravity(model, data, s.q), vec(n, "gravity_torque"));
+       }},
+      {"aba", kTolerance,
+       [&](const YAML::Node& n, const Sample& s) {
+         return relativeError(aba(model, data, s.q, s.v, s.tau), vec(n, "aba"));
+       }},
+      {"com", kTolerance,
+       [&](const YAML::Node& n, const Sample& s) {
+         return relativeError(centerOfMass(model, data, s.q), vec(n, "com"));
+       }},
+      {"centroidal_momentum", kTolerance,
+       [&](const YAML::Node& n, const Sample& s) {
+         return relativeError(computeCentroidalMomentum(model, data, s.q, s.v),
+                              vec(n, "centroidal_momentum"));
+       }},
+      {"frames", kTolerance,
+       [&](const YAML::Node& n, const Sample& s) -> std::optional<double> {
+         computeJointJacobians(model, data, s.q);
+         updateFramePlacements(model, data);
+         Matrix6Xd J(6, model.nv);
+         double worst = 0;
+         for (const auto& entry : n["frames"]) {
+           const std::string name = entry.first.as<std::string>();
+           if (!model.existFrame(name)) {
+             std::printf("  frame '%s' does not exist in the model\n", name.c_str());
+             return std::numeric_limits<double>::infinity();
+           }
+           const int id = model.getFrameId(name);
+           const YAML::Node& f = entry.second;
+           worst = std::max(worst, relativeError(data.oMf[id].p, toVector(f["translation"])));
+           worst = std::max(worst, relativeError(rowMajor(data.oMf[id].R), toVector(f["rotation"])));
+           getFrameJacobian(model, data, id, ReferenceFrame::LocalWorldAligned, J);
+           worst = std::max(worst, relativeError(rowMajor(J), toVector(f["jacobian_local_world_aligned"])));
+         }
+         return worst;
+       }},
+      // Provided by the derivatives and contact dynamics issue.
+      {"drnea_dq", kDerivativeTolerance, {}},
+      {"drnea_dv", kDerivativeTolerance, {}},
+      {"daba_dq", kDerivativeTolerance, {}},
+      {"daba_dv", kDerivativeTolerance, {}},
+      {"contact_dynamics", kTolerance, {}},
+      {"impulse_dynamics", kTolerance, {}},
+  };
+
+  const std::set<std::string> inputs = {"q", "v", "a", "tau"};
+  std::set<std::string> known(inputs);
+  for (const auto& qd : quantities) known.insert(qd.name);
+  std::set<std::string> unknown;
+
+  std::map<std::string, double> worst;
+  std::map<std::string, int> seen;
+  for (const auto& sample : ref["samples"]) {
+    for (const auto& entry : sample)
+      if (!known.count(entry.first.as<std::string>())) unknown.insert(entry.first.as<std::string>());
+    Sample s{vec(sample, "q"), vec(sample, "v"), vec(sample, "a"), vec(sample, "tau")};
+    for (const auto& qd : quantities) {
+      if (!sample[qd.name]) continue;
+      ++seen[qd.name];
+      if (!qd.check) continue;
+      double err;
+      try {
+        err = qd.check(sample, s).value_or(0.0);
+      } catch (const std::exception& e) {
+        std::printf("  %s: %s\n", qd.name.c_str(), e.what());
+        err = std::numeric_limits<double>::infinity();
+      }
+      worst[qd.name] = std::max(worst[qd.name], err);
+    }
+  }
+
+  for (const auto& qd : quantities) {
+    if (!seen.count(qd.name)) {
+      std::printf("%-22s -          not in this reference file\n", qd.name.c_str());
+    } else if (!qd.check) {
+      std::printf("%-22s -          not yet computed (%d samples)\n", qd.name.c_str(), seen[qd.name]);
+    } else {
+      const bool ok = worst[qd.name] <= qd.tolerance;
+      all_ok &= ok;
+      std::printf("%-22s %.3e  %s (tolerance %.0e, %d samples)\n", qd.name.c_str(),
+                  worst[qd.name], ok ? "ok" : "FAIL", qd.tolerance, seen[qd.name]);
+    }
+  }
+  for (const auto& k : unknown) std::printf("%-22s -          unknown key, not checked\n", k.c_str());
+  std::printf("%s\n", all_ok ? "PASS" : "FAIL");
+  return all_ok ? 0 : 1;
+}
