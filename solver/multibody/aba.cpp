@@ -26,7 +26,7 @@ const Eigen::VectorXd& aba(const Model& model, Data& data,
       data.J.middleCols<6>(j.idx_v) = oMi.toActionMatrix();
       vJ = data.J.middleCols<6>(j.idx_v) * v.segment<6>(j.idx_v);
     } else {
-      data.J.col(j.idx_v) = oMi.act(jointSubspaceColumn(j, 0));
+      data.J.col(j.idx_v) = jointSubspaceWorld(j, oMi);
       vJ = data.J.col(j.idx_v) * v[j.idx_v];
     }
     data.ov[i] = data.ov[j.parent] + vJ;

@@ -12,7 +12,7 @@ const Matrix6Xd& updateJointJacobians(const Model& model, Data& data) {
     if (j.type == JointType::FreeFlyer) {
       data.J.middleCols<6>(j.idx_v) = oMi.toActionMatrix();
     } else {
-      data.J.col(j.idx_v) = oMi.act(jointSubspaceColumn(j, 0));
+      data.J.col(j.idx_v) = jointSubspaceWorld(j, oMi);
     }
   }
   return data.J;

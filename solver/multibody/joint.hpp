@@ -82,6 +82,22 @@ inline Vector6d jointSubspaceColumn(const Joint& j, int k) {
   return s;
 }
 
+// The motion subspace of a 1-dof joint in the world frame, oMi.act(S): for an aligned axis the
+// rotation axis is a column of R, with no product at all.
+inline Vector6d jointSubspaceWorld(const Joint& j, const SE3& oMi) {
+  Vector6d s;
+  if (j.type == JointType::Revolute) {
+    const Eigen::Vector3d w = j.alignedAxis >= 0 ? Eigen::Vector3d(oMi.R.col(j.alignedAxis))
+                                                  : Eigen::Vector3d(oMi.R * j.axis);
+    s.head<3>() = oMi.p.cross(w);
+    s.tail<3>() = w;
+  } else {  // prismatic
+    s.head<3>().noalias() = oMi.R * j.axis;
+    s.tail<3>().setZero();
+  }
+  return s;
+}
+
 // v_J = S * qd_j, in the joint frame.
 inline Vector6d jointMotion(const Joint& j, const double* vj) {
   Vector6d m;

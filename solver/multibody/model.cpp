@@ -59,8 +59,17 @@ int Model::addJoint(int parent, JointType type, const SE3& placement, const std:
                     const Eigen::Vector3d& axis) {
   if (parent < 0 || parent >= njoints())
     throw std::invalid_argument("Model::addJoint: joint '" + jname + "' has no valid parent");
-  if (joint_index_.count(jname) || frame_index_.count(jname))
-    throw std::invalid_argument("Model::addJoint: name '" + jname + "' is already used");
+  if (joint_index_.count(jname))
+    throw std::invalid_argument("Model::addJoint: a joint named '" + jname + "' exists");
+  {
+    // Depth-first order (ARCHITECTURE.md §3): every subtree's dofs must stay contiguous.
+    bool on_path = parent == 0;
+    for (int a = njoints() - 1; a > 0 && !on_path; a = joints[a].parent) on_path = a == parent;
+    if (!on_path)
+      throw std::invalid_argument("Model::addJoint: joint '" + jname +
+                                  "' breaks depth-first order (its parent must be the last joint "
+                                  "added or one of its ancestors)");
+  }
   if (type == JointType::Universe)
     throw std::invalid_argument("Model::addJoint: '" + jname + "' cannot be a universe joint");
   if (type == JointType::FreeFlyer && parent != 0)
@@ -94,6 +103,10 @@ int Model::addJoint(int parent, JointType type, const SE3& placement, const std:
       break;
     }
   for (int k = 0; k < j.nv; ++k) parentDof.push_back(k == 0 ? above : j.idx_v + k - 1);
+  for (int k = 0; k < j.nv; ++k) {
+    nvSubtree.push_back(0);
+    for (int r = j.idx_v + k; r >= 0; r = parentDof[r]) ++nvSubtree[r];
+  }
 
   const int id = njoints();
   joints.push_back(j);
@@ -143,14 +156,22 @@ void Model::appendBodyToJoint(int joint, const Inertia& Y, const SE3& placement)
 }
 
 int Model::addFrame(const Frame& frame) {
-  if (frame_index_.count(frame.name))
-    throw std::invalid_argument("Model::addFrame: a frame named '" + frame.name + "' exists");
+  for (const Frame& f : frames)
+    if (f.name == frame.name && f.type == frame.type)
+      throw std::invalid_argument("Model::addFrame: a " + std::string(toString(frame.type)) +
+                                  " frame named '" + frame.name + "' exists");
   if (frame.parentJoint < 0 || frame.parentJoint >= njoints())
     throw std::invalid_argument("Model::addFrame: frame '" + frame.name + "' has no valid joint");
   const int id = nframes();
   frames.push_back(frame);
-  frame_index_[frame.name] = id;
+  frame_index_.emplace(frame.name, id);  // keeps the first frame of a name
   return id;
+}
+
+int Model::getFrameId(const std::string& n, FrameType type) const {
+  for (int f = 0; f < nframes(); ++f)
+    if (frames[f].name == n && frames[f].type == type) return f;
+  throw std::out_of_range("model '" + name + "' has no " + toString(type) + " frame named '" + n + "'");
 }
 
 bool Model::existJoint(const std::string& n) const { return joint_index_.count(n) > 0; }

@@ -65,6 +65,9 @@ class Model {
   // (the previous dof of the same joint, else the last dof of the parent joint), -1 at the root.
   // Walking it visits exactly the dofs that support k: Jacobians and CRBA use it.
   std::vector<int> parentDof;
+  // For each velocity index k: the number of dofs in the subtree it moves, itself included.
+  // Depth-first order makes that subtree the contiguous range [k, k + nvSubtree[k]).
+  std::vector<int> nvSubtree;
   Eigen::Vector3d gravity = Eigen::Vector3d(0, 0, -9.81);
 
   // Joint limits, in configuration / velocity indices (+-inf when the description has none).
@@ -80,20 +83,25 @@ class Model {
 
   // ---- building (used by the URDF parser, tests and random trees) ----
   // Adds a moving joint below `parent` and a frame of type Joint with its name; returns its index.
-  // A free-flyer may only be attached to the universe. Throws std::invalid_argument.
+  // Joints are added in depth-first order: `parent` is the universe, the last joint added or one of
+  // its ancestors. A free-flyer may only be attached to the universe. Throws std::invalid_argument.
   int addJoint(int parent, JointType type, const SE3& placement, const std::string& name,
                const Eigen::Vector3d& axis = Eigen::Vector3d::UnitZ());
   void setJointLimits(int joint, double lower, double upper, double velocity, double effort);
   // Adds a body with inertia Y (expressed in `placement`'s frame) rigidly to a joint.
   void appendBodyToJoint(int joint, const Inertia& Y, const SE3& placement = SE3::Identity());
-  // Adds a frame; returns its index. Names must be unique. Throws std::invalid_argument.
+  // Adds a frame; returns its index. A name may be shared only by frames of different types (a link
+  // and a joint of the same name, as some URDFs have). Throws std::invalid_argument.
   int addFrame(const Frame& frame);
 
   // ---- lookup ----
   bool existJoint(const std::string& joint_name) const;
   bool existFrame(const std::string& frame_name) const;
   int getJointId(const std::string& joint_name) const;  // throws std::out_of_range naming it
-  int getFrameId(const std::string& frame_name) const;  // throws std::out_of_range naming it
+  // The first frame added with that name (ask by type when names are shared); throws
+  // std::out_of_range naming it.
+  int getFrameId(const std::string& frame_name) const;
+  int getFrameId(const std::string& frame_name, FrameType type) const;
   // Total mass of the moving bodies (the universe's fixed bodies carry no dynamics).
   double totalMass() const;
   // Mass rigidly attached to the universe (fixed-base robots: the base itself).

@@ -168,18 +168,25 @@ struct Inertia {
   }
 
   // The same body expressed in the parent frame of the placement M (child -> parent).
-  // h' = R h + m p;  I' = R I R^T - ([Rh]x[p]x + [p]x[Rh]x + m [p]x^2).
+  // h' = R h + m p;  I' = R I R^T - ([Rh]x[p]x + [p]x[Rh]x + m [p]x^2), and with
+  // [a]x[b]x = b a^T - (a.b) Id the correction is  2 (h'.p) Id + m |p|^2 Id - p h'^T - h' p^T - m p p^T.
+  // Written entry by entry on the 6 independent entries: every composite-inertia sweep runs it
+  // once per joint, and the generic 3x3 products cost half as much again.
   Inertia transformedBy(const SE3& M) const {
+    const Eigen::Matrix3d& R = M.R;
+    const Eigen::Vector3d& p = M.p;
     Inertia r;
     r.m = m;
-    const Eigen::Vector3d hr = M.R * h;
-    r.h = hr + m * M.p;
-    r.I.noalias() = M.R * I * M.R.transpose();
-    const Eigen::Vector3d& p = M.p;
-    const double hp = hr.dot(p), pp = p.squaredNorm();
-    // [a]x[b]x = b a^T - (a.b) Id
-    r.I -= p * hr.transpose() + hr * p.transpose() + m * (p * p.transpose());
-    r.I.diagonal().array() += 2.0 * hp + m * pp;
+    const Eigen::Vector3d hr = R * h;
+    r.h = hr + m * p;
+    const Eigen::Matrix3d T = R * I;
+    const double d = 2.0 * hr.dot(p) + m * p.squaredNorm();
+    for (int a = 0; a < 3; ++a) {
+      r.I(a, a) = T.row(a).dot(R.row(a)) - 2.0 * p[a] * hr[a] - m * p[a] * p[a] + d;
+      for (int b = a + 1; b < 3; ++b)
+        r.I(a, b) = r.I(b, a) =
+            T.row(a).dot(R.row(b)) - p[a] * hr[b] - hr[a] * p[b] - m * p[a] * p[b];
+    }
     return r;
   }
 

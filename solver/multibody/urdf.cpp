@@ -4,6 +4,10 @@
 #include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <Eigen/Eigenvalues>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -23,6 +27,41 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 std::string where(const TiXmlElement* e) { return " (line " + std::to_string(e->Row()) + ")"; }
 
+// A number attribute that must be present and finite. urdfdom reads a non-number as 0 without a
+// word, and a missing inertia term as 0: a robot would silently lose mass.
+double numberAttribute(const TiXmlElement* e, const char* attr, const std::string& source,
+                       const std::string& context) {
+  const char* text = e->Attribute(attr);
+  if (!text) fail(source, context + " has no '" + attr + "' attribute" + where(e));
+  char* end = nullptr;
+  const double x = std::strtod(text, &end);
+  while (end && std::isspace(static_cast<unsigned char>(*end))) ++end;
+  if (end == text || *end != '\0' || !std::isfinite(x))
+    fail(source, context + " has " + attr + "='" + text + "', not a finite number" + where(e));
+  return x;
+}
+
+void validateInertial(const TiXmlElement* link, const std::string& source) {
+  const TiXmlElement* in = link->FirstChildElement("inertial");
+  if (!in) return;  // a massless frame link
+  const std::string ctx = "link '" + std::string(link->Attribute("name")) + "' <inertial>";
+  const TiXmlElement* mass = in->FirstChildElement("mass");
+  if (!mass) fail(source, ctx + " has no <mass>" + where(in));
+  if (numberAttribute(mass, "value", source, ctx + " <mass>") < 0)
+    fail(source, ctx + " has a negative mass" + where(mass));
+  const TiXmlElement* inertia = in->FirstChildElement("inertia");
+  if (!inertia) fail(source, ctx + " has no <inertia>" + where(in));
+  double I[6];
+  int k = 0;
+  for (const char* a : {"ixx", "iyy", "izz", "ixy", "ixz", "iyz"})
+    I[k++] = numberAttribute(inertia, a, source, ctx + " <inertia>");
+  Eigen::Matrix3d M;
+  M << I[0], I[3], I[4], I[3], I[1], I[5], I[4], I[5], I[2];
+  const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(M).eigenvalues().minCoeff();
+  if (smallest < -1e-9 * std::max(1.0, M.norm()))
+    fail(source, ctx + " has an inertia tensor that is not positive semi-definite" + where(inertia));
+}
+
 // Structural checks on the raw XML before urdfdom sees it, so that every error names the element
 // and its line: urdfdom itself only logs to the console and returns null.
 void validateStructure(const std::string& xml, const std::string& source) {
@@ -40,6 +79,7 @@ void validateStructure(const std::string& xml, const std::string& source) {
     const char* name = l->Attribute("name");
     if (!name || !*name) fail(source, "<link> without a name" + where(l));
     if (!links.insert(name).second) fail(source, "link '" + std::string(name) + "' is defined twice" + where(l));
+    validateInertial(l, source);
   }
   if (links.empty()) fail(source, "no <link> element");
   std::map<std::string, std::string> parent_joint_of;     // child link -> joint
@@ -153,7 +193,7 @@ struct Builder {
       const Eigen::Vector3d axis(uj->axis.x, uj->axis.y, uj->axis.z);
       if (axis.norm() < 1e-9) fail(source, "joint '" + uj->name + "' has a zero <axis>");
       const int id = model.addJoint(joint, type, at, uj->name, axis);
-      const int jf = model.getFrameId(uj->name);
+      const int jf = model.getFrameId(uj->name, FrameType::Joint);
       model.frames[jf].parentFrame = body_frame;
       double lo = -kInf, hi = kInf, vel = kInf, eff = kInf;
       if (uj->limits) {

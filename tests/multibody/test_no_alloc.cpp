@@ -1,0 +1,150 @@
+// After Data is built, no multibody algorithm touches the heap. Every allocation in the process is
+// counted by interposing malloc and its relatives (operator new and Eigen both end there), and
+// Eigen's own check (EIGEN_RUNTIME_NO_MALLOC) is armed around the calls as well.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <random>
+
+#include "config/robot_config.hpp"
+#include "solver/multibody/aba.hpp"
+#include "solver/multibody/center_of_mass.hpp"
+#include "solver/multibody/centroidal.hpp"
+#include "solver/multibody/crba.hpp"
+#include "solver/multibody/frames.hpp"
+#include "solver/multibody/jacobian.hpp"
+#include "solver/multibody/kinematics.hpp"
+#include "solver/multibody/lie_group.hpp"
+#include "solver/multibody/rnea.hpp"
+#include "solver/multibody/urdf.hpp"
+
+namespace {
+std::atomic<bool> g_counting{false};
+std::atomic<long> g_allocations{0};
+}  // namespace
+
+extern "C" {
+void* __libc_malloc(size_t);
+void* __libc_calloc(size_t, size_t);
+void* __libc_realloc(void*, size_t);
+void* __libc_memalign(size_t, size_t);
+
+void* malloc(size_t n) {
+  if (g_counting) ++g_allocations;
+  return __libc_malloc(n);
+}
+void* calloc(size_t n, size_t s) {
+  if (g_counting) ++g_allocations;
+  return __libc_calloc(n, s);
+}
+void* realloc(void* p, size_t n) {
+  if (g_counting) ++g_allocations;
+  return __libc_realloc(p, n);
+}
+void* memalign(size_t a, size_t n) {
+  if (g_counting) ++g_allocations;
+  return __libc_memalign(a, n);
+}
+void* aligned_alloc(size_t a, size_t n) {
+  if (g_counting) ++g_allocations;
+  return __libc_memalign(a, n);
+}
+int posix_memalign(void** p, size_t a, size_t n) {
+  if (g_counting) ++g_allocations;
+  *p = __libc_memalign(a, n);
+  return *p ? 0 : 12;
+}
+}
+
+namespace stride {
+namespace {
+
+class AllocationCounter {
+ public:
+  AllocationCounter() {
+    g_allocations = 0;
+    Eigen::internal::set_is_malloc_allowed(false);
+    g_counting = true;
+  }
+  ~AllocationCounter() { stop(); }
+  long stop() {
+    g_counting = false;
+    Eigen::internal::set_is_malloc_allowed(true);
+    return g_allocations;
+  }
+};
+
+void runAllAlgorithms(const Model& model, Data& data, const Eigen::VectorXd& q,
+                      const Eigen::VectorXd& v, const Eigen::VectorXd& a, Matrix6Xd& J,
+                      Eigen::VectorXd& qnext, Eigen::VectorXd& dq, Eigen::MatrixXd& Jint) {
+  forwardKinematics(model, data, q);
+  forwardKinematics(model, data, q, v);
+  forwardKinematics(model, data, q, v, a);
+  updateFramePlacements(model, data);
+  const int frame = model.nframes() - 1;
+  getFrameVelocity(model, data, frame, ReferenceFrame::Local);
+  getFrameAcceleration(model, data, frame, ReferenceFrame::LocalWorldAligned);
+  getFrameClassicalAcceleration(model, data, frame, ReferenceFrame::LocalWorldAligned);
+  computeJointJacobians(model, data, q);
+  getFrameJacobian(model, data, frame, ReferenceFrame::Local, J);
+  getFrameJacobian(model, data, frame, ReferenceFrame::LocalWorldAligned, J);
+  getJointJacobian(model, data, model.njoints() - 1, ReferenceFrame::World, J);
+  rnea(model, data, q, v, a);
+  nonLinearEffects(model, data, q, v);
+  computeGeneralizedGravity(model, data, q);
+  crba(model, data, q);
+  aba(model, data, q, v, a);
+  centerOfMass(model, data, q);
+  centerOfMass(model, data, q, v);
+  jacobianCenterOfMass(model, data, q);
+  computeCentroidalMomentum(model, data, q, v);
+  computeCentroidalMap(model, data, q);
+  integrate(model, q, v, qnext);
+  difference(model, q, qnext, dq);
+  dIntegrate(model, q, v, Jint, ArgumentPosition::Second);
+  dDifference(model, q, qnext, Jint, ArgumentPosition::First);
+}
+
+void expectNoAllocation(const Model& model) {
+  Data data(model);
+  std::mt19937 rng(7);
+  const Eigen::VectorXd q = randomConfiguration(model, rng);
+  const Eigen::VectorXd v = Eigen::VectorXd::Random(model.nv);
+  const Eigen::VectorXd a = Eigen::VectorXd::Random(model.nv);
+  Matrix6Xd J(6, model.nv);
+  Eigen::VectorXd qnext(model.nq), dq(model.nv);
+  Eigen::MatrixXd Jint(model.nv, model.nv);
+  runAllAlgorithms(model, data, q, v, a, J, qnext, dq, Jint);  // warm-up outside the counter
+  long count;
+  {
+    AllocationCounter counter;
+    runAllAlgorithms(model, data, q, v, a, J, qnext, dq, Jint);
+    count = counter.stop();
+  }
+  EXPECT_EQ(count, 0) << model.name << ": heap allocations inside the algorithms";
+}
+
+TEST(NoAllocation, CounterSeesAllocations) {
+  // The counter must be able to fail: an Eigen heap vector and a std::vector are both seen.
+  AllocationCounter counter;
+  Eigen::internal::set_is_malloc_allowed(true);
+  volatile double* p = static_cast<double*>(std::malloc(64));
+  std::free(const_cast<double*>(p));
+  std::vector<int> v(10);
+  EXPECT_GE(counter.stop(), 2);
+}
+
+TEST(NoAllocation, SharedRobots) {
+  expectNoAllocation(buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/talos/talos_reduced.urdf", RootJoint::FreeFlyer));
+  expectNoAllocation(buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/ur5/ur5_robot.urdf", RootJoint::Fixed));
+}
+
+TEST(NoAllocation, InHouseRobots) {
+  expectNoAllocation(loadRobot(STRIDE_CONFIG_DIR "/robots/stride_quad/stride_quad.yaml").model);
+  expectNoAllocation(loadRobot(STRIDE_CONFIG_DIR "/robots/stride_humanoid/stride_humanoid.yaml").model);
+}
+
+}  // namespace
+}  // namespace stride

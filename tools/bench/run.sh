@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Run stride-bench with repetitions; print the median of each benchmark and keep the JSON.
+#   tools/bench/run.sh [FILTER] [--out FILE.json]
+# FILTER is a regular expression on the names <algorithm>/<robot> (default: all).
+set -euo pipefail
+here=$(cd "$(dirname "$0")/../.." && pwd)
+bench="${STRIDE_BUILD_DIR:-$here/build}/tools/bench/stride-bench"
+filter="${1:-.}"
+out="${here}/build/bench.json"
+[ "${2:-}" = "--out" ] && out="$3"
+if [ ! -x "$bench" ]; then
+  echo "stride-bench not built: run tools/test.sh (or cmake --build build) first" >&2
+  exit 1
+fi
+"$bench" --benchmark_filter="$filter" --benchmark_repetitions="${REPETITIONS:-15}" \
+  --benchmark_min_time="${MIN_TIME:-0.05}" --benchmark_report_aggregates_only=true \
+  --benchmark_out="$out" --benchmark_out_format=json --benchmark_format=console 2>&1 |
+  grep -E '_median|^Benchmark|^-' | sed 's/_median//'
+echo "JSON: $out"

@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Configures and builds Release into build/ (or $STRIDE_BUILD_DIR). Shared by demo.sh and test.sh.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build="${STRIDE_BUILD_DIR:-$root/build}"
+jobs=$(nproc 2>/dev/null || echo 2)
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
+cmake --build "$build" -j"$jobs"

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages Stride builds and runs with; runs `apt-get update` first only
+# when something is missing. Needs root (or sudo). Used by tools/demo.sh and tools/test.sh.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ccache pkg-config clang-format
+  libeigen3-dev            # linear algebra (3.4)
+  liburdfdom-dev           # URDF parsing
+  libtinyxml-dev           # SRDF parsing (urdfdom's own XML library)
+  libyaml-cpp-dev          # configuration files
+  libcli11-dev             # command lines
+  libgtest-dev libgmock-dev  # tests
+  libbenchmark-dev         # tools/bench
+  libomp-dev               # OpenMP (per-knot parallelism)
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null || { echo "install-deps: need root to install: ${missing[*]}" >&2; exit 1; }
+  sudo="sudo"
+fi
+echo "install-deps: installing ${missing[*]}"
+$sudo apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: done"
