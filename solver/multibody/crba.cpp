@@ -28,26 +28,27 @@ const Eigen::MatrixXd& crba(const Model& model, Data& data,
     if (j.type == JointType::FreeFlyer)
       data.J.middleCols<6>(j.idx_v) = oMi.toActionMatrix();
     else
-      data.J.col(j.idx_v) = jointSubspaceWorld(j, oMi);
+      data.J.col(j.idx_v) = oMi.act(jointSubspaceColumn(j, 0));
     data.oYcrb[i] = model.inertias[i].transformedBy(oMi);
   }
-  // Backward: F_k = Y_i S_k, the momentum of dof k's subtree moving at unit rate, with the
-  // composite inertia Y_i of joint i's subtree; then M(k, r) = S_r . F_k for every dof k in the
-  // subtree of r. The subtree is a contiguous range of columns (depth-first order), so column r of
-  // the lower triangle is filled by a plain loop over memory in order.
+  // Backward: M(r, k) = S_r . (Y_i S_k) for the dofs r supporting dof k; both triangles written
+  // here, which is cheaper than a separate transpose pass over the whole matrix.
   Eigen::MatrixXd& M = data.M;
-  Matrix6Xd& F = data.Ag;  // scratch; the centroidal map is this matrix with moments at the CoM
   for (int i = n - 1; i > 0; --i) {
     const Joint& j = model.joints[i];
-    data.oYcrb[i].mulColumns(data.J.middleCols(j.idx_v, j.nv), F.middleCols(j.idx_v, j.nv));
-    for (int r = j.idx_v; r < j.idx_v + j.nv; ++r) {
-      const Vector6d S = data.J.col(r);
-      const int end = r + model.nvSubtree[r];
-      for (int k = r; k < end; ++k) M(k, r) = S.dot(F.col(k));
+    for (int k = j.idx_v; k < j.idx_v + j.nv; ++k) {
+      const Vector6d F = data.oYcrb[i] * Vector6d(data.J.col(k));
+      // F's entries as scalars in registers: a packet dot product would reload F from the stack
+      // right after it was stored by halves, stalling on store forwarding at every row.
+      const double f0 = F[0], f1 = F[1], f2 = F[2], f3 = F[3], f4 = F[4], f5 = F[5];
+      for (int r = k; r >= 0; r = model.parentDof[r]) {
+        const double* s = data.J.col(r).data();
+        M(r, k) = s[0] * f0 + s[1] * f1 + s[2] * f2 + s[3] * f3 + s[4] * f4 + s[5] * f5;
+      }
     }
     if (j.parent > 0) data.oYcrb[j.parent] += data.oYcrb[i];
   }
-  M.triangularView<Eigen::StrictlyUpper>() = M.transpose();
+  M.triangularView<Eigen::StrictlyLower>() = M.transpose();
   return M;
 }
 

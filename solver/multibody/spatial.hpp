@@ -115,12 +115,21 @@ struct SE3 {
 // first moment h = m c (c: centre of mass) and rotational inertia I about the origin. In this form
 // inertias expressed in the same frame simply add, which the composite-inertia sweeps rely on.
 //   I * [nu; w] = [m nu - h x w; I w + h x nu]
+//
+// Like Eigen's fixed-size types, a default-constructed Inertia is uninitialized (the sweeps build
+// one per joint and overwrite it at once); use Inertia::Zero() for an empty body.
 struct Inertia {
-  double m = 0.0;
-  Eigen::Vector3d h = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d I = Eigen::Matrix3d::Zero();
+  double m;
+  Eigen::Vector3d h;
+  Eigen::Matrix3d I;
 
-  static Inertia Zero() { return Inertia(); }
+  static Inertia Zero() {
+    Inertia Y;
+    Y.m = 0.0;
+    Y.h.setZero();
+    Y.I.setZero();
+    return Y;
+  }
   // From mass, centre of mass c and rotational inertia about the centre of mass (in this frame).
   static Inertia FromMassComInertia(double mass, const Eigen::Vector3d& c,
                                     const Eigen::Matrix3d& inertia_about_com) {

@@ -23,7 +23,9 @@ void expectStandsOnTheGround(const Robot& robot) {
   for (const auto& c : robot.contacts) {
     const SE3& oMf = data.oMf[robot.model.getFrameId(c.frame)];
     EXPECT_NEAR(oMf.p.z(), 0.0, 1e-6) << c.frame;
-    if (c.dim == 6) EXPECT_NEAR(oMf.R(2, 2), 1.0, 1e-9) << c.frame << " sole is not flat";
+    if (c.dim == 6) {
+      EXPECT_NEAR(oMf.R(2, 2), 1.0, 1e-9) << c.frame << " sole is not flat";
+    }
     lo = lo.cwiseMin(oMf.p.head<2>());
     hi = hi.cwiseMax(oMf.p.head<2>());
   }
