@@ -36,26 +36,30 @@ Robot loadRobot(const std::string& yaml_path) {
   robot.yaml_path = yaml_path;
   try {
     robot.name = need(root, "name", yaml_path).as<std::string>();
-    const std::filesystem::path urdf =
-        std::filesystem::path(yaml_path).parent_path() / need(root, "urdf", yaml_path).as<std::string>();
+    const std::filesystem::path urdf = std::filesystem::path(yaml_path).parent_path() /
+                                       need(root, "urdf", yaml_path).as<std::string>();
     robot.urdf_path = urdf.string();
     const std::string root_joint = need(root, "root_joint", yaml_path).as<std::string>();
     if (root_joint != "free-flyer" && root_joint != "fixed")
       fail(yaml_path, "root_joint must be 'free-flyer' or 'fixed', not '" + root_joint + "'");
-    robot.model = buildModelFromUrdf(robot.urdf_path,
-                                     root_joint == "fixed" ? RootJoint::Fixed : RootJoint::FreeFlyer);
+    robot.model = buildModelFromUrdf(
+        robot.urdf_path, root_joint == "fixed" ? RootJoint::Fixed : RootJoint::FreeFlyer);
     Model& model = robot.model;
 
     for (const auto& c : need(root, "contacts", yaml_path)) {
-      ContactSpec spec{need(c, "frame", yaml_path).as<std::string>(), need(c, "dim", yaml_path).as<int>()};
-      if (!model.existFrame(spec.frame)) fail(yaml_path, "contact frame '" + spec.frame + "' is not in the URDF");
+      ContactSpec spec{need(c, "frame", yaml_path).as<std::string>(),
+                       need(c, "dim", yaml_path).as<int>()};
+      if (!model.existFrame(spec.frame))
+        fail(yaml_path, "contact frame '" + spec.frame + "' is not in the URDF");
       if (spec.dim != 3 && spec.dim != 6)
-        fail(yaml_path, "contact '" + spec.frame + "' has dim " + std::to_string(spec.dim) + " (3 or 6)");
+        fail(yaml_path,
+             "contact '" + spec.frame + "' has dim " + std::to_string(spec.dim) + " (3 or 6)");
       robot.contacts.push_back(spec);
     }
     if (root["sole_half_extents"]) {
       const auto e = root["sole_half_extents"].as<std::vector<double>>();
-      if (e.size() != 2 || !(e[0] > 0) || !(e[1] > 0)) fail(yaml_path, "sole_half_extents must be two positive numbers");
+      if (e.size() != 2 || !(e[0] > 0) || !(e[1] > 0))
+        fail(yaml_path, "sole_half_extents must be two positive numbers");
       robot.sole_half_extents << e[0], e[1];
     }
 
@@ -73,15 +77,18 @@ Robot loadRobot(const std::string& yaml_path) {
       const Joint& j = model.joints[i];
       if (j.type == JointType::FreeFlyer) continue;
       if (!limits[j.name]) fail(yaml_path, "torque_limits has no entry for joint '" + j.name + "'");
-      if (!joints[j.name]) fail(yaml_path, "default_posture.joints has no entry for joint '" + j.name + "'");
+      if (!joints[j.name])
+        fail(yaml_path, "default_posture.joints has no entry for joint '" + j.name + "'");
       const double limit = limits[j.name].as<double>();
-      if (!(limit > 0) || !std::isfinite(limit)) fail(yaml_path, "torque limit of '" + j.name + "' must be positive");
+      if (!(limit > 0) || !std::isfinite(limit))
+        fail(yaml_path, "torque limit of '" + j.name + "' must be positive");
       model.effortLimit[j.idx_v] = limit;
       robot.default_q[j.idx_q] = joints[j.name].as<double>();
     }
     if (model.hasFreeFlyer()) {
       const auto base = need(posture, "base", yaml_path).as<std::vector<double>>();
-      if (base.size() != 7) fail(yaml_path, "default_posture.base needs 7 numbers [x y z qx qy qz qw]");
+      if (base.size() != 7)
+        fail(yaml_path, "default_posture.base needs 7 numbers [x y z qx qy qz qw]");
       for (int k = 0; k < 7; ++k) robot.default_q[k] = base[k];
       const double n = robot.default_q.segment<4>(3).norm();
       if (std::abs(n - 1.0) > 1e-6) fail(yaml_path, "default_posture.base quaternion is not unit");

@@ -28,7 +28,7 @@ struct Robot {
   std::string yaml_path;
   std::string urdf_path;
   std::vector<ContactSpec> contacts;
-  Eigen::VectorXd default_q;           // also model.referenceConfigurations["default"]
+  Eigen::VectorXd default_q;  // also model.referenceConfigurations["default"]
   Eigen::Vector2d sole_half_extents = Eigen::Vector2d::Zero();  // surface contacts, if given
 };
 

@@ -72,7 +72,8 @@ const Eigen::VectorXd& aba(const Model& model, Data& data,
     const Vector6d ap = data.oa[j.parent] + data.oc[i];
     if (j.type == JointType::FreeFlyer) {
       auto qdd = data.ddq.segment<6>(j.idx_v);
-      qdd = data.rootLLT.solve(data.u.segment<6>(j.idx_v) - data.U.middleCols<6>(j.idx_v).transpose() * ap);
+      qdd = data.rootLLT.solve(data.u.segment<6>(j.idx_v) -
+                               data.U.middleCols<6>(j.idx_v).transpose() * ap);
       data.oa[i] = ap + data.J.middleCols<6>(j.idx_v) * qdd;
     } else {
       const int k = j.idx_v;

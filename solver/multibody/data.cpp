@@ -27,6 +27,16 @@ Data::Data(const Model& model) {
   Dinv = Eigen::VectorXd::Zero(nv);
   u = Eigen::VectorXd::Zero(nv);
   ddq = Eigen::VectorXd::Zero(nv);
+  oBcrb.assign(n, Matrix6d::Zero());
+  oh.assign(n, Vector6d::Zero());
+  oF.assign(n, Vector6d::Zero());
+  for (Matrix6Xd* m : {&dW, &dC, &dE, &dA, &dB, &dG, &dH}) *m = Matrix6Xd::Zero(6, nv);
+  dtau_dq = Eigen::MatrixXd::Zero(nv, nv);
+  dtau_dv = Eigen::MatrixXd::Zero(nv, nv);
+  Ltdl = Eigen::MatrixXd::Zero(nv, nv);
+  Minv = Eigen::MatrixXd::Zero(nv, nv);
+  ddq_dq = Eigen::MatrixXd::Zero(nv, nv);
+  ddq_dv = Eigen::MatrixXd::Zero(nv, nv);
   mass = model.totalMass();
   Jcom = Eigen::Matrix3Xd::Zero(3, nv);
   Ag = Matrix6Xd::Zero(6, nv);

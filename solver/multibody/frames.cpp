@@ -14,14 +14,16 @@ void checkFrame(const Model& model, int frame, const char* fn) {
 // A motion in the frame's LOCAL coordinates expressed in the requested reference frame.
 Vector6d expressLocalMotion(const Vector6d& local, const SE3& oMf, ReferenceFrame rf) {
   switch (rf) {
-    case ReferenceFrame::Local: return local;
+    case ReferenceFrame::Local:
+      return local;
     case ReferenceFrame::LocalWorldAligned: {
       Vector6d r;
       r.head<3>().noalias() = oMf.R * local.head<3>();
       r.tail<3>().noalias() = oMf.R * local.tail<3>();
       return r;
     }
-    case ReferenceFrame::World: return oMf.act(local);
+    case ReferenceFrame::World:
+      return oMf.act(local);
   }
   return local;
 }

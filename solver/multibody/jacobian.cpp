@@ -34,8 +34,12 @@ void supportedColumns(const Model& model, const Data& data, int joint, const SE3
   for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
     const Vector6d col = data.J.col(k);
     switch (rf) {
-      case ReferenceFrame::World: J.col(k) = col; break;
-      case ReferenceFrame::Local: J.col(k) = oMf.actInv(col); break;
+      case ReferenceFrame::World:
+        J.col(k) = col;
+        break;
+      case ReferenceFrame::Local:
+        J.col(k) = oMf.actInv(col);
+        break;
       case ReferenceFrame::LocalWorldAligned:
         // Velocity of the frame origin: nu_o + w x p.
         J.col(k).head<3>() = col.head<3>() - oMf.p.cross(col.tail<3>());

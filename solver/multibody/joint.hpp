@@ -14,16 +14,25 @@ inline Eigen::Matrix3d axisRotation(const Joint& j, double angle) {
   const double c = std::cos(angle), s = std::sin(angle);
   Eigen::Matrix3d R;
   switch (j.alignedAxis) {
-    case 0: R << 1, 0, 0, 0, c, -s, 0, s, c; return R;
-    case 1: R << c, 0, s, 0, 1, 0, -s, 0, c; return R;
-    case 2: R << c, -s, 0, s, c, 0, 0, 0, 1; return R;
+    case 0:
+      R << 1, 0, 0, 0, c, -s, 0, s, c;
+      return R;
+    case 1:
+      R << c, 0, s, 0, 1, 0, -s, 0, c;
+      return R;
+    case 2:
+      R << c, -s, 0, s, c, 0, 0, 0, 1;
+      return R;
     default: {
       const Eigen::Vector3d& a = j.axis;
       R.noalias() = (1.0 - c) * (a * a.transpose());
       R.diagonal().array() += c;
-      R(0, 1) -= s * a.z(); R(1, 0) += s * a.z();
-      R(0, 2) += s * a.y(); R(2, 0) -= s * a.y();
-      R(1, 2) -= s * a.x(); R(2, 1) += s * a.x();
+      R(0, 1) -= s * a.z();
+      R(1, 0) += s * a.z();
+      R(0, 2) += s * a.y();
+      R(2, 0) -= s * a.y();
+      R(1, 2) -= s * a.x();
+      R(2, 1) += s * a.x();
       return R;
     }
   }
@@ -57,7 +66,8 @@ inline void jointPlacement(const Joint& j, const double* qj, SE3& liMi) {
           liMi.R.col(0) = c * P.col(0) + s * P.col(1);
           liMi.R.col(1) = c * P.col(1) - s * P.col(0);
           break;
-        default: liMi.R.noalias() = P * axisRotation(j, qj[0]);
+        default:
+          liMi.R.noalias() = P * axisRotation(j, qj[0]);
       }
       liMi.p = j.placement.p;
       return;
@@ -66,7 +76,9 @@ inline void jointPlacement(const Joint& j, const double* qj, SE3& liMi) {
       liMi.R = j.placement.R;
       liMi.p = j.placement.p + j.placement.R * (j.axis * qj[0]);
       return;
-    case JointType::Universe: liMi = SE3::Identity(); return;
+    case JointType::Universe:
+      liMi = SE3::Identity();
+      return;
   }
 }
 
@@ -74,10 +86,17 @@ inline void jointPlacement(const Joint& j, const double* qj, SE3& liMi) {
 inline Vector6d jointSubspaceColumn(const Joint& j, int k) {
   Vector6d s = Vector6d::Zero();
   switch (j.type) {
-    case JointType::FreeFlyer: s[k] = 1.0; break;
-    case JointType::Revolute: s.tail<3>() = j.axis; break;
-    case JointType::Prismatic: s.head<3>() = j.axis; break;
-    case JointType::Universe: break;
+    case JointType::FreeFlyer:
+      s[k] = 1.0;
+      break;
+    case JointType::Revolute:
+      s.tail<3>() = j.axis;
+      break;
+    case JointType::Prismatic:
+      s.head<3>() = j.axis;
+      break;
+    case JointType::Universe:
+      break;
   }
   return s;
 }
@@ -88,7 +107,7 @@ inline Vector6d jointSubspaceWorld(const Joint& j, const SE3& oMi) {
   Vector6d s;
   if (j.type == JointType::Revolute) {
     const Eigen::Vector3d w = j.alignedAxis >= 0 ? Eigen::Vector3d(oMi.R.col(j.alignedAxis))
-                                                  : Eigen::Vector3d(oMi.R * j.axis);
+                                                 : Eigen::Vector3d(oMi.R * j.axis);
     s.head<3>() = oMi.p.cross(w);
     s.tail<3>() = w;
   } else {  // prismatic
@@ -102,10 +121,17 @@ inline Vector6d jointSubspaceWorld(const Joint& j, const SE3& oMi) {
 inline Vector6d jointMotion(const Joint& j, const double* vj) {
   Vector6d m;
   switch (j.type) {
-    case JointType::FreeFlyer: m = Eigen::Map<const Vector6d>(vj); break;
-    case JointType::Revolute: m << 0, 0, 0, j.axis * vj[0]; break;
-    case JointType::Prismatic: m << j.axis * vj[0], 0, 0, 0; break;
-    default: m.setZero();
+    case JointType::FreeFlyer:
+      m = Eigen::Map<const Vector6d>(vj);
+      break;
+    case JointType::Revolute:
+      m << 0, 0, 0, j.axis * vj[0];
+      break;
+    case JointType::Prismatic:
+      m << j.axis * vj[0], 0, 0, 0;
+      break;
+    default:
+      m.setZero();
   }
   return m;
 }
@@ -113,10 +139,17 @@ inline Vector6d jointMotion(const Joint& j, const double* vj) {
 // S^T f for a force f in the joint frame, written to tau_j.
 inline void jointForceProjection(const Joint& j, const Vector6d& f, double* tau_j) {
   switch (j.type) {
-    case JointType::FreeFlyer: Eigen::Map<Vector6d>{tau_j} = f; break;
-    case JointType::Revolute: tau_j[0] = j.axis.dot(f.tail<3>()); break;
-    case JointType::Prismatic: tau_j[0] = j.axis.dot(f.head<3>()); break;
-    default: break;
+    case JointType::FreeFlyer:
+      Eigen::Map<Vector6d>{tau_j} = f;
+      break;
+    case JointType::Revolute:
+      tau_j[0] = j.axis.dot(f.tail<3>());
+      break;
+    case JointType::Prismatic:
+      tau_j[0] = j.axis.dot(f.head<3>());
+      break;
+    default:
+      break;
   }
 }
 

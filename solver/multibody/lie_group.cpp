@@ -5,8 +5,9 @@
 namespace stride {
 
 namespace {
-// Below this angle the closed forms lose digits; second-order Taylor series are exact to ~1e-16.
-constexpr double kSmallAngle = 1e-4;
+// Below this angle the closed forms lose digits to cancellation (e.g. (1 - cos t)/t^2 loses
+// eps/t^2); Taylor series to t^8 are exact to ~1e-16 up to here, and the closed forms above it.
+constexpr double kSmallAngle = 0.1;
 
 // Coefficients of SO(3) series, in theta^2 where possible.
 // A = sin t / t, B = (1 - cos t)/t^2, C = (t - sin t)/t^3.
@@ -15,9 +16,9 @@ struct SO3Coeffs {
   explicit SO3Coeffs(double t) {
     const double t2 = t * t;
     if (t < kSmallAngle) {
-      A = 1.0 - t2 / 6.0;
-      B = 0.5 - t2 / 24.0;
-      C = 1.0 / 6.0 - t2 / 120.0;
+      A = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0)));
+      B = 0.5 - t2 / 24.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0)));
+      C = 1.0 / 6.0 - t2 / 120.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0 * (1.0 - t2 / 110.0)));
     } else {
       const double s = std::sin(t), c = std::cos(t);
       A = s / t;
@@ -29,8 +30,10 @@ struct SO3Coeffs {
 
 // 1/t^2 - (1 + cos t) / (2 t sin t), the W^2 coefficient of the inverse SO(3) Jacobians.
 double inverseJacobianCoeff(double t) {
-  if (t < kSmallAngle) return 1.0 / 12.0 + t * t / 720.0;
-  return 1.0 / (t * t) - (1.0 + std::cos(t)) / (2.0 * t * std::sin(t));
+  const double t2 = t * t;
+  if (t < kSmallAngle)
+    return 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0 + t2 * t2 * t2 / 1209600.0;
+  return 1.0 / t2 - (1.0 + std::cos(t)) / (2.0 * t * std::sin(t));
 }
 
 // Left SO(3) Jacobian and its inverse.
@@ -49,9 +52,10 @@ Eigen::Matrix3d barfootQ(const Eigen::Vector3d& rho, const Eigen::Vector3d& phi)
   const double t = phi.norm(), t2 = t * t;
   double a, b, c;
   if (t < kSmallAngle) {
-    a = 1.0 / 6.0 - t2 / 120.0;
-    b = 1.0 / 24.0 - t2 / 720.0;
-    c = 1.0 / 120.0 - t2 / 2520.0;
+    const double t4 = t2 * t2, t6 = t4 * t2;
+    a = 1.0 / 6.0 - t2 / 120.0 + t4 / 5040.0 - t6 / 362880.0;
+    b = 1.0 / 24.0 - t2 / 720.0 + t4 / 40320.0 - t6 / 3628800.0;
+    c = 1.0 / 120.0 - t2 / 2520.0 + t4 / 120960.0 - t6 / 9979200.0;
   } else {
     const double s = std::sin(t), co = std::cos(t);
     a = (t - s) / (t2 * t);
@@ -159,14 +163,17 @@ Eigen::VectorXd randomConfiguration(const Model& model, std::mt19937& rng) {
     const Joint& j = model.joints[i];
     if (j.type == JointType::FreeFlyer) {
       for (int k = 0; k < 3; ++k) {
-        double lo = model.lowerPositionLimit[j.idx_q + k], hi = model.upperPositionLimit[j.idx_q + k];
+        double lo = model.lowerPositionLimit[j.idx_q + k],
+               hi = model.upperPositionLimit[j.idx_q + k];
         if (!std::isfinite(lo) || !std::isfinite(hi)) lo = -1.0, hi = 1.0;
         q[j.idx_q + k] = uniform(rng, lo, hi);
       }
       // Shoemake's uniform random rotation.
-      const double u1 = uniform(rng, 0, 1), u2 = uniform(rng, 0, 2 * M_PI), u3 = uniform(rng, 0, 2 * M_PI);
+      const double u1 = uniform(rng, 0, 1), u2 = uniform(rng, 0, 2 * M_PI),
+                   u3 = uniform(rng, 0, 2 * M_PI);
       const double a = std::sqrt(1 - u1), b = std::sqrt(u1);
-      q.segment<4>(j.idx_q + 3) << a * std::sin(u2), a * std::cos(u2), b * std::sin(u3), b * std::cos(u3);
+      q.segment<4>(j.idx_q + 3) << a * std::sin(u2), a * std::cos(u2), b * std::sin(u3),
+          b * std::cos(u3);
     } else {
       double lo = model.lowerPositionLimit[j.idx_q], hi = model.upperPositionLimit[j.idx_q];
       if (!std::isfinite(lo) || !std::isfinite(hi)) {

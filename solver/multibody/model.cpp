@@ -18,20 +18,28 @@ void appendRows(Eigen::VectorXd& v, int n, double value) {
 
 const char* toString(JointType type) {
   switch (type) {
-    case JointType::Universe: return "universe";
-    case JointType::FreeFlyer: return "free-flyer";
-    case JointType::Revolute: return "revolute";
-    case JointType::Prismatic: return "prismatic";
+    case JointType::Universe:
+      return "universe";
+    case JointType::FreeFlyer:
+      return "free-flyer";
+    case JointType::Revolute:
+      return "revolute";
+    case JointType::Prismatic:
+      return "prismatic";
   }
   return "?";
 }
 
 const char* toString(FrameType type) {
   switch (type) {
-    case FrameType::Joint: return "joint";
-    case FrameType::FixedJoint: return "fixed joint";
-    case FrameType::Body: return "body";
-    case FrameType::Operational: return "operational";
+    case FrameType::Joint:
+      return "joint";
+    case FrameType::FixedJoint:
+      return "fixed joint";
+    case FrameType::Body:
+      return "body";
+    case FrameType::Operational:
+      return "operational";
   }
   return "?";
 }
@@ -171,11 +179,16 @@ int Model::addFrame(const Frame& frame) {
 int Model::getFrameId(const std::string& n, FrameType type) const {
   for (int f = 0; f < nframes(); ++f)
     if (frames[f].name == n && frames[f].type == type) return f;
-  throw std::out_of_range("model '" + name + "' has no " + toString(type) + " frame named '" + n + "'");
+  throw std::out_of_range("model '" + name + "' has no " + toString(type) + " frame named '" + n +
+                          "'");
 }
 
-bool Model::existJoint(const std::string& n) const { return joint_index_.count(n) > 0; }
-bool Model::existFrame(const std::string& n) const { return frame_index_.count(n) > 0; }
+bool Model::existJoint(const std::string& n) const {
+  return joint_index_.count(n) > 0;
+}
+bool Model::existFrame(const std::string& n) const {
+  return frame_index_.count(n) > 0;
+}
 
 int Model::getJointId(const std::string& n) const {
   auto it = joint_index_.find(n);
@@ -197,8 +210,7 @@ double Model::totalMass() const {
   return m;
 }
 
-void Model::checkConfiguration(const Eigen::Ref<const Eigen::VectorXd>& q,
-                               const char* what) const {
+void Model::checkConfiguration(const Eigen::Ref<const Eigen::VectorXd>& q, const char* what) const {
   if (q.size() != nq) throwSizeError(what, "q", nq, q.size());
 }
 

@@ -27,8 +27,8 @@ const char* toString(JointType type);
 struct Joint {
   std::string name;
   JointType type = JointType::Universe;
-  int parent = -1;       // parent joint index (0 = universe)
-  SE3 placement;         // parent joint frame -> this joint frame at q = 0
+  int parent = -1;  // parent joint index (0 = universe)
+  SE3 placement;    // parent joint frame -> this joint frame at q = 0
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // unit axis, in this joint's frame
   // 0, 1, 2 when the axis is +x, +y, +z: the elementary rotation is then cheaper to build.
   int alignedAxis = -1;
@@ -48,9 +48,9 @@ struct Frame {
 
 // Reference frame in which a frame velocity, acceleration or Jacobian is expressed.
 enum class ReferenceFrame : std::uint8_t {
-  Local,               // the frame's own axes and origin
-  World,               // world axes, velocity of the point at the world origin
-  LocalWorldAligned,   // world axes, velocity of the frame's origin
+  Local,              // the frame's own axes and origin
+  World,              // world axes, velocity of the point at the world origin
+  LocalWorldAligned,  // world axes, velocity of the frame's origin
 };
 
 class Model {
@@ -58,9 +58,9 @@ class Model {
   std::string name;
   int nq = 0;
   int nv = 0;
-  std::vector<Joint> joints;        // joints[0] is the universe
-  std::vector<Inertia> inertias;    // body inertia carried by each joint, in its frame
-  std::vector<Frame> frames;        // frames[0] is "universe"
+  std::vector<Joint> joints;      // joints[0] is the universe
+  std::vector<Inertia> inertias;  // body inertia carried by each joint, in its frame
+  std::vector<Frame> frames;      // frames[0] is "universe"
   // For each velocity index k: the velocity index just above it on the path to the root
   // (the previous dof of the same joint, else the last dof of the parent joint), -1 at the root.
   // Walking it visits exactly the dofs that support k: Jacobians and CRBA use it.

@@ -137,7 +137,8 @@ struct Inertia {
     Y.m = mass;
     Y.h = mass * c;
     // Parallel axis theorem: I_o = I_c + m [c]x^T [c]x = I_c + m (|c|^2 Id - c c^T).
-    Y.I = inertia_about_com + mass * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
+    Y.I = inertia_about_com +
+          mass * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
     return Y;
   }
 
@@ -178,8 +179,8 @@ struct Inertia {
 
   // The same body expressed in the parent frame of the placement M (child -> parent).
   // h' = R h + m p;  I' = R I R^T - ([Rh]x[p]x + [p]x[Rh]x + m [p]x^2), and with
-  // [a]x[b]x = b a^T - (a.b) Id the correction is  2 (h'.p) Id + m |p|^2 Id - p h'^T - h' p^T - m p p^T.
-  // Written entry by entry on the 6 independent entries: every composite-inertia sweep runs it
+  // [a]x[b]x = b a^T - (a.b) Id the correction is  2 (h'.p) Id + m |p|^2 Id - p h'^T - h' p^T - m p
+  // p^T. Written entry by entry on the 6 independent entries: every composite-inertia sweep runs it
   // once per joint, and the generic 3x3 products cost half as much again.
   Inertia transformedBy(const SE3& M) const {
     const Eigen::Matrix3d& R = M.R;

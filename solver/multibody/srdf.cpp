@@ -27,7 +27,8 @@ SrdfReport loadReferenceConfigurations(Model& model, const std::string& path) {
     const std::string line = " (line " + std::to_string(gs->Row()) + ")";
     if (!state_name) throw UrdfError("SRDF '" + path + "': <group_state> without a name" + line);
     Eigen::VectorXd q = neutral(model);
-    for (const TiXmlElement* je = gs->FirstChildElement("joint"); je; je = je->NextSiblingElement("joint")) {
+    for (const TiXmlElement* je = gs->FirstChildElement("joint"); je;
+         je = je->NextSiblingElement("joint")) {
       const char* jname = je->Attribute("name");
       const char* value = je->Attribute("value");
       const std::string jline = " (line " + std::to_string(je->Row()) + ")";
@@ -47,7 +48,8 @@ SrdfReport loadReferenceConfigurations(Model& model, const std::string& path) {
       while (in >> x) values.push_back(x);
       if (!in.eof() || static_cast<int>(values.size()) != j.nq)
         throw UrdfError("SRDF '" + path + "': group_state '" + state_name + "', joint '" + jname +
-                        "' needs " + std::to_string(j.nq) + " number(s), got '" + value + "'" + jline);
+                        "' needs " + std::to_string(j.nq) + " number(s), got '" + value + "'" +
+                        jline);
       for (int k = 0; k < j.nq; ++k) q[j.idx_q + k] = values[k];
     }
     normalize(model, q);

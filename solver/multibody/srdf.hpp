@@ -10,8 +10,8 @@
 namespace stride {
 
 struct SrdfReport {
-  std::vector<std::string> states;           // names loaded
-  std::vector<std::string> ignored_joints;   // joints named in the SRDF that the model lacks
+  std::vector<std::string> states;          // names loaded
+  std::vector<std::string> ignored_joints;  // joints named in the SRDF that the model lacks
 };
 
 // Adds every group_state to model.referenceConfigurations. Joints the model does not have (e.g. a

@@ -25,7 +25,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
   throw UrdfError("URDF '" + source + "': " + what);
 }
 
-std::string where(const TiXmlElement* e) { return " (line " + std::to_string(e->Row()) + ")"; }
+std::string where(const TiXmlElement* e) {
+  return " (line " + std::to_string(e->Row()) + ")";
+}
 
 // A number attribute that must be present and finite. urdfdom reads a non-number as 0 without a
 // word, and a missing inertia term as 0: a robot would silently lose mass.
@@ -57,9 +59,11 @@ void validateInertial(const TiXmlElement* link, const std::string& source) {
     I[k++] = numberAttribute(inertia, a, source, ctx + " <inertia>");
   Eigen::Matrix3d M;
   M << I[0], I[3], I[4], I[3], I[1], I[5], I[4], I[5], I[2];
-  const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(M).eigenvalues().minCoeff();
+  const double smallest =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(M).eigenvalues().minCoeff();
   if (smallest < -1e-9 * std::max(1.0, M.norm()))
-    fail(source, ctx + " has an inertia tensor that is not positive semi-definite" + where(inertia));
+    fail(source,
+         ctx + " has an inertia tensor that is not positive semi-definite" + where(inertia));
 }
 
 // Structural checks on the raw XML before urdfdom sees it, so that every error names the element
@@ -75,18 +79,21 @@ void validateStructure(const std::string& xml, const std::string& source) {
   if (!robot || std::string(robot->Value()) != "robot")
     fail(source, "the root element must be <robot>");
   std::set<std::string> links;
-  for (const TiXmlElement* l = robot->FirstChildElement("link"); l; l = l->NextSiblingElement("link")) {
+  for (const TiXmlElement* l = robot->FirstChildElement("link"); l;
+       l = l->NextSiblingElement("link")) {
     const char* name = l->Attribute("name");
     if (!name || !*name) fail(source, "<link> without a name" + where(l));
-    if (!links.insert(name).second) fail(source, "link '" + std::string(name) + "' is defined twice" + where(l));
+    if (!links.insert(name).second)
+      fail(source, "link '" + std::string(name) + "' is defined twice" + where(l));
     validateInertial(l, source);
   }
   if (links.empty()) fail(source, "no <link> element");
-  std::map<std::string, std::string> parent_joint_of;     // child link -> joint
+  std::map<std::string, std::string> parent_joint_of;        // child link -> joint
   std::map<std::string, std::vector<std::string>> children;  // parent link -> child links
   std::set<std::string> joints;
   static const std::set<std::string> kSupported = {"revolute", "continuous", "prismatic", "fixed"};
-  for (const TiXmlElement* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
+  for (const TiXmlElement* j = robot->FirstChildElement("joint"); j;
+       j = j->NextSiblingElement("joint")) {
     const char* name = j->Attribute("name");
     if (!name || !*name) fail(source, "<joint> without a name" + where(j));
     const std::string jn = name;
@@ -103,8 +110,12 @@ void validateStructure(const std::string& xml, const std::string& source) {
     const char* cl = c ? c->Attribute("link") : nullptr;
     if (!pl) fail(source, "joint '" + jn + "' has no <parent link=...>" + where(j));
     if (!cl) fail(source, "joint '" + jn + "' has no <child link=...>" + where(j));
-    if (!links.count(pl)) fail(source, "joint '" + jn + "' names a parent link '" + pl + "' that does not exist" + where(j));
-    if (!links.count(cl)) fail(source, "joint '" + jn + "' names a child link '" + cl + "' that does not exist" + where(j));
+    if (!links.count(pl))
+      fail(source,
+           "joint '" + jn + "' names a parent link '" + pl + "' that does not exist" + where(j));
+    if (!links.count(cl))
+      fail(source,
+           "joint '" + jn + "' names a child link '" + cl + "' that does not exist" + where(j));
     if (parent_joint_of.count(cl))
       fail(source, "link '" + std::string(cl) + "' is the child of two joints, '" +
                        parent_joint_of[cl] + "' and '" + jn + "'" + where(j) +
@@ -141,7 +152,8 @@ class CaptureLog : public console_bridge::OutputHandler {
   CaptureLog() { console_bridge::useOutputHandler(this); }
   ~CaptureLog() override { console_bridge::restorePreviousOutputHandler(); }
   void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
-    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN) messages += (messages.empty() ? "" : "; ") + text;
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN)
+      messages += (messages.empty() ? "" : "; ") + text;
   }
   std::string messages;
 };
@@ -158,7 +170,8 @@ Inertia linkInertia(const urdf::Link& link) {
   Eigen::Matrix3d I;
   I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
   // The URDF tensor is about the centre of mass, in the <inertial><origin> frame.
-  return Inertia::FromMassComInertia(in.mass, Eigen::Vector3d::Zero(), I).transformedBy(toSE3(in.origin));
+  return Inertia::FromMassComInertia(in.mass, Eigen::Vector3d::Zero(), I)
+      .transformedBy(toSE3(in.origin));
 }
 
 struct Builder {

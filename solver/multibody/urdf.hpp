@@ -1,8 +1,8 @@
 #pragma once
 // Model from a URDF file (parsed by urdfdom). Fixed joints are merged into the parent body's
 // inertia; every link (Body frame) and joint (Joint / FixedJoint frame) stays a frame. Joint order:
-// depth-first from the root link, sibling joints by name (ARCHITECTURE.md §3). Continuous joints are
-// revolute joints without position limits (nq = 1). Mimic tags are ignored: such joints are
+// depth-first from the root link, sibling joints by name (ARCHITECTURE.md §3). Continuous joints
+// are revolute joints without position limits (nq = 1). Mimic tags are ignored: such joints are
 // independent. Floating and planar joints inside the tree are refused.
 
 #include <stdexcept>

@@ -97,7 +97,8 @@ TEST(RobotConfig, BadInput) {
   };
   expectConfigError("name: [unclosed", "malformed YAML");
   expectConfigError(with("name: stride_quad", "nom: stride_quad"), "missing key 'name'");
-  expectConfigError(with("{frame: FL_foot, dim: 3}", "{frame: FL_toe, dim: 3}"), "contact frame 'FL_toe'");
+  expectConfigError(with("{frame: FL_foot, dim: 3}", "{frame: FL_toe, dim: 3}"),
+                    "contact frame 'FL_toe'");
   expectConfigError(with("{frame: FL_foot, dim: 3}", "{frame: FL_foot, dim: 4}"), "dim 4");
   expectConfigError(with("FL_HAA: 2.7,", ""), "torque_limits has no entry for joint 'FL_HAA'");
   expectConfigError(with("FL_HAA: 2.7,", "FL_HAA: -1,"), "must be positive");

@@ -82,12 +82,13 @@ inline Inertia randomInertia(std::mt19937& rng) {
 
 // A random tree of n_joints one-dof joints (plus a free-flyer root named "root_joint" when
 // free_flyer is set, which then carries every other joint). Each tree draws its own "chain bias"
-// so that seeds give chains, stars and everything between. Joints: revolute about +x/+y/+z exactly
-// (the aligned fast paths), revolute about a random unit axis (or -x/-y/-z), prismatic along a
-// random or aligned axis. Position limits always contain 0 (so neutral() is admissible); some
-// revolute joints are continuous. Every joint carries a body, sometimes at a non-identity
-// placement, sometimes with a second body merged as a fixed link would be. A few Operational
-// frames hang from random joints (the universe included) at random placements.
+// so that seeds give chains, stars and everything between; parents always have smaller indices.
+// Joints: revolute about +x/+y/+z exactly (the aligned fast paths), revolute about a random unit
+// axis (or -x/-y/-z), prismatic along a random or aligned axis. Position limits always contain 0
+// (so neutral() is admissible); some revolute joints are continuous. Every joint carries a body,
+// sometimes at a non-identity placement, sometimes with a second body merged as a fixed link would
+// be. A few Operational frames hang from random joints (the universe included) at random
+// placements.
 inline Model makeRandomTree(std::mt19937& rng, int n_joints, bool free_flyer) {
   using namespace random_tree_detail;
   Model model;
@@ -101,8 +102,17 @@ inline Model makeRandomTree(std::mt19937& rng, int n_joints, bool free_flyer) {
   }
   const double chain_bias = uniform(rng, 0.0, 1.0);
   for (int k = 0; k < n_joints; ++k) {
-    const int last = model.njoints() - 1;
-    const int parent = uniform(rng, 0, 1) < chain_bias ? last : uniformInt(rng, first_parent, last);
+    // Joints are added in depth-first order (Model::addJoint): the parent is the last joint added
+    // or one of its ancestors, down to the root (the free-flyer, else the universe). Every tree
+    // has such an order, so drawing uniformly on that path still reaches every shape.
+    std::vector<int> path;
+    for (int a = model.njoints() - 1; a >= first_parent; a = model.joints[a].parent) {
+      path.push_back(a);
+      if (a == 0) break;
+    }
+    const int parent = uniform(rng, 0, 1) < chain_bias
+                           ? path.front()
+                           : path[uniformInt(rng, 0, static_cast<int>(path.size()) - 1)];
 
     JointType type = JointType::Revolute;
     Eigen::Vector3d axis;
@@ -353,6 +363,32 @@ inline void rneaMatchesMassMatrixAndBias(const Model& model, const Sample& s) {
   for (int j = 0; j < model.nv; ++j)
     M_rnea.col(j) = rnea(no_gravity, d0, s.q, zero, Eigen::VectorXd::Unit(model.nv, j));
   EXPECT_LT(relativeError(M_rnea, M), kExact);
+  // Independent of the RNEA sweeps: gravity torques are the gradient of the potential energy,
+  // g = -m Jcom^T gravity, and the velocity terms follow from the kinetic energy alone
+  // (Lagrange / Euler-Poincare equations with the base velocity in the base frame):
+  //   b - g = d/dt (M v) + [v_base x* (M v)_base; 0] - 1/2 grad_q (v^T M v),
+  // d/dt along q ⊕ t v (whose velocity stays v), grad_q in the tangent space, both by central
+  // differences. Gyroscopic forces do no work, so this sees errors v^T (b - g) cannot.
+  Data dc(model);
+  const Eigen::Matrix3Xd Jcom = jacobianCenterOfMass(model, dc, s.q);
+  EXPECT_LT(relativeError(g, Eigen::VectorXd(-dc.mass * Jcom.transpose() * model.gravity)), kExact);
+  const double h = kFdStep;
+  const Eigen::MatrixXd M_plus = crba(model, dc, integrate(model, s.q, h * s.v));
+  const Eigen::MatrixXd M_minus = crba(model, dc, integrate(model, s.q, -h * s.v));
+  Eigen::VectorXd lagrange = (M_plus - M_minus) * s.v / (2.0 * h);
+  if (model.hasFreeFlyer()) {
+    const Vector6d momentum = (M * s.v).head<6>();
+    lagrange.head<6>() += forceCross(s.v.head<6>(), momentum);
+  }
+  lagrange -= manifoldCentralDifference(
+                  model, s.q,
+                  [&](const Eigen::VectorXd& q) {
+                    return Eigen::VectorXd::Constant(1, 0.5 * s.v.dot(crba(model, dc, q) * s.v));
+                  },
+                  h)
+                  .transpose();
+  EXPECT_LT(relativeError(Eigen::VectorXd(b - g), lagrange), kFd)
+      << "b - g    " << (b - g).transpose() << "\n lagrange " << lagrange.transpose();
 }
 
 // M symmetric positive definite, and 1/2 v^T M v equals the bodies' kinetic energy.

@@ -137,13 +137,16 @@ TEST(NoAllocation, CounterSeesAllocations) {
 }
 
 TEST(NoAllocation, SharedRobots) {
-  expectNoAllocation(buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/talos/talos_reduced.urdf", RootJoint::FreeFlyer));
-  expectNoAllocation(buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/ur5/ur5_robot.urdf", RootJoint::Fixed));
+  expectNoAllocation(buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/talos/talos_reduced.urdf",
+                                        RootJoint::FreeFlyer));
+  expectNoAllocation(
+      buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/ur5/ur5_robot.urdf", RootJoint::Fixed));
 }
 
 TEST(NoAllocation, InHouseRobots) {
   expectNoAllocation(loadRobot(STRIDE_CONFIG_DIR "/robots/stride_quad/stride_quad.yaml").model);
-  expectNoAllocation(loadRobot(STRIDE_CONFIG_DIR "/robots/stride_humanoid/stride_humanoid.yaml").model);
+  expectNoAllocation(
+      loadRobot(STRIDE_CONFIG_DIR "/robots/stride_humanoid/stride_humanoid.yaml").model);
 }
 
 }  // namespace

@@ -66,7 +66,7 @@ TEST(Urdf, StructureOrderAndLimits) {
   const Model model = buildModelFromUrdfString(kArm, RootJoint::Fixed);
   EXPECT_EQ(model.name, "arm");
   ASSERT_EQ(model.njoints(), 4);  // universe + 3 moving joints
-  EXPECT_EQ(model.nq, 3);        // continuous counts as one angle
+  EXPECT_EQ(model.nq, 3);         // continuous counts as one angle
   EXPECT_EQ(model.nv, 3);
   // Depth-first, siblings by name: shoulder, then a_joint before b_joint.
   EXPECT_EQ(model.joints[1].name, "shoulder");
@@ -102,8 +102,9 @@ TEST(Urdf, FixedLinksAreMergedWithTheirMass) {
   EXPECT_DOUBLE_EQ(model.inertias[model.getJointId("shoulder")].m, 1.5);
   EXPECT_DOUBLE_EQ(model.totalMass(), 1.0 + 0.5 + 0.7 + 0.2);
   // The merged body's centre of mass is the mass-weighted mean of the two, in the joint frame.
-  const Eigen::Vector3d sensor_com = Eigen::Vector3d(0, 0.05, 0.15) +
-                                     Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitX()) * Eigen::Vector3d(0.01, 0, 0);
+  const Eigen::Vector3d sensor_com =
+      Eigen::Vector3d(0, 0.05, 0.15) +
+      Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitX()) * Eigen::Vector3d(0.01, 0, 0);
   const Eigen::Vector3d expected = (1.0 * Eigen::Vector3d(0, 0, 0.1) + 0.5 * sensor_com) / 1.5;
   EXPECT_LT((model.inertias[model.getJointId("shoulder")].com() - expected).norm(), 1e-14);
 }
@@ -128,7 +129,8 @@ TEST(Urdf, BadInputNamesFileAndElement) {
   expectError("<robot name='x'><link name='a'></robot>", "malformed XML at line 1");
   expectError("<model/>", "root element must be <robot>");
   expectError("<robot name='x'/>", "no <link>");
-  expectError(replace(kArm, "type=\"prismatic\"", "type=\"floating\""), "joint 'a_joint' has type 'floating'");
+  expectError(replace(kArm, "type=\"prismatic\"", "type=\"floating\""),
+              "joint 'a_joint' has type 'floating'");
   expectError(replace(kArm, "type=\"prismatic\"", "type=\"planar\""), "'planar'");
   expectError(replace(kArm, "<child link=\"slider\"/>", "<child link=\"lower\"/>"),
               "link 'lower' is the child of two joints");
@@ -136,27 +138,33 @@ TEST(Urdf, BadInputNamesFileAndElement) {
               "child link 'nowhere' that does not exist");
   // A loop with no root left: base becomes the child of the tool.
   expectError(replace(kArm, "</robot>",
-                      "<joint name='back' type='fixed'><parent link='tool'/><child link='base'/></joint></robot>"),
+                      "<joint name='back' type='fixed'><parent link='tool'/><child "
+                      "link='base'/></joint></robot>"),
               "no root link");
   // Two roots.
-  expectError(replace(kArm, "<link name=\"tool\"/>", "<link name=\"tool\"/><link name=\"island\"/>"),
-              "several root links");
+  expectError(
+      replace(kArm, "<link name=\"tool\"/>", "<link name=\"tool\"/><link name=\"island\"/>"),
+      "several root links");
   // A cycle that does not reach the root.
-  expectError(replace(kArm, "</robot>",
-                      "<link name='p'/><link name='r'/>"
-                      "<joint name='pr' type='fixed'><parent link='p'/><child link='r'/></joint>"
-                      "<joint name='rp' type='fixed'><parent link='r'/><child link='p'/></joint></robot>"),
-              "kinematic loop");
-  expectError(replace(kArm, "<axis xyz=\"1 0 0\"/>", "<axis xyz=\"0 0 0\"/>"), "'a_joint' has a zero <axis>");
-  expectError(replace(kArm, "lower=\"-1\" upper=\"1.5\"", "lower=\"2\" upper=\"1.5\""), "lower limit above");
+  expectError(
+      replace(kArm, "</robot>",
+              "<link name='p'/><link name='r'/>"
+              "<joint name='pr' type='fixed'><parent link='p'/><child link='r'/></joint>"
+              "<joint name='rp' type='fixed'><parent link='r'/><child link='p'/></joint></robot>"),
+      "kinematic loop");
+  expectError(replace(kArm, "<axis xyz=\"1 0 0\"/>", "<axis xyz=\"0 0 0\"/>"),
+              "'a_joint' has a zero <axis>");
+  expectError(replace(kArm, "lower=\"-1\" upper=\"1.5\"", "lower=\"2\" upper=\"1.5\""),
+              "lower limit above");
   expectError(replace(kArm, "<mass value=\"0.7\"/>", "<mass value=\"abc\"/>"),
               "link 'lower' <inertial> <mass> has value='abc', not a finite number");
   expectError(replace(kArm, "<mass value=\"0.7\"/>", "<mass value=\"-1\"/>"), "negative mass");
   expectError(replace(kArm, "ixx=\"0.02\" ", ""), "link 'upper' <inertial> <inertia> has no 'ixx'");
   expectError(replace(kArm, "izz=\"0.002\"", "izz=\"-0.5\""), "not positive semi-definite");
   // What only urdfdom checks still comes back with its own words.
-  expectError(replace(kArm, "<limit lower=\"0\" upper=\"0.1\" effort=\"100\" velocity=\"0.5\"/>", ""),
-              "PRISMATIC without limits");
+  expectError(
+      replace(kArm, "<limit lower=\"0\" upper=\"0.1\" effort=\"100\" velocity=\"0.5\"/>", ""),
+      "PRISMATIC without limits");
 }
 
 TEST(Urdf, WrongSizesAreCaughtAtTheBoundary) {
@@ -169,31 +177,37 @@ TEST(Urdf, WrongSizesAreCaughtAtTheBoundary) {
   try {
     rnea(model, data, v, v, v);
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("'q' has size 9, expected 10"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'q' has size 9, expected 10"), std::string::npos)
+        << e.what();
   }
 }
 
 TEST(Urdf, EverySharedRobotLoads) {
   // nv with a free-flyer root, as the files describe them (fixed joints merged).
   const std::vector<std::pair<std::string, int>> robots = {
-      {"anymal/anymal.urdf", 18},        {"anymal_c/anymal.urdf", 18},  {"bolt/bolt.urdf", 12},
-      {"hyq/hyq_no_sensors.urdf", 18},   {"panda/panda.urdf", 15},      {"solo12/solo.urdf", 14},
-      {"solo12/solo12.urdf", 18},        {"talos/talos_full_v2.urdf", 50},
-      {"talos/talos_reduced.urdf", 38},  {"ur5/ur5_robot.urdf", 12}};
+      {"anymal/anymal.urdf", 18},       {"anymal_c/anymal.urdf", 18},
+      {"bolt/bolt.urdf", 12},           {"hyq/hyq_no_sensors.urdf", 18},
+      {"panda/panda.urdf", 15},         {"solo12/solo.urdf", 14},
+      {"solo12/solo12.urdf", 18},       {"talos/talos_full_v2.urdf", 50},
+      {"talos/talos_reduced.urdf", 38}, {"ur5/ur5_robot.urdf", 12}};
   for (const auto& [file, nv] : robots) {
-    const Model model = buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/" + file, RootJoint::FreeFlyer);
+    const Model model =
+        buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/" + file, RootJoint::FreeFlyer);
     EXPECT_EQ(model.nv, nv) << file;
     EXPECT_GT(model.totalMass(), 0.5) << file;
   }
   // ANYmal C has a link and a joint both named LF_HAA: both stay reachable as frames.
-  const Model anymal = buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/anymal_c/anymal.urdf", RootJoint::FreeFlyer);
+  const Model anymal =
+      buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/anymal_c/anymal.urdf", RootJoint::FreeFlyer);
   EXPECT_EQ(anymal.frames[anymal.getFrameId("LF_HAA", FrameType::Joint)].type, FrameType::Joint);
   EXPECT_EQ(anymal.frames[anymal.getFrameId("LF_HAA", FrameType::Body)].type, FrameType::Body);
 }
 
 TEST(Srdf, ReferenceConfigurations) {
-  Model solo = buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/solo12/solo12.urdf", RootJoint::FreeFlyer);
-  const SrdfReport report = loadReferenceConfigurations(solo, STRIDE_SHARED_DIR "/robots/solo12/solo.srdf");
+  Model solo =
+      buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/solo12/solo12.urdf", RootJoint::FreeFlyer);
+  const SrdfReport report =
+      loadReferenceConfigurations(solo, STRIDE_SHARED_DIR "/robots/solo12/solo.srdf");
   ASSERT_TRUE(solo.referenceConfigurations.count("standing"));
   const Eigen::VectorXd& q = solo.referenceConfigurations["standing"];
   EXPECT_DOUBLE_EQ(q[2], 0.235);
@@ -203,8 +217,10 @@ TEST(Srdf, ReferenceConfigurations) {
   EXPECT_TRUE(report.ignored_joints.empty());
 
   // The full Talos SRDF against the reduced model: extra joints are reported, not fatal.
-  Model talos = buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/talos/talos_reduced.urdf", RootJoint::FreeFlyer);
-  const SrdfReport tr = loadReferenceConfigurations(talos, STRIDE_SHARED_DIR "/robots/talos/talos.srdf");
+  Model talos = buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/talos/talos_reduced.urdf",
+                                   RootJoint::FreeFlyer);
+  const SrdfReport tr =
+      loadReferenceConfigurations(talos, STRIDE_SHARED_DIR "/robots/talos/talos.srdf");
   ASSERT_TRUE(talos.referenceConfigurations.count("half_sitting"));
   EXPECT_NEAR(talos.referenceConfigurations["half_sitting"][2], 1.01927, 1e-12);
 }
@@ -219,7 +235,8 @@ TEST(Srdf, BadInput) {
     loadReferenceConfigurations(model, path);
     ADD_FAILURE() << "a 3-number free-flyer value was accepted";
   } catch (const UrdfError& e) {
-    EXPECT_NE(std::string(e.what()).find("joint 'root_joint' needs 7 number(s)"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("joint 'root_joint' needs 7 number(s)"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -38,18 +38,32 @@ void registerAlgorithm(const std::string& algorithm, const Kernel& kernel) {
 }  // namespace
 
 void registerMultibodyBenchmarks() {
-  registerAlgorithm("fk", [](const BenchRobot& r, Data& d, int k) { forwardKinematics(r.model, d, r.q[k]); });
+  registerAlgorithm(
+      "fk", [](const BenchRobot& r, Data& d, int k) { forwardKinematics(r.model, d, r.q[k]); });
   registerAlgorithm("fk_va", [](const BenchRobot& r, Data& d, int k) {
     forwardKinematics(r.model, d, r.q[k], r.v[k], r.a[k]);
   });
-  registerAlgorithm("rnea", [](const BenchRobot& r, Data& d, int k) { rnea(r.model, d, r.q[k], r.v[k], r.a[k]); });
-  registerAlgorithm("nle", [](const BenchRobot& r, Data& d, int k) { nonLinearEffects(r.model, d, r.q[k], r.v[k]); });
+  registerAlgorithm("rnea", [](const BenchRobot& r, Data& d, int k) {
+    rnea(r.model, d, r.q[k], r.v[k], r.a[k]);
+  });
+  registerAlgorithm("nle", [](const BenchRobot& r, Data& d, int k) {
+    nonLinearEffects(r.model, d, r.q[k], r.v[k]);
+  });
   registerAlgorithm("crba", [](const BenchRobot& r, Data& d, int k) { crba(r.model, d, r.q[k]); });
-  registerAlgorithm("aba", [](const BenchRobot& r, Data& d, int k) { aba(r.model, d, r.q[k], r.v[k], r.tau[k]); });
-  registerAlgorithm("jacobians", [](const BenchRobot& r, Data& d, int k) { computeJointJacobians(r.model, d, r.q[k]); });
-  registerAlgorithm("com", [](const BenchRobot& r, Data& d, int k) { centerOfMass(r.model, d, r.q[k]); });
-  registerAlgorithm("jacobian_com", [](const BenchRobot& r, Data& d, int k) { jacobianCenterOfMass(r.model, d, r.q[k]); });
-  registerAlgorithm("centroidal_map", [](const BenchRobot& r, Data& d, int k) { computeCentroidalMap(r.model, d, r.q[k]); });
+  registerAlgorithm("aba", [](const BenchRobot& r, Data& d, int k) {
+    aba(r.model, d, r.q[k], r.v[k], r.tau[k]);
+  });
+  registerAlgorithm("jacobians", [](const BenchRobot& r, Data& d, int k) {
+    computeJointJacobians(r.model, d, r.q[k]);
+  });
+  registerAlgorithm("com",
+                    [](const BenchRobot& r, Data& d, int k) { centerOfMass(r.model, d, r.q[k]); });
+  registerAlgorithm("jacobian_com", [](const BenchRobot& r, Data& d, int k) {
+    jacobianCenterOfMass(r.model, d, r.q[k]);
+  });
+  registerAlgorithm("centroidal_map", [](const BenchRobot& r, Data& d, int k) {
+    computeCentroidalMap(r.model, d, r.q[k]);
+  });
 }
 
 }  // namespace stride::bench

@@ -46,7 +46,8 @@ const std::vector<BenchRobot>& benchRobots() {
       out.push_back(withSamples(s.name, buildModelFromUrdf(path.string(), s.root)));
     }
     for (const char* name : {"stride_quad", "stride_humanoid"}) {
-      const std::string yaml = std::string(STRIDE_CONFIG_DIR) + "/robots/" + name + "/" + name + ".yaml";
+      const std::string yaml =
+          std::string(STRIDE_CONFIG_DIR) + "/robots/" + name + "/" + name + ".yaml";
       out.push_back(withSamples(name, loadRobot(yaml).model));
     }
     return out;

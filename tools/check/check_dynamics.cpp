@@ -40,7 +40,8 @@ constexpr double kDerivativeTolerance = 1e-7;
 
 Eigen::VectorXd toVector(const YAML::Node& node) {
   Eigen::VectorXd v(static_cast<Eigen::Index>(node.size()));
-  for (std::size_t k = 0; k < node.size(); ++k) v[static_cast<Eigen::Index>(k)] = node[k].as<double>();
+  for (std::size_t k = 0; k < node.size(); ++k)
+    v[static_cast<Eigen::Index>(k)] = node[k].as<double>();
   return v;
 }
 
@@ -107,7 +108,8 @@ int main(int argc, char** argv) {
 
   Model model;
   try {
-    model = buildModelFromUrdf(urdf.string(), root == "fixed" ? RootJoint::Fixed : RootJoint::FreeFlyer);
+    model = buildModelFromUrdf(urdf.string(),
+                               root == "fixed" ? RootJoint::Fixed : RootJoint::FreeFlyer);
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;
@@ -163,7 +165,8 @@ int main(int argc, char** argv) {
        }},
       {"gravity_torque", kTolerance,
        [&](const YAML::Node& n, const Sample& s) {
-         return relativeError(computeGeneralizedGravity(model, data, s.q), vec(n, "gravity_torque"));
+         return relativeError(computeGeneralizedGravity(model, data, s.q),
+                              vec(n, "gravity_torque"));
        }},
       {"aba", kTolerance,
        [&](const YAML::Node& n, const Sample& s) {
@@ -193,9 +196,11 @@ int main(int argc, char** argv) {
            const int id = model.getFrameId(name);
            const YAML::Node& f = entry.second;
            worst = std::max(worst, relativeError(data.oMf[id].p, toVector(f["translation"])));
-           worst = std::max(worst, relativeError(rowMajor(data.oMf[id].R), toVector(f["rotation"])));
+           worst =
+               std::max(worst, relativeError(rowMajor(data.oMf[id].R), toVector(f["rotation"])));
            getFrameJacobian(model, data, id, ReferenceFrame::LocalWorldAligned, J);
-           worst = std::max(worst, relativeError(rowMajor(J), toVector(f["jacobian_local_world_aligned"])));
+           worst = std::max(
+               worst, relativeError(rowMajor(J), toVector(f["jacobian_local_world_aligned"])));
          }
          return worst;
        }},
@@ -217,7 +222,8 @@ int main(int argc, char** argv) {
   std::map<std::string, int> seen;
   for (const auto& sample : ref["samples"]) {
     for (const auto& entry : sample)
-      if (!known.count(entry.first.as<std::string>())) unknown.insert(entry.first.as<std::string>());
+      if (!known.count(entry.first.as<std::string>()))
+        unknown.insert(entry.first.as<std::string>());
     Sample s{vec(sample, "q"), vec(sample, "v"), vec(sample, "a"), vec(sample, "tau")};
     for (const auto& qd : quantities) {
       if (!sample[qd.name]) continue;
@@ -238,15 +244,17 @@ int main(int argc, char** argv) {
     if (!seen.count(qd.name)) {
       std::printf("%-22s -          not in this reference file\n", qd.name.c_str());
     } else if (!qd.check) {
-      std::printf("%-22s -          not yet computed (%d samples)\n", qd.name.c_str(), seen[qd.name]);
+      std::printf("%-22s -          not yet computed (%d samples)\n", qd.name.c_str(),
+                  seen[qd.name]);
     } else {
       const bool ok = worst[qd.name] <= qd.tolerance;
       all_ok &= ok;
-      std::printf("%-22s %.3e  %s (tolerance %.0e, %d samples)\n", qd.name.c_str(),
-                  worst[qd.name], ok ? "ok" : "FAIL", qd.tolerance, seen[qd.name]);
+      std::printf("%-22s %.3e  %s (tolerance %.0e, %d samples)\n", qd.name.c_str(), worst[qd.name],
+                  ok ? "ok" : "FAIL", qd.tolerance, seen[qd.name]);
     }
   }
-  for (const auto& k : unknown) std::printf("%-22s -          unknown key, not checked\n", k.c_str());
+  for (const auto& k : unknown)
+    std::printf("%-22s -          unknown key, not checked\n", k.c_str());
   std::printf("%s\n", all_ok ? "PASS" : "FAIL");
   return all_ok ? 0 : 1;
 }

@@ -33,7 +33,8 @@ double medianMicroseconds(const std::function<void()>& f, int iterations) {
   for (int b = 0; b < kBatches; ++b) {
     const auto start = std::chrono::steady_clock::now();
     for (int k = 0; k < iterations; ++k) f();
-    t[b] = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count() /
+    t[b] = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start)
+               .count() /
            iterations;
   }
   std::nth_element(t.begin(), t.begin() + kBatches / 2, t.end());
@@ -46,15 +47,15 @@ void describe(const Robot& robot, int iterations) {
   int revolute = 0;
   for (const Joint& j : model.joints) revolute += j.type == JointType::Revolute;
   std::printf("\n%s  (%s)\n", robot.name.c_str(), robot.urdf_path.c_str());
-  std::printf("  %d actuated joints, nq = %d, nv = %d, %d frames, mass %.2f kg\n", revolute, model.nq,
-              model.nv, model.nframes(), model.totalMass());
+  std::printf("  %d actuated joints, nq = %d, nv = %d, %d frames, mass %.2f kg\n", revolute,
+              model.nq, model.nv, model.nframes(), model.totalMass());
 
   // Default posture: where the contacts and the centre of mass are.
   const Eigen::VectorXd& q0 = robot.default_q;
   framesForwardKinematics(model, data, q0);
   const Eigen::Vector3d com = centerOfMass(model, data, q0);
-  std::printf("  default posture: base at z = %.3f m, centre of mass at (%.3f, %.3f, %.3f) m\n", q0[2],
-              com.x(), com.y(), com.z());
+  std::printf("  default posture: base at z = %.3f m, centre of mass at (%.3f, %.3f, %.3f) m\n",
+              q0[2], com.x(), com.y(), com.z());
   for (const ContactSpec& c : robot.contacts) {
     const SE3& oMf = data.oMf[model.getFrameId(c.frame)];
     std::printf("    %-8s %s contact at (%6.3f, %6.3f, %6.3f) m\n", c.frame.c_str(),
@@ -70,7 +71,8 @@ void describe(const Robot& robot, int iterations) {
   // Timings on random states within the joint limits.
   std::mt19937 rng(1);
   const Eigen::VectorXd q = randomConfiguration(model, rng);
-  const Eigen::VectorXd v = Eigen::VectorXd::Random(model.nv), a = Eigen::VectorXd::Random(model.nv);
+  const Eigen::VectorXd v = Eigen::VectorXd::Random(model.nv),
+                        a = Eigen::VectorXd::Random(model.nv);
   const struct {
     const char* name;
     std::function<void()> run;

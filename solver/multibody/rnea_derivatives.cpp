@@ -1,0 +1,142 @@
+#include "solver/multibody/rnea_derivatives.hpp"
+
+#include "solver/multibody/joint.hpp"
+
+// Derivation (world frame; S_j the world motion subspace of dof j, λ the parent joint of j's joint,
+// v, a the world spatial velocity and acceleration of a body, a_0 = -g; "i ⪰ j" when dof i belongs
+// to the subtree of dof j's joint, its own joint included).
+//
+// Moving q_j turns j's subtree by S_j: ∂S_k/∂q_j = S_j x S_k, and the velocity and acceleration
+// of a body k of that subtree change by
+//   ∂v_k/∂q_j = S_j x v_k + w_j,                 w_j = -S_j x v_λ
+//   ∂a_k/∂q_j = S_j x a_k + u_j + w_j x (v_k - v_λ),  u_j = -S_j x a_λ.
+// A pure turn of everything (S x on motions, S x* on forces, Y -> S x* Y - Y S x) maps the body
+// force f = Y a + v x* (Y v) to S x* f, so only the extra terms remain. With Ẏ = v x* Y - Y v x
+// they sum over a subtree to
+//   ∂F_i/∂q_j = S_j x* F_i + Y_i c_j + Ẏ_i w_j + w_j x* h_i,     c_j = u_j - w_j x v_λ,
+// where F_i, Y_i, Ẏ_i, h_i = Σ Y v are the composite force, inertia, inertia rate and momentum
+// of the subtree of dof i. Because <S x m, f> + <m, S x* f> = 0, for τ_i = S_i . F_i:
+//   i ⪰ j:  ∂τ_i/∂q_j = A_i . c_j + B_i . w_j,   A_i = Y_i S_i,  B_i = Ẏ_i^T S_i - S_i x* h_i
+//   i ≺ j:  ∂τ_i/∂q_j = S_i . G_j,               G_j = S_j x* F_j + Y_j c_j + Ẏ_j w_j + w_j x* h_j
+// The same steps for the joint rates (∂v_k/∂q̇_j = S_j, ∂a_k/∂q̇_j = S_j x v_k + e_j with
+// e_j = (v_λ + v_J) x S_j, v_J the velocity of j's own joint) give
+//   i ⪰ j:  ∂τ_i/∂v_j = A_i . e_j + B_i . S_j
+//   i ≺ j:  ∂τ_i/∂v_j = S_i . H_j,               H_j = Ẏ_j S_j + Y_j e_j + S_j x* h_j.
+// Every entry is one 6-vector dot product over pairs of dofs on a common path, like the CRBA.
+
+namespace stride {
+
+namespace {
+
+// [v x*] Y for a 6x6 inertia matrix Y; Ẏ = P + P^T with P = [v x*] Y (since [v x]^T = -[v x*]).
+Matrix6d inertiaRate(const Vector6d& v, const Inertia& Y) {
+  const Matrix6d Ym = Y.matrix();
+  const Eigen::Matrix3d Nu = skew(v.head<3>()), W = skew(v.tail<3>());
+  // [v x*] = [W, 0; Nu, W]
+  Matrix6d P;
+  P.topRows<3>().noalias() = W * Ym.topRows<3>();
+  P.bottomRows<3>().noalias() = Nu * Ym.topRows<3>() + W * Ym.bottomRows<3>();
+  return P + P.transpose();
+}
+
+inline double dot6(const double* a, const Vector6d& b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5];
+}
+
+}  // namespace
+
+void computeRNEADerivatives(const Model& model, Data& data,
+                            const Eigen::Ref<const Eigen::VectorXd>& q,
+                            const Eigen::Ref<const Eigen::VectorXd>& v,
+                            const Eigen::Ref<const Eigen::VectorXd>& a) {
+  model.checkConfiguration(q, "computeRNEADerivatives");
+  model.checkVelocity(v, "computeRNEADerivatives");
+  if (a.size() != model.nv) throwSizeError("computeRNEADerivatives", "a", model.nv, a.size());
+  const int n = model.njoints();
+
+  // Forward sweep: world placements, subspaces, velocities, accelerations (gravity included), the
+  // per-dof vectors w, c, e, and each body's inertia, inertia rate, momentum and force.
+  data.ov[0].setZero();
+  data.oa[0].head<3>() = -model.gravity;
+  data.oa[0].tail<3>().setZero();
+  for (int i = 1; i < n; ++i) {
+    const Joint& j = model.joints[i];
+    jointPlacement(j, q.data() + j.idx_q, data.liMi[i]);
+    data.oMi[i] = data.oMi[j.parent] * data.liMi[i];
+    const SE3& oMi = data.oMi[i];
+    auto S = data.J.middleCols(j.idx_v, j.nv);
+    if (j.type == JointType::FreeFlyer)
+      S = oMi.toActionMatrix();
+    else
+      S.col(0) = jointSubspaceWorld(j, oMi);
+    const Vector6d vJ = S * v.segment(j.idx_v, j.nv);
+    const Vector6d& vp = data.ov[j.parent];
+    const Vector6d& ap = data.oa[j.parent];
+    data.ov[i] = vp + vJ;
+    data.oa[i] = ap + S * a.segment(j.idx_v, j.nv) + motionCross(data.ov[i], vJ);
+    const Vector6d vsum = vp + data.ov[i];
+    for (int k = 0; k < j.nv; ++k) {
+      const Vector6d Sk = S.col(k);
+      const int d = j.idx_v + k;
+      const Vector6d w = motionCross(vp, Sk);  // -S x v_λ
+      data.dW.col(d) = w;
+      data.dC.col(d) = motionCross(ap, Sk) - motionCross(w, vp);
+      data.dE.col(d) = motionCross(vsum, Sk);
+    }
+    const Inertia oY = model.inertias[i].transformedBy(oMi);
+    data.oYcrb[i] = oY;
+    data.oh[i] = oY * data.ov[i];
+    data.oF[i] = oY * data.oa[i] + forceCross(data.ov[i], data.oh[i]);
+    data.oBcrb[i] = inertiaRate(data.ov[i], oY);
+  }
+
+  // Backward sweep: with the subtree of joint i complete, the per-dof vectors A, B, G, H of its
+  // dofs, then the entries of the columns of its dofs, then accumulation into the parent.
+  Eigen::MatrixXd& dq = data.dtau_dq;
+  Eigen::MatrixXd& dv = data.dtau_dv;
+  for (int i = n - 1; i > 0; --i) {
+    const Joint& j = model.joints[i];
+    const Inertia& Y = data.oYcrb[i];
+    const Matrix6d& B = data.oBcrb[i];
+    const Vector6d& h = data.oh[i];
+    const Vector6d& F = data.oF[i];
+    for (int k = j.idx_v; k < j.idx_v + j.nv; ++k) {
+      const Vector6d Sk = data.J.col(k);
+      const Vector6d w = data.dW.col(k), c = data.dC.col(k), e = data.dE.col(k);
+      data.tau[k] = Sk.dot(F);
+      data.dA.col(k) = Y * Sk;
+      data.dB.col(k).noalias() = B.transpose() * Sk;
+      data.dB.col(k) -= forceCross(Sk, h);
+      data.dG.col(k) = forceCross(Sk, F) + Y * c + forceCross(w, h);
+      data.dG.col(k).noalias() += B * w;
+      data.dH.col(k) = Y * e + forceCross(Sk, h);
+      data.dH.col(k).noalias() += B * Sk;
+    }
+    const int first = j.idx_v, end = first + model.nvSubtree[first];
+    for (int col = first; col < first + j.nv; ++col) {
+      const Vector6d c = data.dC.col(col), w = data.dW.col(col), e = data.dE.col(col),
+                     Sj = data.J.col(col), G = data.dG.col(col), H = data.dH.col(col);
+      // Rows in the subtree (this joint's dofs included).
+      for (int r = first; r < end; ++r) {
+        const double* A = data.dA.col(r).data();
+        const double* Bv = data.dB.col(r).data();
+        dq(r, col) = dot6(A, c) + dot6(Bv, w);
+        dv(r, col) = dot6(A, e) + dot6(Bv, Sj);
+      }
+      // Rows of the strict ancestors.
+      for (int r = model.parentDof[first]; r >= 0; r = model.parentDof[r]) {
+        const double* Sr = data.J.col(r).data();
+        dq(r, col) = dot6(Sr, G);
+        dv(r, col) = dot6(Sr, H);
+      }
+    }
+    if (j.parent > 0) {
+      data.oYcrb[j.parent] += Y;
+      data.oBcrb[j.parent] += B;
+      data.oh[j.parent] += h;
+      data.oF[j.parent] += F;
+    }
+  }
+}
+
+}  // namespace stride

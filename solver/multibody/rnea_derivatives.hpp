@@ -1,0 +1,18 @@
+#pragma once
+// Analytical first-order derivatives of inverse dynamics, ∂τ/∂q and ∂τ/∂v of τ = RNEA(q, v, a)
+// (∂τ/∂a = M, from crba). Derivatives with respect to q are in the tangent space: column j is
+// d/dε τ(q ⊕ ε e_j, v, a). The method follows Carpentier & Mansard (RSS 2018): everything in the
+// world frame, where moving dof j turns its whole subtree by the twist S_j, so each derivative
+// becomes a 6-vector dot product along the tree; the derivation is in rnea_derivatives.cpp.
+
+#include "solver/multibody/data.hpp"
+
+namespace stride {
+
+// Fills data.dtau_dq and data.dtau_dv (nv x nv), and data.tau = rnea(q, v, a).
+void computeRNEADerivatives(const Model& model, Data& data,
+                            const Eigen::Ref<const Eigen::VectorXd>& q,
+                            const Eigen::Ref<const Eigen::VectorXd>& v,
+                            const Eigen::Ref<const Eigen::VectorXd>& a);
+
+}  // namespace stride
