@@ -28,6 +28,7 @@
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/jacobian.hpp"
 #include "solver/multibody/rnea.hpp"
+#include "solver/multibody/rnea_derivatives.hpp"
 #include "solver/multibody/urdf.hpp"
 
 namespace fs = std::filesystem;
@@ -205,8 +206,16 @@ int main(int argc, char** argv) {
          return worst;
        }},
       // Provided by the derivatives and contact dynamics issue.
-      {"drnea_dq", kDerivativeTolerance, {}},
-      {"drnea_dv", kDerivativeTolerance, {}},
+      {"drnea_dq", kDerivativeTolerance,
+       [&](const YAML::Node& n, const Sample& s) {
+         computeRNEADerivatives(model, data, s.q, s.v, s.a);
+         return relativeError(rowMajor(data.dtau_dq), vec(n, "drnea_dq"));
+       }},
+      {"drnea_dv", kDerivativeTolerance,
+       [&](const YAML::Node& n, const Sample& s) {
+         computeRNEADerivatives(model, data, s.q, s.v, s.a);
+         return relativeError(rowMajor(data.dtau_dv), vec(n, "drnea_dv"));
+       }},
       {"daba_dq", kDerivativeTolerance, {}},
       {"daba_dv", kDerivativeTolerance, {}},
       {"contact_dynamics", kTolerance, {}},
