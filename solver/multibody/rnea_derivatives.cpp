@@ -45,19 +45,24 @@ inline double dot6(const double* a, const Vector6d& b) {
 
 }  // namespace
 
-void computeRNEADerivatives(const Model& model, Data& data,
-                            const Eigen::Ref<const Eigen::VectorXd>& q,
-                            const Eigen::Ref<const Eigen::VectorXd>& v,
-                            const Eigen::Ref<const Eigen::VectorXd>& a) {
+namespace {
+void rneaDerivatives(const Model& model, Data& data, const Eigen::Ref<const Eigen::VectorXd>& q,
+                     const Eigen::Ref<const Eigen::VectorXd>& v,
+                     const Eigen::Ref<const Eigen::VectorXd>& a, const std::vector<Vector6d>* fext,
+                     bool with_gravity) {
   model.checkConfiguration(q, "computeRNEADerivatives");
   model.checkVelocity(v, "computeRNEADerivatives");
   if (a.size() != model.nv) throwSizeError("computeRNEADerivatives", "a", model.nv, a.size());
   const int n = model.njoints();
+  if (fext && static_cast<int>(fext->size()) != n)
+    throwSizeError("computeRNEADerivatives", "fext", n, static_cast<long>(fext->size()));
 
   // Forward sweep: world placements, subspaces, velocities, accelerations (gravity included), the
   // per-dof vectors w, c, e, and each body's inertia, inertia rate, momentum and force.
   data.ov[0].setZero();
-  data.oa[0].head<3>() = -model.gravity;
+  // An external force turns with its body, like the body's own force: it simply joins the
+  // composite force F (the derivation above holds for f - f_ext).
+  data.oa[0].head<3>() = with_gravity ? Eigen::Vector3d(-model.gravity) : Eigen::Vector3d::Zero();
   data.oa[0].tail<3>().setZero();
   for (int i = 1; i < n; ++i) {
     const Joint& j = model.joints[i];
@@ -87,6 +92,7 @@ void computeRNEADerivatives(const Model& model, Data& data,
     data.oYcrb[i] = oY;
     data.oh[i] = oY * data.ov[i];
     data.oF[i] = oY * data.oa[i] + forceCross(data.ov[i], data.oh[i]);
+    if (fext) data.oF[i] -= oMi.actForce((*fext)[i]);
     data.oBcrb[i] = inertiaRate(data.ov[i], oY);
   }
 
@@ -137,6 +143,22 @@ void computeRNEADerivatives(const Model& model, Data& data,
       data.oF[j.parent] += F;
     }
   }
+}
+}  // namespace
+
+void computeRNEADerivatives(const Model& model, Data& data,
+                            const Eigen::Ref<const Eigen::VectorXd>& q,
+                            const Eigen::Ref<const Eigen::VectorXd>& v,
+                            const Eigen::Ref<const Eigen::VectorXd>& a) {
+  rneaDerivatives(model, data, q, v, a, nullptr, true);
+}
+
+void computeRNEADerivatives(const Model& model, Data& data,
+                            const Eigen::Ref<const Eigen::VectorXd>& q,
+                            const Eigen::Ref<const Eigen::VectorXd>& v,
+                            const Eigen::Ref<const Eigen::VectorXd>& a,
+                            const std::vector<Vector6d>& fext, bool with_gravity) {
+  rneaDerivatives(model, data, q, v, a, &fext, with_gravity);
 }
 
 }  // namespace stride

@@ -15,4 +15,13 @@ void computeRNEADerivatives(const Model& model, Data& data,
                             const Eigen::Ref<const Eigen::VectorXd>& v,
                             const Eigen::Ref<const Eigen::VectorXd>& a);
 
+// The same with external forces and a choice of gravity: τ = M a + b - Σ J_i^T f_i, where
+// fext[i] is the wrench on joint i's body, in the joint's frame, held fixed in that frame as q
+// moves (a contact force expressed in a contact frame). Impulse dynamics uses gravity off.
+void computeRNEADerivatives(const Model& model, Data& data,
+                            const Eigen::Ref<const Eigen::VectorXd>& q,
+                            const Eigen::Ref<const Eigen::VectorXd>& v,
+                            const Eigen::Ref<const Eigen::VectorXd>& a,
+                            const std::vector<Vector6d>& fext, bool with_gravity);
+
 }  // namespace stride

@@ -9,7 +9,9 @@
 #include <random>
 
 #include "config/robot_config.hpp"
+#include "solver/contact/knot_dynamics.hpp"
 #include "solver/multibody/aba.hpp"
+#include "solver/multibody/aba_derivatives.hpp"
 #include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/centroidal.hpp"
 #include "solver/multibody/crba.hpp"
@@ -18,6 +20,7 @@
 #include "solver/multibody/kinematics.hpp"
 #include "solver/multibody/lie_group.hpp"
 #include "solver/multibody/rnea.hpp"
+#include "solver/multibody/rnea_derivatives.hpp"
 #include "solver/multibody/urdf.hpp"
 
 namespace {
@@ -147,6 +150,52 @@ TEST(NoAllocation, InHouseRobots) {
   expectNoAllocation(loadRobot(STRIDE_CONFIG_DIR "/robots/stride_quad/stride_quad.yaml").model);
   expectNoAllocation(
       loadRobot(STRIDE_CONFIG_DIR "/robots/stride_humanoid/stride_humanoid.yaml").model);
+}
+
+// Derivatives, contact and impulse dynamics and the knot: nothing allocates after setup, for any
+// active subset of the contact set.
+TEST(NoAllocation, DerivativesContactsAndKnots) {
+  struct Setup {
+    Model model;
+    std::vector<std::pair<std::string, int>> contacts;
+  } setups[] = {
+      {buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/solo12/solo12.urdf", RootJoint::FreeFlyer),
+       {{"FL_FOOT", 3}, {"FR_FOOT", 3}, {"HL_FOOT", 3}, {"HR_FOOT", 3}}},
+      {buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/talos/talos_reduced.urdf",
+                          RootJoint::FreeFlyer),
+       {{"left_sole_link", 6}, {"right_sole_link", 6}}},
+  };
+  for (Setup& s : setups) {
+    const Model& model = s.model;
+    ContactSet contacts;
+    for (const auto& [frame, dim] : s.contacts)
+      contacts.add(model, frame, dim, ReferenceFrame::LocalWorldAligned, 0.0, 50.0);
+    Data data(model);
+    KnotData kd(model, contacts);
+    std::mt19937 rng(3);
+    const Eigen::VectorXd q = randomConfiguration(model, rng);
+    const Eigen::VectorXd v = Eigen::VectorXd::Random(model.nv);
+    const Eigen::VectorXd tau = Eigen::VectorXd::Random(model.nv);
+    const Eigen::VectorXd u = tau.tail(kd.nu);
+    auto run = [&] {
+      computeRNEADerivatives(model, data, q, v, tau);
+      computeABADerivatives(model, data, q, v, tau);
+      contactDynamicsDerivatives(model, data, contacts, kd.contact, q, v, tau);
+      impulseDynamicsDerivatives(model, data, contacts, kd.contact, q, v);
+      knotDynamicsDerivatives(model, data, contacts, kd, q, v, u, 0.01);
+      contacts.setActive(0, false);  // a phase with one contact fewer
+      knotDynamicsDerivatives(model, data, contacts, kd, q, v, u, 0.01);
+      contacts.setActive(0, true);
+    };
+    run();
+    long count;
+    {
+      AllocationCounter counter;
+      run();
+      count = counter.stop();
+    }
+    EXPECT_EQ(count, 0) << model.name;
+  }
 }
 
 }  // namespace

@@ -21,7 +21,9 @@
 #include <string>
 #include <vector>
 
+#include "solver/contact/contact_dynamics.hpp"
 #include "solver/multibody/aba.hpp"
+#include "solver/multibody/aba_derivatives.hpp"
 #include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/centroidal.hpp"
 #include "solver/multibody/crba.hpp"
@@ -117,6 +119,17 @@ int main(int argc, char** argv) {
   }
   if (ref["gravity"]) model.gravity = toVector(ref["gravity"]);
   Data data(model);
+  // The reference closes all listed contacts at once, forces in each contact frame (LOCAL).
+  ContactSet contacts;
+  try {
+    if (ref["contacts"])
+      for (const auto& c : ref["contacts"])
+        contacts.add(model, c["frame"].as<std::string>(), c["dim"].as<int>());
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  }
+  ContactData cdata(model, contacts);
 
   std::printf("robot %s (%s): nq %d, nv %d, %d joints, %d frames, %zu samples\n",
               ref["robot"].as<std::string>().c_str(), urdf.string().c_str(), model.nq, model.nv,
@@ -216,10 +229,37 @@ int main(int argc, char** argv) {
          computeRNEADerivatives(model, data, s.q, s.v, s.a);
          return relativeError(rowMajor(data.dtau_dv), vec(n, "drnea_dv"));
        }},
-      {"daba_dq", kDerivativeTolerance, {}},
-      {"daba_dv", kDerivativeTolerance, {}},
-      {"contact_dynamics", kTolerance, {}},
-      {"impulse_dynamics", kTolerance, {}},
+      {"daba_dq", kDerivativeTolerance,
+       [&](const YAML::Node& n, const Sample& s) {
+         computeABADerivatives(model, data, s.q, s.v, s.tau);
+         return relativeError(rowMajor(data.ddq_dq), vec(n, "daba_dq"));
+       }},
+      {"daba_dv", kDerivativeTolerance,
+       [&](const YAML::Node& n, const Sample& s) {
+         computeABADerivatives(model, data, s.q, s.v, s.tau);
+         return relativeError(rowMajor(data.ddq_dv), vec(n, "daba_dv"));
+       }},
+      {"contact_dynamics", kTolerance,
+       [&](const YAML::Node& n, const Sample& s) -> std::optional<double> {
+         const YAML::Node& cd = n["contact_dynamics"];
+         const Eigen::VectorXd tau = toVector(cd["tau"]);
+         if (contactDynamics(model, data, contacts, cdata, s.q, s.v, tau) != ContactStatus::Ok)
+           return std::numeric_limits<double>::infinity();
+         return std::max(
+             {relativeError(cdata.gamma.head(cdata.nc), toVector(cd["constraint_drift"])),
+              relativeError(cdata.ddq, toVector(cd["ddq"])),
+              relativeError(cdata.lambda.head(cdata.nc), toVector(cd["forces"]))});
+       }},
+      {"impulse_dynamics", kTolerance,
+       [&](const YAML::Node& n, const Sample& s) -> std::optional<double> {
+         const YAML::Node& id = n["impulse_dynamics"];
+         const double r = id["restitution"] ? id["restitution"].as<double>() : 0.0;
+         if (impulseDynamics(model, data, contacts, cdata, s.q, toVector(id["v_before"]), r) !=
+             ContactStatus::Ok)
+           return std::numeric_limits<double>::infinity();
+         return std::max(relativeError(cdata.v_after, toVector(id["v_after"])),
+                         relativeError(cdata.impulses.head(cdata.nc), toVector(id["impulses"])));
+       }},
   };
 
   const std::set<std::string> inputs = {"q", "v", "a", "tau"};

@@ -1,0 +1,389 @@
+#include "solver/contact/contact_dynamics.hpp"
+
+#include "solver/multibody/cholesky.hpp"
+#include "solver/multibody/crba.hpp"
+#include "solver/multibody/frame_derivatives.hpp"
+#include "solver/multibody/frames.hpp"
+#include "solver/multibody/jacobian.hpp"
+#include "solver/multibody/kinematics.hpp"
+#include "solver/multibody/lie_group.hpp"
+#include "solver/multibody/rnea.hpp"
+#include "solver/multibody/rnea_derivatives.hpp"
+
+namespace stride {
+
+const char* toString(ContactStatus status) {
+  switch (status) {
+    case ContactStatus::Ok:
+      return "ok";
+    case ContactStatus::NonFinite:
+      return "non-finite input";
+    case ContactStatus::Singular:
+      return "singular contact Jacobian (add damping)";
+  }
+  return "?";
+}
+
+ContactData::ContactData(const Model& model, const ContactSet& contacts) {
+  const int nv = model.nv, m = contacts.maxNc();
+  Jc = Eigen::MatrixXd::Zero(m, nv);
+  gamma = lambda = impulses = rhs = Eigen::VectorXd::Zero(m);
+  ddq = v_after = zero = Eigen::VectorXd::Zero(nv);
+  ddq_dq = ddq_dv = ddq_dtau = Mc = Eigen::MatrixXd::Zero(nv, nv);
+  lambda_dq = lambda_dv = lambda_dtau = KinvYt = dacc_dq = dacc_dv = tmp =
+      Eigen::MatrixXd::Zero(m, nv);
+  Y = Eigen::MatrixXd::Zero(nv, m);
+  K = Eigen::MatrixXd::Zero(m, m);
+  Jframe = dv_dq = dv_dv = da_dq = da_dv = Matrix6Xd::Zero(6, nv);
+  rows3 = Eigen::Matrix3Xd::Zero(3, nv);
+  fext.assign(static_cast<size_t>(model.njoints()), Vector6d::Zero());
+}
+
+namespace {
+
+bool finite(const Eigen::Ref<const Eigen::VectorXd>& x) {
+  return x.allFinite();
+}
+
+void clearOutputs(ContactData& cd) {
+  cd.ddq.setZero();
+  cd.v_after.setZero();
+  cd.lambda.setZero();
+  cd.impulses.setZero();
+}
+
+SE3 framePlacement(const Model& model, const Data& data, int frame) {
+  const Frame& f = model.frames[frame];
+  return data.oMi[f.parentJoint] * f.placement;
+}
+
+// Jc (LOCAL rows) from data.J; with kinematics of (q, v, a = 0) in data.v, data.a, also the drift
+// γ. Needs crba (or computeJointJacobians) and forwardKinematics(q, v, 0).
+void constraintRows(const Model& model, Data& data, const ContactSet& contacts, ContactData& cd,
+                    bool with_drift) {
+  int r = 0;
+  for (int c = 0; c < contacts.size(); ++c) {
+    if (!contacts.isActive(c)) continue;
+    const ContactModel& cm = contacts[c];
+    getFrameJacobian(model, data, cm.frame, ReferenceFrame::Local, cd.Jframe);
+    cd.Jc.middleRows(r, cm.dim) = cd.Jframe.topRows(cm.dim);
+    if (with_drift) {
+      const Vector6d vf = getFrameVelocity(model, data, cm.frame, ReferenceFrame::Local);
+      const Vector6d af = getFrameAcceleration(model, data, cm.frame, ReferenceFrame::Local);
+      const SE3 oMf = framePlacement(model, data, cm.frame);
+      if (cm.dim == 3) {
+        Eigen::Vector3d g = af.head<3>() + vf.tail<3>().cross(vf.head<3>()) + cm.kd * vf.head<3>();
+        if (cm.kp > 0) g += cm.kp * (oMf.R.transpose() * (oMf.p - cm.reference.p));
+        cd.gamma.segment<3>(r) = g;
+      } else {
+        Vector6d g = af + cm.kd * vf;
+        if (cm.kp > 0) g += cm.kp * log6(cm.reference.actInv(oMf));
+        cd.gamma.segment<6>(r) = g;
+      }
+    }
+    r += cm.dim;
+  }
+  cd.nc = r;
+}
+
+// Y = M^-1 Jc^T and the Cholesky factor of K = Jc Y + μ I, in place in K's lower triangle.
+bool factorSchur(const Model& model, const Data& data, ContactData& cd, double damping) {
+  const int nc = cd.nc;
+  if (nc == 0) return true;
+  auto Y = cd.Y.leftCols(nc);
+  Y = cd.Jc.topRows(nc).transpose();
+  solveMassMatrixColumns(model, data, Y);
+  auto K = cd.K.topLeftCorner(nc, nc);
+  K.noalias() = cd.Jc.topRows(nc) * Y;
+  K.diagonal().array() += damping;
+  // In-place LLT on the block: no allocation, and the factor stays in K for later solves.
+  Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(K);
+  return llt.info() == Eigen::Success;
+}
+
+// X <- K^-1 X with the factor in K's lower triangle.
+template <typename Derived>
+void solveSchur(const ContactData& cd, Eigen::MatrixBase<Derived>& X) {
+  const auto L = cd.K.topLeftCorner(cd.nc, cd.nc).template triangularView<Eigen::Lower>();
+  L.solveInPlace(X);
+  L.adjoint().solveInPlace(X);
+}
+
+// Contact forces in LOCAL coordinates -> joint wrenches (for the RNEA derivatives).
+void forcesToJointWrenches(const Model& model, const ContactSet& contacts, ContactData& cd,
+                           const Eigen::VectorXd& local) {
+  for (auto& f : cd.fext) f.setZero();
+  int r = 0;
+  for (int c = 0; c < contacts.size(); ++c) {
+    if (!contacts.isActive(c)) continue;
+    const ContactModel& cm = contacts[c];
+    const Frame& fr = model.frames[cm.frame];
+    Vector6d w = Vector6d::Zero();
+    if (cm.dim == 3)
+      w.head<3>() = local.segment<3>(r);
+    else
+      w = local.segment<6>(r);
+    cd.fext[fr.parentJoint] += fr.placement.actForce(w);
+    r += cm.dim;
+  }
+}
+
+// Rotates LOCAL forces (and their derivatives) of LOCAL_WORLD_ALIGNED contacts to world axes.
+// λ_w = R λ_l, so ∂λ_w = R ∂λ_l + (∂R) λ_l, and ∂R/∂q_j λ_l = ω_j x λ_w (ω_j: world angular
+// Jacobian column of the frame).
+void rotateForces(const Model& model, const Data& data, const ContactSet& contacts, ContactData& cd,
+                  Eigen::VectorXd& forces, Eigen::MatrixXd* dq, Eigen::MatrixXd* dv,
+                  Eigen::MatrixXd* dtau) {
+  int r = 0;
+  for (int c = 0; c < contacts.size(); ++c) {
+    if (!contacts.isActive(c)) continue;
+    const ContactModel& cm = contacts[c];
+    if (cm.forces == ReferenceFrame::LocalWorldAligned) {
+      const SE3 oMf = framePlacement(model, data, cm.frame);
+      if (dq) getFrameJacobian(model, data, cm.frame, ReferenceFrame::LocalWorldAligned, cd.Jframe);
+      for (int b = 0; b < cm.dim; b += 3) {
+        auto f = forces.segment<3>(r + b);
+        f = oMf.R * Eigen::Vector3d(f);
+        for (Eigen::MatrixXd* m : {dq, dv, dtau}) {
+          if (!m) continue;
+          cd.rows3.noalias() = oMf.R * m->middleRows<3>(r + b);  // no aliased product temporary
+          m->middleRows<3>(r + b) = cd.rows3;
+        }
+        if (dq) dq->middleRows<3>(r + b).noalias() -= skew(f) * cd.Jframe.bottomRows<3>();
+      }
+    }
+    r += cm.dim;
+  }
+}
+
+// The common tail of both derivative computations: from R_x in data.dtau_dq (and dtau_dv) and
+// the constraint derivatives in cd.dacc_dq (and dacc_dv), the derivatives of the primal and dual.
+void kktDerivatives(const Model& model, Data& data, ContactData& cd, Eigen::MatrixXd& primal_dq,
+                    Eigen::MatrixXd& dual_dq, Eigen::MatrixXd* primal_dv,
+                    Eigen::MatrixXd* dual_dv) {
+  const int nc = cd.nc;
+  computeMinverse(model, data);
+  auto Y = cd.Y.leftCols(nc);
+  auto KinvYt = cd.KinvYt.topRows(nc);
+  KinvYt = Y.transpose();
+  solveSchur(cd, KinvYt);
+  cd.Mc = data.Minv;
+  cd.Mc.noalias() -= Y * KinvYt;
+  auto tmp = cd.tmp.topRows(nc);
+  const struct {
+    const Eigen::MatrixXd& R;
+    const Eigen::MatrixXd& A;
+    Eigen::MatrixXd* primal;
+    Eigen::MatrixXd* dual;
+  } blocks[] = {{data.dtau_dq, cd.dacc_dq, &primal_dq, &dual_dq},
+                {data.dtau_dv, cd.dacc_dv, primal_dv, dual_dv}};
+  for (const auto& b : blocks) {
+    if (!b.primal) continue;
+    tmp = b.A.topRows(nc);
+    solveSchur(cd, tmp);
+    b.primal->noalias() = -cd.Mc * b.R;
+    b.primal->noalias() -= Y * tmp;
+    auto dual = b.dual->topRows(nc);
+    dual.noalias() = KinvYt * b.R;
+    dual -= tmp;
+  }
+}
+
+}  // namespace
+
+ContactStatus contactDynamics(const Model& model, Data& data, const ContactSet& contacts,
+                              ContactData& cd, const Eigen::Ref<const Eigen::VectorXd>& q,
+                              const Eigen::Ref<const Eigen::VectorXd>& v,
+                              const Eigen::Ref<const Eigen::VectorXd>& tau, double damping) {
+  model.checkConfiguration(q, "contactDynamics");
+  model.checkVelocity(v, "contactDynamics");
+  if (tau.size() != model.nv) throwSizeError("contactDynamics", "tau", model.nv, tau.size());
+  if (!finite(q) || !finite(v) || !finite(tau)) {
+    clearOutputs(cd);
+    return ContactStatus::NonFinite;
+  }
+  crba(model, data, q);
+  factorizeMassMatrix(model, data);
+  nonLinearEffects(model, data, q, v);
+  forwardKinematics(model, data, q, v, cd.zero);
+  constraintRows(model, data, contacts, cd, true);
+  if (!factorSchur(model, data, cd, damping)) {
+    clearOutputs(cd);
+    return ContactStatus::Singular;
+  }
+  // v̇_free = M^-1 (τ - b); λ = -K^-1 (γ + Jc v̇_free); v̇ = v̇_free + Y λ.
+  cd.ddq = tau - data.nle;
+  solveMassMatrix(model, data, cd.ddq);
+  const int nc = cd.nc;
+  auto lambda = cd.lambda.head(nc);
+  lambda = -cd.gamma.head(nc);
+  lambda.noalias() -= cd.Jc.topRows(nc) * cd.ddq;
+  solveSchur(cd, lambda);
+  cd.ddq.noalias() += cd.Y.leftCols(nc) * lambda;
+  if (!cd.ddq.allFinite() || !lambda.allFinite()) {
+    clearOutputs(cd);
+    return ContactStatus::Singular;
+  }
+  rotateForces(model, data, contacts, cd, cd.lambda, nullptr, nullptr, nullptr);
+  return ContactStatus::Ok;
+}
+
+ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const ContactSet& contacts,
+                                         ContactData& cd,
+                                         const Eigen::Ref<const Eigen::VectorXd>& q,
+                                         const Eigen::Ref<const Eigen::VectorXd>& v,
+                                         const Eigen::Ref<const Eigen::VectorXd>& tau,
+                                         double damping) {
+  // Keep λ in LOCAL coordinates for the derivatives: solve with every contact treated as LOCAL,
+  // then rotate at the end (rotateForces needs the LOCAL values and derivatives).
+  const ContactStatus status = contactDynamics(model, data, contacts, cd, q, v, tau, damping);
+  if (status != ContactStatus::Ok) return status;
+  const int nc = cd.nc;
+  // Undo the rotation of LOCAL_WORLD_ALIGNED forces to get the LOCAL ones back.
+  cd.rhs.head(nc) = cd.lambda.head(nc);
+  {
+    int r = 0;
+    for (int c = 0; c < contacts.size(); ++c) {
+      if (!contacts.isActive(c)) continue;
+      const ContactModel& cm = contacts[c];
+      if (cm.forces == ReferenceFrame::LocalWorldAligned) {
+        const SE3 oMf = framePlacement(model, data, cm.frame);
+        for (int b = 0; b < cm.dim; b += 3)
+          cd.rhs.segment<3>(r + b) = oMf.R.transpose() * cd.rhs.segment<3>(r + b);
+      }
+      r += cm.dim;
+    }
+  }
+  forcesToJointWrenches(model, contacts, cd, cd.rhs);
+  // R_x = ∂(RNEA(q, v, v̇) - Jc^T λ)/∂x at the solution; also the world sweep the frame
+  // derivatives read.
+  computeRNEADerivatives(model, data, q, v, cd.ddq, cd.fext, true);
+  int r = 0;
+  for (int c = 0; c < contacts.size(); ++c) {
+    if (!contacts.isActive(c)) continue;
+    const ContactModel& cm = contacts[c];
+    getFrameAccelerationDerivatives(model, data, cm.frame, cd.dv_dq, cd.dv_dv, cd.da_dq, cd.da_dv);
+    const Matrix6Xd& J = cd.dv_dv;  // LOCAL frame Jacobian
+    if (cm.dim == 3) {
+      // α = a_lin + ω x ν + kd ν + kp R^T (p - p_ref)
+      const Vector6d vf = frameVelocityFromSweep(model, data, cm.frame);
+      const Eigen::Matrix3d W = skew(vf.tail<3>()), N = skew(vf.head<3>());
+      auto Aq = cd.dacc_dq.middleRows<3>(r);
+      auto Av = cd.dacc_dv.middleRows<3>(r);
+      // One product per statement, with noalias: a product inside a sum would be evaluated into
+      // a heap temporary.
+      Aq = cd.da_dq.topRows<3>() + cm.kd * cd.dv_dq.topRows<3>();
+      Aq.noalias() += W * cd.dv_dq.topRows<3>();
+      Aq.noalias() -= N * cd.dv_dq.bottomRows<3>();
+      Av = cd.da_dv.topRows<3>() + cm.kd * J.topRows<3>();
+      Av.noalias() += W * J.topRows<3>();
+      Av.noalias() -= N * J.bottomRows<3>();
+      if (cm.kp > 0) {
+        const SE3 oMf = framePlacement(model, data, cm.frame);
+        const Eigen::Vector3d e = oMf.R.transpose() * (oMf.p - cm.reference.p);
+        Aq += cm.kp * J.topRows<3>();
+        Aq.noalias() += (cm.kp * skew(e)) * J.bottomRows<3>();
+      }
+    } else {
+      // α = a + kd v + kp log6(M_ref^-1 M)
+      cd.dacc_dq.middleRows<6>(r) = cd.da_dq + cm.kd * cd.dv_dq;
+      cd.dacc_dv.middleRows<6>(r) = cd.da_dv + cm.kd * J;
+      if (cm.kp > 0) {
+        const SE3 oMf = framePlacement(model, data, cm.frame);
+        cd.dacc_dq.middleRows<6>(r).noalias() += cm.kp * Jlog6(cm.reference.actInv(oMf)) * J;
+      }
+    }
+    r += cm.dim;
+  }
+  kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, &cd.ddq_dv, &cd.lambda_dv);
+  cd.ddq_dtau = cd.Mc;
+  cd.lambda_dtau.topRows(nc) = -cd.KinvYt.topRows(nc);
+  // Back to the contacts' force frames (λ itself is already rotated by contactDynamics).
+  rotateForces(model, data, contacts, cd, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, &cd.lambda_dtau);
+  return ContactStatus::Ok;
+}
+
+ContactStatus impulseDynamics(const Model& model, Data& data, const ContactSet& contacts,
+                              ContactData& cd, const Eigen::Ref<const Eigen::VectorXd>& q,
+                              const Eigen::Ref<const Eigen::VectorXd>& v_before, double restitution,
+                              double damping) {
+  model.checkConfiguration(q, "impulseDynamics");
+  model.checkVelocity(v_before, "impulseDynamics");
+  if (!finite(q) || !finite(v_before) || !std::isfinite(restitution)) {
+    clearOutputs(cd);
+    return ContactStatus::NonFinite;
+  }
+  crba(model, data, q);
+  factorizeMassMatrix(model, data);
+  constraintRows(model, data, contacts, cd, false);
+  if (!factorSchur(model, data, cd, damping)) {
+    clearOutputs(cd);
+    return ContactStatus::Singular;
+  }
+  // Jc v⁺ = -r Jc v⁻ with v⁺ = v⁻ + Y Λ:  Λ = -(1 + r) K^-1 Jc v⁻.
+  const int nc = cd.nc;
+  auto L = cd.impulses.head(nc);
+  L.noalias() = -(1.0 + restitution) * (cd.Jc.topRows(nc) * v_before);
+  solveSchur(cd, L);
+  cd.v_after = v_before;
+  cd.v_after.noalias() += cd.Y.leftCols(nc) * L;
+  if (!cd.v_after.allFinite() || !L.allFinite()) {
+    clearOutputs(cd);
+    return ContactStatus::Singular;
+  }
+  rotateForces(model, data, contacts, cd, cd.impulses, nullptr, nullptr, nullptr);
+  return ContactStatus::Ok;
+}
+
+ContactStatus impulseDynamicsDerivatives(const Model& model, Data& data, const ContactSet& contacts,
+                                         ContactData& cd,
+                                         const Eigen::Ref<const Eigen::VectorXd>& q,
+                                         const Eigen::Ref<const Eigen::VectorXd>& v_before,
+                                         double restitution, double damping) {
+  const ContactStatus status =
+      impulseDynamics(model, data, contacts, cd, q, v_before, restitution, damping);
+  if (status != ContactStatus::Ok) return status;
+  const int nc = cd.nc;
+  // Constraint rows: ∂(Jc(q) (v⁺ + r v⁻))/∂q at fixed velocities, the derivative of the contact
+  // velocity at w = v⁺ + r v⁻ (linear in w).
+  cd.ddq = cd.v_after + restitution * v_before;  // scratch: w
+  computeRNEADerivatives(model, data, q, cd.ddq, cd.zero);
+  int r = 0;
+  for (int c = 0; c < contacts.size(); ++c) {
+    if (!contacts.isActive(c)) continue;
+    const ContactModel& cm = contacts[c];
+    getFrameAccelerationDerivatives(model, data, cm.frame, cd.dv_dq, cd.dv_dv, cd.da_dq, cd.da_dv);
+    cd.dacc_dq.middleRows(r, cm.dim) = cd.dv_dq.topRows(cm.dim);
+    r += cm.dim;
+  }
+  // R_q = ∂(M(q)(v⁺ - v⁻) - Jc^T Λ)/∂q: RNEA with zero velocity, no gravity, a = v⁺ - v⁻.
+  cd.rhs.head(nc) = cd.impulses.head(nc);
+  {
+    int rr = 0;
+    for (int c = 0; c < contacts.size(); ++c) {
+      if (!contacts.isActive(c)) continue;
+      const ContactModel& cm = contacts[c];
+      if (cm.forces == ReferenceFrame::LocalWorldAligned) {
+        const SE3 oMf = framePlacement(model, data, cm.frame);
+        for (int b = 0; b < cm.dim; b += 3)
+          cd.rhs.segment<3>(rr + b) = oMf.R.transpose() * cd.rhs.segment<3>(rr + b);
+      }
+      rr += cm.dim;
+    }
+  }
+  forcesToJointWrenches(model, contacts, cd, cd.rhs);
+  cd.ddq = cd.v_after - v_before;
+  computeRNEADerivatives(model, data, q, cd.zero, cd.ddq, cd.fext, false);
+  kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, nullptr, nullptr);
+  // With respect to v⁻: ∂v⁺/∂v⁻ = I - (1 + r) Y K^-1 Jc,  ∂Λ/∂v⁻ = -(1 + r) K^-1 Jc.
+  auto dL = cd.lambda_dv.topRows(nc);
+  dL = -(1.0 + restitution) * cd.Jc.topRows(nc);
+  solveSchur(cd, dL);
+  cd.ddq_dv.setIdentity();
+  cd.ddq_dv.noalias() += cd.Y.leftCols(nc) * dL;
+  cd.ddq.setZero();
+  rotateForces(model, data, contacts, cd, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, nullptr);
+  return ContactStatus::Ok;
+}
+
+}  // namespace stride

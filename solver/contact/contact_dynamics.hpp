@@ -1,0 +1,85 @@
+#pragma once
+// Rigid contact dynamics (paper §IV, eq. 10), the KKT system
+//   [M  Jc^T] [ v̇ ]   [ τ - b ]
+//   [Jc  0  ] [-λ ] = [  -γ   ]
+// solved through the tree-sparse factorization of M and the Cholesky factorization of the Schur
+// complement K = Jc M^-1 Jc^T (+ μ I, the paper's damping for rank-deficient contact sets), and
+// the impulse at touch-down
+//   [M  Jc^T] [ v⁺ ]   [ M v⁻ ]
+//   [Jc  0  ] [-Λ  ] = [ -r Jc v⁻ ]   (r: restitution, 0 = perfectly inelastic).
+// Derivatives come from differentiating the KKT system at the solution, reusing both
+// factorizations (the KKT matrix is never inverted): with R_x = ∂(RNEA(q, v, v̇) - Jc^T λ)/∂x and
+// A_x = ∂(constraint acceleration)/∂x,
+//   ∂v̇/∂x = -(M^-1 - Y K^-1 Y^T) R_x - Y K^-1 A_x,   ∂λ/∂x = K^-1 Y^T R_x - K^-1 A_x,
+//   ∂v̇/∂τ = M^-1 - Y K^-1 Y^T,                     ∂λ/∂τ = -K^-1 Y^T,       Y = M^-1 Jc^T.
+
+#include <vector>
+
+#include "solver/contact/contact_set.hpp"
+#include "solver/multibody/data.hpp"
+
+namespace stride {
+
+enum class ContactStatus : std::uint8_t {
+  Ok,
+  NonFinite,  // an input (q, v, τ) is not finite; outputs are left zero
+  Singular,   // K is not positive definite (rank-deficient contacts without damping); outputs zero
+};
+const char* toString(ContactStatus status);
+
+// Workspace for one contact set, sized for all its contacts (any active subset fits).
+struct ContactData {
+  ContactData(const Model& model, const ContactSet& contacts);
+
+  int nc = 0;                // active dimension of the last call
+  Eigen::MatrixXd Jc;        // maxNc x nv, LOCAL rows of the active contacts (top nc rows)
+  Eigen::VectorXd gamma;     // drift γ (constraint acceleration at v̇ = 0)
+  Eigen::VectorXd lambda;    // contact forces, in each contact's force frame
+  Eigen::VectorXd ddq;       // v̇
+  Eigen::VectorXd v_after;   // impulse: v⁺
+  Eigen::VectorXd impulses;  // impulse: Λ, in each contact's force frame
+
+  // Derivatives (tangent space). Contact dynamics: of v̇ and λ; impulse: of v⁺ and Λ, with the
+  // *_dv blocks taken with respect to v⁻ and no *_dtau.
+  Eigen::MatrixXd ddq_dq, ddq_dv, ddq_dtau;           // nv x nv
+  Eigen::MatrixXd lambda_dq, lambda_dv, lambda_dtau;  // maxNc x nv
+
+  // Workspaces.
+  Eigen::VectorXd rhs, zero;
+  Eigen::MatrixXd Y;                 // M^-1 Jc^T, nv x maxNc
+  Eigen::MatrixXd K;                 // Schur complement, maxNc x maxNc (factorized in place)
+  Eigen::MatrixXd KinvYt;            // K^-1 Y^T, maxNc x nv
+  Eigen::MatrixXd Mc;                // M^-1 - Y K^-1 Y^T
+  Eigen::MatrixXd dacc_dq, dacc_dv;  // constraint acceleration (or velocity) derivatives
+  Eigen::MatrixXd tmp;               // maxNc x nv
+  Matrix6Xd Jframe, dv_dq, dv_dv, da_dq, da_dv;
+  Eigen::Matrix3Xd rows3;
+  std::vector<Vector6d> fext;  // contact forces as joint wrenches
+};
+
+// v̇ and λ (cdata.ddq, cdata.lambda) for torque τ; also cdata.Jc, cdata.gamma, data.M.
+ContactStatus contactDynamics(const Model& model, Data& data, const ContactSet& contacts,
+                              ContactData& cdata, const Eigen::Ref<const Eigen::VectorXd>& q,
+                              const Eigen::Ref<const Eigen::VectorXd>& v,
+                              const Eigen::Ref<const Eigen::VectorXd>& tau, double damping = 0.0);
+// contactDynamics, then the derivatives of v̇ and λ with respect to q, v and τ.
+ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const ContactSet& contacts,
+                                         ContactData& cdata,
+                                         const Eigen::Ref<const Eigen::VectorXd>& q,
+                                         const Eigen::Ref<const Eigen::VectorXd>& v,
+                                         const Eigen::Ref<const Eigen::VectorXd>& tau,
+                                         double damping = 0.0);
+
+// v⁺ and Λ (cdata.v_after, cdata.impulses) when the active contacts close at velocity v⁻.
+ContactStatus impulseDynamics(const Model& model, Data& data, const ContactSet& contacts,
+                              ContactData& cdata, const Eigen::Ref<const Eigen::VectorXd>& q,
+                              const Eigen::Ref<const Eigen::VectorXd>& v_before,
+                              double restitution = 0.0, double damping = 0.0);
+// impulseDynamics, then the derivatives of v⁺ and Λ with respect to q and v⁻.
+ContactStatus impulseDynamicsDerivatives(const Model& model, Data& data, const ContactSet& contacts,
+                                         ContactData& cdata,
+                                         const Eigen::Ref<const Eigen::VectorXd>& q,
+                                         const Eigen::Ref<const Eigen::VectorXd>& v_before,
+                                         double restitution = 0.0, double damping = 0.0);
+
+}  // namespace stride

@@ -1,0 +1,41 @@
+#pragma once
+// The discrete dynamics of one knot (paper eq. 11): KKT contact dynamics, then semi-implicit
+// Euler on the manifold,
+//   v̇, λ = contact dynamics(q, v, τ(u)),   v⁺ = v + dt v̇,   q⁺ = q ⊕ dt v⁺,
+// so x⁺ = f(x, u) and λ = g(x, u), with the Jacobians Fx, Fu, Gx, Gu in the tangent space
+// (dx = [dq; dv], dq in the tangent space of q). Actuation: a floating base is unactuated,
+// τ = [0_6; u]; a fixed base is fully actuated, τ = u.
+
+#include "solver/contact/contact_dynamics.hpp"
+
+namespace stride {
+
+int actuatedDimension(const Model& model);
+
+struct KnotData {
+  KnotData(const Model& model, const ContactSet& contacts);
+  int nu;
+  Eigen::VectorXd tau;             // τ(u)
+  Eigen::VectorXd q_next, v_next;  // x⁺
+  Eigen::VectorXd step;            // dt v⁺
+  Eigen::MatrixXd Fx, Fu;          // 2nv x 2nv, 2nv x nu
+  Eigen::MatrixXd Gx, Gu;          // maxNc x 2nv, maxNc x nu (top nc rows)
+  Eigen::MatrixXd Jq, Jv;          // dIntegrate at (q, dt v⁺)
+  Matrix6Xd rows6;                 // workspace
+  ContactData contact;             // v̇ (contact.ddq), λ (contact.lambda), ...
+};
+
+// x⁺ and λ (data in kd); returns the contact dynamics status (outputs are zero unless Ok).
+ContactStatus knotDynamics(const Model& model, Data& data, const ContactSet& contacts, KnotData& kd,
+                           const Eigen::Ref<const Eigen::VectorXd>& q,
+                           const Eigen::Ref<const Eigen::VectorXd>& v,
+                           const Eigen::Ref<const Eigen::VectorXd>& u, double dt,
+                           double damping = 0.0);
+// knotDynamics and Fx, Fu, Gx, Gu.
+ContactStatus knotDynamicsDerivatives(const Model& model, Data& data, const ContactSet& contacts,
+                                      KnotData& kd, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                      const Eigen::Ref<const Eigen::VectorXd>& v,
+                                      const Eigen::Ref<const Eigen::VectorXd>& u, double dt,
+                                      double damping = 0.0);
+
+}  // namespace stride

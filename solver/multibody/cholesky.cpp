@@ -1,0 +1,51 @@
+#include "solver/multibody/cholesky.hpp"
+
+namespace stride {
+
+void factorizeMassMatrix(const Model& model, Data& data) {
+  Eigen::MatrixXd& U = data.Ltdl;
+  U = data.M;
+  const std::vector<int>& parent = model.parentDof;
+  // RBDA Table 6.3 (LTDL), on the transpose so that each column is read top-down.
+  for (int k = model.nv - 1; k >= 0; --k) {
+    for (int i = parent[k]; i >= 0; i = parent[i]) {
+      const double a = U(i, k) / U(k, k);
+      for (int j = i; j >= 0; j = parent[j]) U(j, i) -= a * U(j, k);
+      U(i, k) = a;
+    }
+  }
+}
+
+namespace {
+void solveInPlace(const Model& model, const Data& data, double* x) {
+  const Eigen::MatrixXd& U = data.Ltdl;
+  const std::vector<int>& parent = model.parentDof;
+  const int n = model.nv;
+  // L^T y = b: leaves to root.
+  for (int k = n - 1; k >= 0; --k)
+    for (int i = parent[k]; i >= 0; i = parent[i]) x[i] -= U(i, k) * x[k];
+  for (int k = 0; k < n; ++k) x[k] /= U(k, k);
+  // L x = z: root to leaves.
+  for (int k = 0; k < n; ++k)
+    for (int i = parent[k]; i >= 0; i = parent[i]) x[k] -= U(i, k) * x[i];
+}
+}  // namespace
+
+void solveMassMatrix(const Model& model, const Data& data, Eigen::Ref<Eigen::VectorXd> x) {
+  if (x.size() != model.nv) throwSizeError("solveMassMatrix", "x", model.nv, x.size());
+  solveInPlace(model, data, x.data());
+}
+
+void solveMassMatrixColumns(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> X) {
+  if (X.rows() != model.nv)
+    throwSizeError("solveMassMatrixColumns", "X (rows)", model.nv, X.rows());
+  for (Eigen::Index c = 0; c < X.cols(); ++c) solveInPlace(model, data, X.col(c).data());
+}
+
+const Eigen::MatrixXd& computeMinverse(const Model& model, Data& data) {
+  data.Minv.setIdentity();
+  solveMassMatrixColumns(model, data, data.Minv);
+  return data.Minv;
+}
+
+}  // namespace stride

@@ -1,0 +1,20 @@
+#pragma once
+// Tree-sparse factorization of the joint-space inertia matrix, M = L^T D L (Featherstone, RBDA
+// §6.5): L is unit lower triangular and, like M, nonzero only where the column's dof supports the
+// row's, so factorization and solves cost O(n d) and O(n d^2) (d: depth of the tree) instead of
+// the dense O(n^3) and O(n^2). Stored in data.Ltdl, upper triangle: Ltdl(i, k) = L(k, i), D on the
+// diagonal.
+
+#include "solver/multibody/data.hpp"
+
+namespace stride {
+
+// Factorizes data.M (crba first) into data.Ltdl.
+void factorizeMassMatrix(const Model& model, Data& data);
+// x <- M^-1 x, with the factorization in data.Ltdl; the second form on every column of X.
+void solveMassMatrix(const Model& model, const Data& data, Eigen::Ref<Eigen::VectorXd> x);
+void solveMassMatrixColumns(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> X);
+// M^-1 (data.Minv), from the factorization.
+const Eigen::MatrixXd& computeMinverse(const Model& model, Data& data);
+
+}  // namespace stride
