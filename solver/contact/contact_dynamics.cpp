@@ -29,10 +29,11 @@ ContactData::ContactData(const Model& model, const ContactSet& contacts) {
   Jc = Eigen::MatrixXd::Zero(m, nv);
   gamma = lambda = impulses = rhs = Eigen::VectorXd::Zero(m);
   ddq = v_after = zero = Eigen::VectorXd::Zero(nv);
-  ddq_dq = ddq_dv = ddq_dtau = Mc = Eigen::MatrixXd::Zero(nv, nv);
-  lambda_dq = lambda_dv = lambda_dtau = KinvYt = dacc_dq = dacc_dv = tmp =
-      Eigen::MatrixXd::Zero(m, nv);
-  Y = Eigen::MatrixXd::Zero(nv, m);
+  ddq_dq = ddq_dv = ddq_dtau = Eigen::MatrixXd::Zero(nv, nv);
+  lambda_dq = lambda_dv = lambda_dtau = Yt = dacc_dq = dacc_dv = Eigen::MatrixXd::Zero(m, nv);
+  rhs3 = RowMatrixXd::Zero(nv, 3 * nv);
+  work = Eigen::MatrixXd::Zero(m, nv);
+  Kinv = Eigen::MatrixXd::Zero(m, m);
   K = Eigen::MatrixXd::Zero(m, m);
   Jframe = dv_dq = dv_dv = da_dq = da_dv = Matrix6Xd::Zero(6, nv);
   rows3 = Eigen::Matrix3Xd::Zero(3, nv);
@@ -86,15 +87,16 @@ void constraintRows(const Model& model, Data& data, const ContactSet& contacts, 
   cd.nc = r;
 }
 
-// Y = M^-1 Jc^T and the Cholesky factor of K = Jc Y + μ I, in place in K's lower triangle.
+// Yt = (M^-1 Jc^T)^T = Jc M^-1 and the Cholesky factor of K = Jc M^-1 Jc^T + μ I, in place in
+// K's lower triangle. Yt is stored nc x nv so that the solve runs on rows of its transpose.
 bool factorSchur(const Model& model, const Data& data, ContactData& cd, double damping) {
   const int nc = cd.nc;
   if (nc == 0) return true;
-  auto Y = cd.Y.leftCols(nc);
-  Y = cd.Jc.topRows(nc).transpose();
-  solveMassMatrixColumns(model, data, Y);
+  auto Yt = cd.Yt.topRows(nc);
+  Yt = cd.Jc.topRows(nc);
+  solveMassMatrixRows(model, data, Yt.transpose());
   auto K = cd.K.topLeftCorner(nc, nc);
-  K.noalias() = cd.Jc.topRows(nc) * Y;
+  K.noalias() = Yt * cd.Jc.topRows(nc).transpose();
   K.diagonal().array() += damping;
   // In-place LLT on the block: no allocation, and the factor stays in K for later solves.
   Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(K);
@@ -156,36 +158,56 @@ void rotateForces(const Model& model, const Data& data, const ContactSet& contac
   }
 }
 
-// The common tail of both derivative computations: from R_x in data.dtau_dq (and dtau_dv) and
-// the constraint derivatives in cd.dacc_dq (and dacc_dv), the derivatives of the primal and dual.
+// The common tail of both derivative computations. With R_x in data.dtau_dq (and dtau_dv) and
+// the constraint derivatives A_x in cd.dacc_dq (and dacc_dv):
+//   ∂λ/∂x = K^-1 (Yt R_x - A_x),   ∂λ/∂τ = -K^-1 Yt,
+//   ∂v̇/∂x = M^-1 (-R_x + Jc^T ∂λ/∂x),   ∂v̇/∂τ = M^-1 (I + Jc^T ∂λ/∂τ),
+// the second line from the first block row of the differentiated KKT system. The primal
+// derivatives then share one solve with M on the stacked right-hand sides [q | v | τ], and M^-1
+// itself is never formed.
 void kktDerivatives(const Model& model, Data& data, ContactData& cd, Eigen::MatrixXd& primal_dq,
-                    Eigen::MatrixXd& dual_dq, Eigen::MatrixXd* primal_dv,
-                    Eigen::MatrixXd* dual_dv) {
-  const int nc = cd.nc;
-  computeMinverse(model, data);
-  auto Y = cd.Y.leftCols(nc);
-  auto KinvYt = cd.KinvYt.topRows(nc);
-  KinvYt = Y.transpose();
-  solveSchur(cd, KinvYt);
-  cd.Mc = data.Minv;
-  cd.Mc.noalias() -= Y * KinvYt;
-  auto tmp = cd.tmp.topRows(nc);
+                    Eigen::MatrixXd& dual_dq, Eigen::MatrixXd* primal_dv, Eigen::MatrixXd* dual_dv,
+                    Eigen::MatrixXd* primal_dtau, Eigen::MatrixXd* dual_dtau) {
+  const int nc = cd.nc, nv = model.nv;
+  const auto Yt = cd.Yt.topRows(nc);
+  const auto Jc = cd.Jc.topRows(nc);
+  // K^-1 explicitly: it is at most a few dozen rows, and one small product per block is cheaper
+  // than a triangular solve per block.
+  auto Kinv = cd.Kinv.topLeftCorner(nc, nc);
+  Kinv.setIdentity();
+  solveSchur(cd, Kinv);
   const struct {
-    const Eigen::MatrixXd& R;
-    const Eigen::MatrixXd& A;
+    const Eigen::MatrixXd* R;  // null for τ
+    const Eigen::MatrixXd* A;
     Eigen::MatrixXd* primal;
     Eigen::MatrixXd* dual;
-  } blocks[] = {{data.dtau_dq, cd.dacc_dq, &primal_dq, &dual_dq},
-                {data.dtau_dv, cd.dacc_dv, primal_dv, dual_dv}};
+  } blocks[] = {{&data.dtau_dq, &cd.dacc_dq, &primal_dq, &dual_dq},
+                {&data.dtau_dv, &cd.dacc_dv, primal_dv, dual_dv},
+                {nullptr, nullptr, primal_dtau, dual_dtau}};
+  int used = 0;
   for (const auto& b : blocks) {
     if (!b.primal) continue;
-    tmp = b.A.topRows(nc);
-    solveSchur(cd, tmp);
-    b.primal->noalias() = -cd.Mc * b.R;
-    b.primal->noalias() -= Y * tmp;
+    auto work = cd.work.topRows(nc);
     auto dual = b.dual->topRows(nc);
-    dual.noalias() = KinvYt * b.R;
-    dual -= tmp;
+    auto rhs = cd.rhs3.middleCols(used, nv);
+    if (b.R) {
+      work.noalias() = Yt * *b.R;
+      work -= b.A->topRows(nc);
+      rhs = -*b.R;
+    } else {
+      work = -Yt;
+      rhs.setIdentity();
+    }
+    dual.noalias() = Kinv * work;
+    rhs.noalias() += Jc.transpose() * dual;
+    used += nv;
+  }
+  solveMassMatrixRows(model, data, cd.rhs3.leftCols(used));
+  used = 0;
+  for (Eigen::MatrixXd* p : {&primal_dq, primal_dv, primal_dtau}) {
+    if (!p) continue;
+    *p = cd.rhs3.middleCols(used, nv);
+    used += nv;
   }
 }
 
@@ -219,7 +241,7 @@ ContactStatus contactDynamics(const Model& model, Data& data, const ContactSet& 
   lambda = -cd.gamma.head(nc);
   lambda.noalias() -= cd.Jc.topRows(nc) * cd.ddq;
   solveSchur(cd, lambda);
-  cd.ddq.noalias() += cd.Y.leftCols(nc) * lambda;
+  cd.ddq.noalias() += cd.Yt.topRows(nc).transpose() * lambda;
   if (!cd.ddq.allFinite() || !lambda.allFinite()) {
     clearOutputs(cd);
     return ContactStatus::Singular;
@@ -295,9 +317,8 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
     }
     r += cm.dim;
   }
-  kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, &cd.ddq_dv, &cd.lambda_dv);
-  cd.ddq_dtau = cd.Mc;
-  cd.lambda_dtau.topRows(nc) = -cd.KinvYt.topRows(nc);
+  kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, &cd.ddq_dv, &cd.lambda_dv, &cd.ddq_dtau,
+                 &cd.lambda_dtau);
   // Back to the contacts' force frames (λ itself is already rotated by contactDynamics).
   rotateForces(model, data, contacts, cd, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, &cd.lambda_dtau);
   return ContactStatus::Ok;
@@ -326,7 +347,7 @@ ContactStatus impulseDynamics(const Model& model, Data& data, const ContactSet& 
   L.noalias() = -(1.0 + restitution) * (cd.Jc.topRows(nc) * v_before);
   solveSchur(cd, L);
   cd.v_after = v_before;
-  cd.v_after.noalias() += cd.Y.leftCols(nc) * L;
+  cd.v_after.noalias() += cd.Yt.topRows(nc).transpose() * L;
   if (!cd.v_after.allFinite() || !L.allFinite()) {
     clearOutputs(cd);
     return ContactStatus::Singular;
@@ -374,13 +395,13 @@ ContactStatus impulseDynamicsDerivatives(const Model& model, Data& data, const C
   forcesToJointWrenches(model, contacts, cd, cd.rhs);
   cd.ddq = cd.v_after - v_before;
   computeRNEADerivatives(model, data, q, cd.zero, cd.ddq, cd.fext, false);
-  kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, nullptr, nullptr);
+  kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, nullptr, nullptr, nullptr, nullptr);
   // With respect to v⁻: ∂v⁺/∂v⁻ = I - (1 + r) Y K^-1 Jc,  ∂Λ/∂v⁻ = -(1 + r) K^-1 Jc.
   auto dL = cd.lambda_dv.topRows(nc);
   dL = -(1.0 + restitution) * cd.Jc.topRows(nc);
   solveSchur(cd, dL);
   cd.ddq_dv.setIdentity();
-  cd.ddq_dv.noalias() += cd.Y.leftCols(nc) * dL;
+  cd.ddq_dv.noalias() += cd.Yt.topRows(nc).transpose() * dL;
   cd.ddq.setZero();
   rotateForces(model, data, contacts, cd, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, nullptr);
   return ContactStatus::Ok;

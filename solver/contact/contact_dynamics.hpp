@@ -10,8 +10,8 @@
 // Derivatives come from differentiating the KKT system at the solution, reusing both
 // factorizations (the KKT matrix is never inverted): with R_x = ∂(RNEA(q, v, v̇) - Jc^T λ)/∂x and
 // A_x = ∂(constraint acceleration)/∂x,
-//   ∂v̇/∂x = -(M^-1 - Y K^-1 Y^T) R_x - Y K^-1 A_x,   ∂λ/∂x = K^-1 Y^T R_x - K^-1 A_x,
-//   ∂v̇/∂τ = M^-1 - Y K^-1 Y^T,                     ∂λ/∂τ = -K^-1 Y^T,       Y = M^-1 Jc^T.
+//   ∂λ/∂x = K^-1 (Jc M^-1 R_x - A_x),   ∂v̇/∂x = M^-1 (-R_x + Jc^T ∂λ/∂x),
+//   ∂λ/∂τ = -K^-1 Jc M^-1,             ∂v̇/∂τ = M^-1 (I + Jc^T ∂λ/∂τ).
 
 #include <vector>
 
@@ -46,12 +46,12 @@ struct ContactData {
 
   // Workspaces.
   Eigen::VectorXd rhs, zero;
-  Eigen::MatrixXd Y;                 // M^-1 Jc^T, nv x maxNc
+  Eigen::MatrixXd Yt;                // Jc M^-1, maxNc x nv
   Eigen::MatrixXd K;                 // Schur complement, maxNc x maxNc (factorized in place)
-  Eigen::MatrixXd KinvYt;            // K^-1 Y^T, maxNc x nv
-  Eigen::MatrixXd Mc;                // M^-1 - Y K^-1 Y^T
   Eigen::MatrixXd dacc_dq, dacc_dv;  // constraint acceleration (or velocity) derivatives
-  Eigen::MatrixXd tmp;               // maxNc x nv
+  RowMatrixXd rhs3;                  // nv x 3nv, right-hand sides of the primal derivatives
+  Eigen::MatrixXd work;              // maxNc x nv
+  Eigen::MatrixXd Kinv;              // K^-1 (derivatives only)
   Matrix6Xd Jframe, dv_dq, dv_dv, da_dq, da_dv;
   Eigen::Matrix3Xd rows3;
   std::vector<Vector6d> fext;  // contact forces as joint wrenches

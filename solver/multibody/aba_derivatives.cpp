@@ -15,9 +15,15 @@ void computeABADerivatives(const Model& model, Data& data,
   computeRNEADerivatives(model, data, q, v, data.ddq);
   crba(model, data, q);
   factorizeMassMatrix(model, data);
-  computeMinverse(model, data);
-  data.ddq_dq.noalias() = -data.Minv * data.dtau_dq;
-  data.ddq_dv.noalias() = -data.Minv * data.dtau_dv;
+  // One solve on the stacked right-hand sides [-∂τ/∂q, -∂τ/∂v, I].
+  const int nv = model.nv;
+  data.rhs3.leftCols(nv) = -data.dtau_dq;
+  data.rhs3.middleCols(nv, nv) = -data.dtau_dv;
+  data.rhs3.rightCols(nv).setIdentity();
+  solveMassMatrixRows(model, data, data.rhs3);
+  data.ddq_dq = data.rhs3.leftCols(nv);
+  data.ddq_dv = data.rhs3.middleCols(nv, nv);
+  data.Minv = data.rhs3.rightCols(nv);
 }
 
 }  // namespace stride

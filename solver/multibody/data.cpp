@@ -37,6 +37,7 @@ Data::Data(const Model& model) {
   Minv = Eigen::MatrixXd::Zero(nv, nv);
   ddq_dq = Eigen::MatrixXd::Zero(nv, nv);
   ddq_dv = Eigen::MatrixXd::Zero(nv, nv);
+  rhs3 = RowMatrixXd::Zero(nv, 3 * nv);
   mass = model.totalMass();
   Jcom = Eigen::Matrix3Xd::Zero(3, nv);
   Ag = Matrix6Xd::Zero(6, nv);

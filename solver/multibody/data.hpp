@@ -57,6 +57,7 @@ struct Data {
   Eigen::MatrixXd Ltdl;
   Eigen::MatrixXd Minv;            // computeMinverse output
   Eigen::MatrixXd ddq_dq, ddq_dv;  // ABA derivatives; d ddq / d tau = Minv
+  RowMatrixXd rhs3;                // nv x 3nv: stacked right-hand sides of one M^-1 solve
 
   // Centre of mass (center_of_mass.hpp) and centroidal momentum (centroidal.hpp).
   double mass = 0.0;  // total moving mass

@@ -6,10 +6,12 @@
 
 namespace stride::bench {
 void registerMultibodyBenchmarks();
-}
+void registerContactBenchmarks();
+}  // namespace stride::bench
 
 int main(int argc, char** argv) {
   stride::bench::registerMultibodyBenchmarks();
+  stride::bench::registerContactBenchmarks();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
