@@ -111,20 +111,28 @@ void solveSchur(const ContactData& cd, Eigen::MatrixBase<Derived>& X) {
   L.adjoint().solveInPlace(X);
 }
 
-// Contact forces in LOCAL coordinates -> joint wrenches (for the RNEA derivatives).
-void forcesToJointWrenches(const Model& model, const ContactSet& contacts, ContactData& cd,
-                           const Eigen::VectorXd& local) {
+// Contact forces as reported (each in its contact's force frame) -> LOCAL values in cd.rhs (the
+// rotation of LOCAL_WORLD_ALIGNED contacts undone) -> joint wrenches in cd.fext, for the RNEA
+// derivatives.
+void localForcesToJointWrenches(const Model& model, const Data& data, const ContactSet& contacts,
+                                ContactData& cd, const Eigen::VectorXd& reported) {
   for (auto& f : cd.fext) f.setZero();
   int r = 0;
   for (int c = 0; c < contacts.size(); ++c) {
     if (!contacts.isActive(c)) continue;
     const ContactModel& cm = contacts[c];
     const Frame& fr = model.frames[cm.frame];
+    cd.rhs.segment(r, cm.dim) = reported.segment(r, cm.dim);
+    if (cm.forces == ReferenceFrame::LocalWorldAligned) {
+      const SE3 oMf = framePlacement(model, data, cm.frame);
+      for (int b = 0; b < cm.dim; b += 3)
+        cd.rhs.segment<3>(r + b) = oMf.R.transpose() * cd.rhs.segment<3>(r + b);
+    }
     Vector6d w = Vector6d::Zero();
     if (cm.dim == 3)
-      w.head<3>() = local.segment<3>(r);
+      w.head<3>() = cd.rhs.segment<3>(r);
     else
-      w = local.segment<6>(r);
+      w = cd.rhs.segment<6>(r);
     cd.fext[fr.parentJoint] += fr.placement.actForce(w);
     r += cm.dim;
   }
@@ -256,27 +264,11 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
                                          const Eigen::Ref<const Eigen::VectorXd>& v,
                                          const Eigen::Ref<const Eigen::VectorXd>& tau,
                                          double damping) {
-  // Keep λ in LOCAL coordinates for the derivatives: solve with every contact treated as LOCAL,
-  // then rotate at the end (rotateForces needs the LOCAL values and derivatives).
+  // λ comes back in each contact's force frame; the derivatives are taken in LOCAL coordinates
+  // and rotated at the end (rotateForces).
   const ContactStatus status = contactDynamics(model, data, contacts, cd, q, v, tau, damping);
   if (status != ContactStatus::Ok) return status;
-  const int nc = cd.nc;
-  // Undo the rotation of LOCAL_WORLD_ALIGNED forces to get the LOCAL ones back.
-  cd.rhs.head(nc) = cd.lambda.head(nc);
-  {
-    int r = 0;
-    for (int c = 0; c < contacts.size(); ++c) {
-      if (!contacts.isActive(c)) continue;
-      const ContactModel& cm = contacts[c];
-      if (cm.forces == ReferenceFrame::LocalWorldAligned) {
-        const SE3 oMf = framePlacement(model, data, cm.frame);
-        for (int b = 0; b < cm.dim; b += 3)
-          cd.rhs.segment<3>(r + b) = oMf.R.transpose() * cd.rhs.segment<3>(r + b);
-      }
-      r += cm.dim;
-    }
-  }
-  forcesToJointWrenches(model, contacts, cd, cd.rhs);
+  localForcesToJointWrenches(model, data, contacts, cd, cd.lambda);
   // R_x = ∂(RNEA(q, v, v̇) - Jc^T λ)/∂x at the solution; also the world sweep the frame
   // derivatives read.
   computeRNEADerivatives(model, data, q, v, cd.ddq, cd.fext, true);
@@ -378,21 +370,7 @@ ContactStatus impulseDynamicsDerivatives(const Model& model, Data& data, const C
     r += cm.dim;
   }
   // R_q = ∂(M(q)(v⁺ - v⁻) - Jc^T Λ)/∂q: RNEA with zero velocity, no gravity, a = v⁺ - v⁻.
-  cd.rhs.head(nc) = cd.impulses.head(nc);
-  {
-    int rr = 0;
-    for (int c = 0; c < contacts.size(); ++c) {
-      if (!contacts.isActive(c)) continue;
-      const ContactModel& cm = contacts[c];
-      if (cm.forces == ReferenceFrame::LocalWorldAligned) {
-        const SE3 oMf = framePlacement(model, data, cm.frame);
-        for (int b = 0; b < cm.dim; b += 3)
-          cd.rhs.segment<3>(rr + b) = oMf.R.transpose() * cd.rhs.segment<3>(rr + b);
-      }
-      rr += cm.dim;
-    }
-  }
-  forcesToJointWrenches(model, contacts, cd, cd.rhs);
+  localForcesToJointWrenches(model, data, contacts, cd, cd.impulses);
   cd.ddq = cd.v_after - v_before;
   computeRNEADerivatives(model, data, q, cd.zero, cd.ddq, cd.fext, false);
   kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, nullptr, nullptr, nullptr, nullptr);
