@@ -25,7 +25,8 @@ struct KnotData {
   ContactData contact;             // v̇ (contact.ddq), λ (contact.lambda), ...
 };
 
-// x⁺ and λ (data in kd); returns the contact dynamics status (outputs are zero unless Ok).
+// x⁺ and λ (data in kd); returns the contact dynamics status. Unless Ok, the state is held
+// (x⁺ = x), λ is zero and the Jacobians are not updated: the caller must not use them.
 ContactStatus knotDynamics(const Model& model, Data& data, const ContactSet& contacts, KnotData& kd,
                            const Eigen::Ref<const Eigen::VectorXd>& q,
                            const Eigen::Ref<const Eigen::VectorXd>& v,

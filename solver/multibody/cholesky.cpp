@@ -36,12 +36,6 @@ void solveMassMatrix(const Model& model, const Data& data, Eigen::Ref<Eigen::Vec
   solveInPlace(model, data, x.data());
 }
 
-void solveMassMatrixColumns(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> X) {
-  if (X.rows() != model.nv)
-    throwSizeError("solveMassMatrixColumns", "X (rows)", model.nv, X.rows());
-  for (Eigen::Index c = 0; c < X.cols(); ++c) solveInPlace(model, data, X.col(c).data());
-}
-
 void solveMassMatrixRows(const Model& model, const Data& data, Eigen::Ref<RowMatrixXd> B) {
   if (B.rows() != model.nv) throwSizeError("solveMassMatrixRows", "B (rows)", model.nv, B.rows());
   const Eigen::MatrixXd& U = data.Ltdl;
@@ -64,13 +58,6 @@ void solveMassMatrixRows(const Model& model, const Data& data, Eigen::Ref<RowMat
   }
   for (int k = 0; k < n; ++k)
     for (int i = parent[k]; i >= 0; i = parent[i]) axpy(U(i, k), b + i * stride, b + k * stride);
-}
-
-const Eigen::MatrixXd& computeMinverse(const Model& model, Data& data) {
-  // M^-1 is symmetric: solving on the transposed (row-major) view gives the same matrix.
-  data.Minv.setIdentity();
-  solveMassMatrixRows(model, data, data.Minv.transpose());
-  return data.Minv;
 }
 
 }  // namespace stride

@@ -11,13 +11,10 @@ namespace stride {
 
 // Factorizes data.M (crba first) into data.Ltdl.
 void factorizeMassMatrix(const Model& model, Data& data);
-// x <- M^-1 x, with the factorization in data.Ltdl; the second form on every column of X.
+// x <- M^-1 x, with the factorization in data.Ltdl.
 void solveMassMatrix(const Model& model, const Data& data, Eigen::Ref<Eigen::VectorXd> x);
-void solveMassMatrixColumns(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> X);
 // B <- M^-1 B for a row-major block: each step of the solve is an operation on whole rows,
 // contiguous in memory, so many right-hand sides vectorize together. The fast path for matrices.
 void solveMassMatrixRows(const Model& model, const Data& data, Eigen::Ref<RowMatrixXd> B);
-// M^-1 (data.Minv), from the factorization.
-const Eigen::MatrixXd& computeMinverse(const Model& model, Data& data);
 
 }  // namespace stride

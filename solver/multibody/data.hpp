@@ -55,7 +55,7 @@ struct Data {
   // Tree-sparse L^T D L factorization of M (cholesky.hpp): D on the diagonal of Ltdl, L (unit
   // lower triangular, nonzero only where the column's dof supports the row's) below it.
   Eigen::MatrixXd Ltdl;
-  Eigen::MatrixXd Minv;            // computeMinverse output
+  Eigen::MatrixXd Minv;            // M^-1 = ∂v̇/∂τ (computeABADerivatives)
   Eigen::MatrixXd ddq_dq, ddq_dv;  // ABA derivatives; d ddq / d tau = Minv
   RowMatrixXd rhs3;                // nv x 3nv: stacked right-hand sides of one M^-1 solve
 
