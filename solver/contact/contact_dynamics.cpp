@@ -5,7 +5,6 @@
 #include "solver/multibody/frame_derivatives.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/jacobian.hpp"
-#include "solver/multibody/kinematics.hpp"
 #include "solver/multibody/lie_group.hpp"
 #include "solver/multibody/rnea.hpp"
 #include "solver/multibody/rnea_derivatives.hpp"
@@ -59,7 +58,7 @@ SE3 framePlacement(const Model& model, const Data& data, int frame) {
 }
 
 // Jc (LOCAL rows) from data.J; with kinematics of (q, v, a = 0) in data.v, data.a, also the drift
-// γ. Needs crba (or computeJointJacobians) and forwardKinematics(q, v, 0).
+// γ. Needs crba (or computeJointJacobians) first.
 void constraintRows(const Model& model, Data& data, const ContactSet& contacts, ContactData& cd,
                     bool with_drift) {
   int r = 0;
@@ -235,7 +234,12 @@ ContactStatus contactDynamics(const Model& model, Data& data, const ContactSet& 
   crba(model, data, q);
   factorizeMassMatrix(model, data);
   nonLinearEffects(model, data, q, v);
-  forwardKinematics(model, data, q, v, cd.zero);
+  // The RNEA sweep just run holds the joint velocities and, at v̇ = 0, the accelerations with
+  // gravity a_gf = X^-1 a_0 + a: removing the gravity term gives the accelerations the drift
+  // needs, without another kinematics sweep.
+  Vector6d a0 = Vector6d::Zero();
+  a0.head<3>() = -model.gravity;
+  for (int i = 1; i < model.njoints(); ++i) data.a[i] = data.a_gf[i] - data.oMi[i].actInv(a0);
   constraintRows(model, data, contacts, cd, true);
   if (!factorSchur(model, data, cd, damping)) {
     clearOutputs(cd);
