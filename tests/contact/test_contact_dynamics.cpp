@@ -7,11 +7,15 @@
 #include <random>
 
 #include "config/robot_config.hpp"
+#include "multibody/random_tree.hpp"
 #include "solver/contact/knot_dynamics.hpp"
+#include "solver/multibody/aba.hpp"
+#include "solver/multibody/aba_derivatives.hpp"
 #include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/lie_group.hpp"
 #include "solver/multibody/rnea.hpp"
+#include "solver/multibody/rnea_derivatives.hpp"
 #include "solver/multibody/urdf.hpp"
 
 namespace stride {
@@ -106,6 +110,44 @@ std::vector<Case> cases() {
   {
     Case c{"ur5 tool point (fixed base)", shared("ur5/ur5_robot.urdf", RootJoint::Fixed), {}, 0.0};
     c.contacts.add(c.model, "tool0", 3, ReferenceFrame::LocalWorldAligned, 0.0, 3.0);
+    out.push_back(std::move(c));
+  }
+  // Random trees with a free-flyer: a surface contact (world-aligned forces, Baumgarte) on a frame
+  // of one branch and, when the tree has one, a point contact on a frame of a different branch.
+  std::mt19937 rng(2024);
+  for (int t = 0; t < 6; ++t) {
+    Case c{"random tree " + std::to_string(t), makeRandomTree(rng, 8 + 2 * t, true), {}, 0.0};
+    const Model& m = c.model;
+    auto onPath = [&](int a, int b) {  // a is b or one of its ancestors
+      for (int j = b; j >= 0; j = j > 0 ? m.joints[j].parent : -1)
+        if (j == a) return true;
+      return false;
+    };
+    int surface = -1, point = -1;
+    for (int f = m.nframes() - 1; f > 0 && surface < 0; --f)
+      if (m.frames[f].parentJoint > 1) surface = f;
+    const int js = m.frames[surface].parentJoint;
+    for (int f = 1; f < m.nframes() && point < 0; ++f) {
+      const int jp = m.frames[f].parentJoint;
+      if (jp > 1 && !onPath(jp, js) && !onPath(js, jp)) point = f;
+    }
+    // A point contact whose own branch has fewer than 3 independent dofs (or parallel axes) makes
+    // Jc rank-deficient: keep it only when the pair solves without damping.
+    for (const bool with_point : {true, false}) {
+      if (with_point && point < 0) continue;
+      ContactSet set;
+      set.add(m, m.frames[surface].name, 6, ReferenceFrame::LocalWorldAligned, 20.0, 4.0);
+      set.setReference(0,
+                       SE3(exp3(Eigen::Vector3d(0.1, -0.2, 0.1)), Eigen::Vector3d(0.1, 0.0, 0.2)));
+      if (with_point) set.add(m, m.frames[point].name, 3);
+      Data d(m);
+      ContactData cd(m, set);
+      const Eigen::VectorXd q = randomConfiguration(m, rng), z = Eigen::VectorXd::Zero(m.nv);
+      if (contactDynamics(m, d, set, cd, q, z, z) != ContactStatus::Ok) continue;
+      c.contacts = set;
+      break;
+    }
+    if (c.contacts.size() == 0) ADD_FAILURE() << c.name << ": no regular contact set";
     out.push_back(std::move(c));
   }
   return out;
@@ -260,6 +302,50 @@ TEST(KnotDynamics, JacobiansMatchFiniteDifferences) {
     EXPECT_LT(relErr(Gx.leftCols(nv), Nq.bottomRows(nc)), c.tol()) << c.name << " Gx (q)";
     EXPECT_LT(relErr(Gx.rightCols(nv), Nv.bottomRows(nc)), c.tol()) << c.name << " Gx (v)";
     EXPECT_LT(relErr(Gu, Nu.bottomRows(nc)), c.tol()) << c.name << " Gu";
+  }
+}
+
+TEST(Derivatives, RneaAndAbaMatchFiniteDifferences) {
+  std::mt19937 rng(17);
+  for (Case& c : cases()) {
+    const Model& model = c.model;
+    Data data(model), d2(model);
+    const State s = randomState(model, rng);
+    const Eigen::VectorXd a = s.tau / 5.0;
+    const int nv = model.nv;
+    computeRNEADerivatives(model, data, s.q, s.v, a);
+    const Eigen::MatrixXd tq = data.dtau_dq, tv = data.dtau_dv;
+    auto tau = [&](const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
+      return Eigen::VectorXd(rnea(model, d2, q, v, a));
+    };
+    EXPECT_LT(
+        relErr(tq, fdQ(model, s.q, nv, [&](const Eigen::VectorXd& q) { return tau(q, s.v); })),
+        kTol)
+        << c.name;
+    EXPECT_LT(relErr(tv, fdVec(s.v, nv, [&](const Eigen::VectorXd& v) { return tau(s.q, v); })),
+              kTol)
+        << c.name;
+    // Realistic torques: on solo12's 0.1 kg legs ±5 N·m gives accelerations in the thousands, and
+    // finite differences lose eps |v̇| / h to rounding (the reference check covers the exact
+    // values).
+    const Eigen::VectorXd tau_small = 0.2 * s.tau;
+    computeABADerivatives(model, data, s.q, s.v, tau_small);
+    const Eigen::MatrixXd aq = data.ddq_dq, av = data.ddq_dv, at = data.Minv;
+    auto acc = [&](const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& t) {
+      return Eigen::VectorXd(aba(model, d2, q, v, t));
+    };
+    EXPECT_LT(relErr(aq, fdQ(model, s.q, nv,
+                             [&](const Eigen::VectorXd& q) { return acc(q, s.v, tau_small); })),
+              kTol)
+        << c.name;
+    EXPECT_LT(relErr(av, fdVec(s.v, nv,
+                               [&](const Eigen::VectorXd& v) { return acc(s.q, v, tau_small); })),
+              kTol)
+        << c.name;
+    EXPECT_LT(relErr(at, fdVec(tau_small, nv,
+                               [&](const Eigen::VectorXd& t) { return acc(s.q, s.v, t); })),
+              kTol)
+        << c.name;
   }
 }
 
