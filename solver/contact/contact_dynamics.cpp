@@ -1,5 +1,7 @@
 #include "solver/contact/contact_dynamics.hpp"
 
+#include <algorithm>
+
 #include "solver/multibody/cholesky.hpp"
 #include "solver/multibody/crba.hpp"
 #include "solver/multibody/frame_derivatives.hpp"
@@ -19,6 +21,8 @@ const char* toString(ContactStatus status) {
       return "non-finite input";
     case ContactStatus::Singular:
       return "singular contact Jacobian (add damping)";
+    case ContactStatus::SingularMassMatrix:
+      return "singular mass matrix (a moving body without inertia?)";
   }
   return "?";
 }
@@ -97,9 +101,23 @@ bool factorSchur(const Model& model, const Data& data, ContactData& cd, double d
   auto K = cd.K.topLeftCorner(nc, nc);
   K.noalias() = Yt * cd.Jc.topRows(nc).transpose();
   K.diagonal().array() += damping;
-  // In-place LLT on the block: no allocation, and the factor stays in K for later solves.
+  // In-place LLT on the block: no allocation, and the factor stays in K for later solves. LLT only
+  // fails on a non-positive pivot; a rank-deficient K usually leaves a tiny positive one instead,
+  // with forces split arbitrarily between redundant contacts, so small pivots count as singular.
+  // With damping μ every pivot is at least μ in exact arithmetic: that is the user's choice.
+  const double threshold =
+      damping > 0.0 ? 0.5 * damping : 1e-10 * std::max(1.0, K.diagonal().maxCoeff());
   Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(K);
-  return llt.info() == Eigen::Success;
+  if (llt.info() != Eigen::Success) return false;
+  return K.diagonal().cwiseAbs2().minCoeff() > threshold;  // K holds L now: L_ii^2 = pivot
+}
+
+// The workspace must have been built for this set and model (a set may not grow afterwards).
+void checkWorkspace(const Model& model, const ContactSet& contacts, const ContactData& cd,
+                    const char* fn) {
+  if (cd.Jc.cols() != model.nv) throwSizeError(fn, "ContactData (nv)", model.nv, cd.Jc.cols());
+  if (cd.Jc.rows() < contacts.maxNc())
+    throwSizeError(fn, "ContactData (contact rows)", contacts.maxNc(), cd.Jc.rows());
 }
 
 // X <- K^-1 X with the factor in K's lower triangle.
@@ -227,12 +245,16 @@ ContactStatus contactDynamics(const Model& model, Data& data, const ContactSet& 
   model.checkConfiguration(q, "contactDynamics");
   model.checkVelocity(v, "contactDynamics");
   if (tau.size() != model.nv) throwSizeError("contactDynamics", "tau", model.nv, tau.size());
+  checkWorkspace(model, contacts, cd, "contactDynamics");
   if (!finite(q) || !finite(v) || !finite(tau)) {
     clearOutputs(cd);
     return ContactStatus::NonFinite;
   }
   crba(model, data, q);
-  factorizeMassMatrix(model, data);
+  if (!factorizeMassMatrix(model, data)) {
+    clearOutputs(cd);
+    return ContactStatus::SingularMassMatrix;
+  }
   nonLinearEffects(model, data, q, v);
   // The RNEA sweep just run holds the joint velocities and, at v̇ = 0, the accelerations with
   // gravity a_gf = X^-1 a_0 + a: removing the gravity term gives the accelerations the drift
@@ -326,12 +348,16 @@ ContactStatus impulseDynamics(const Model& model, Data& data, const ContactSet& 
                               double damping) {
   model.checkConfiguration(q, "impulseDynamics");
   model.checkVelocity(v_before, "impulseDynamics");
-  if (!finite(q) || !finite(v_before) || !std::isfinite(restitution)) {
+  checkWorkspace(model, contacts, cd, "impulseDynamics");
+  if (!finite(q) || !finite(v_before) || !std::isfinite(restitution) || restitution < 0.0) {
     clearOutputs(cd);
     return ContactStatus::NonFinite;
   }
   crba(model, data, q);
-  factorizeMassMatrix(model, data);
+  if (!factorizeMassMatrix(model, data)) {
+    clearOutputs(cd);
+    return ContactStatus::SingularMassMatrix;
+  }
   constraintRows(model, data, contacts, cd, false);
   if (!factorSchur(model, data, cd, damping)) {
     clearOutputs(cd);

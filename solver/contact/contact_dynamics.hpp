@@ -23,11 +23,14 @@ namespace stride {
 enum class ContactStatus : std::uint8_t {
   Ok,
   NonFinite,  // an input (q, v, τ) is not finite; outputs are left zero
-  Singular,   // K is not positive definite (rank-deficient contacts without damping); outputs zero
+  Singular,   // K is (numerically) singular: rank-deficient contacts without damping; outputs zero
+  SingularMassMatrix,  // M is not positive definite (a moving body without inertia); outputs zero
 };
 const char* toString(ContactStatus status);
 
-// Workspace for one contact set, sized for all its contacts (any active subset fits).
+// Workspace for one contact set, sized for all its contacts (any active subset fits). Built after
+// the set is complete: a set that grows afterwards is refused at the next call
+// (std::invalid_argument).
 struct ContactData {
   ContactData(const Model& model, const ContactSet& contacts);
 

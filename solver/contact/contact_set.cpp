@@ -10,6 +10,9 @@ int ContactSet::add(const Model& model, const std::string& frame, int dim, Refer
   if (dim != 3 && dim != 6)
     throw std::invalid_argument("ContactSet::add: contact '" + frame + "' has dimension " +
                                 std::to_string(dim) + " (3 or 6)");
+  if (model.frames[model.getFrameId(frame)].parentJoint == 0)
+    throw std::invalid_argument("ContactSet::add: frame '" + frame +
+                                "' is fixed to the world; a contact there constrains nothing");
   if (forces == ReferenceFrame::World)
     throw std::invalid_argument("ContactSet::add: contact forces are Local or LocalWorldAligned");
   if (!(kp >= 0.0) || !(kd >= 0.0))
@@ -28,10 +31,12 @@ int ContactSet::add(const Model& model, const std::string& frame, int dim, Refer
   return size() - 1;
 }
 
-void ContactSet::setActive(int contact, bool active) {
-  if (isActive(contact) == active) return;
+bool ContactSet::setActive(int contact, bool active) {
+  if (contact < 0 || contact >= size()) return false;
+  if (isActive(contact) == active) return true;
   active_[contact] = active ? 1 : 0;
   nc_ += (active ? 1 : -1) * contacts_[contact].dim;
+  return true;
 }
 
 int ContactSet::find(const std::string& name) const {

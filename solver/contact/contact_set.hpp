@@ -28,12 +28,14 @@ struct ContactModel {
 
 class ContactSet {
  public:
-  // Adds a contact on a frame (throws std::invalid_argument for an unknown frame, a dimension
-  // other than 3 or 6, or a World force frame). Returns its index. Setup only.
+  // Adds a contact on a frame (throws std::invalid_argument for an unknown frame, a frame fixed to
+  // the world, a dimension other than 3 or 6, or a World force frame). Returns its index. Setup
+  // only.
   int add(const Model& model, const std::string& frame, int dim,
           ReferenceFrame forces = ReferenceFrame::Local, double kp = 0.0, double kd = 0.0);
 
-  void setActive(int contact, bool active);
+  // Switches a contact on or off; false (and no change) for an index out of range.
+  bool setActive(int contact, bool active);
   bool isActive(int contact) const { return active_[contact] != 0; }
   void setReference(int contact, const SE3& placement) { contacts_[contact].reference = placement; }
   int size() const { return static_cast<int>(contacts_.size()); }

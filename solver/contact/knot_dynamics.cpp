@@ -1,5 +1,7 @@
 #include "solver/contact/knot_dynamics.hpp"
 
+#include <cmath>
+
 #include "solver/multibody/lie_group.hpp"
 
 namespace stride {
@@ -29,6 +31,12 @@ ContactStatus step(const Model& model, Data& data, const ContactSet& contacts, K
                    const Eigen::Ref<const Eigen::VectorXd>& u, double dt, double damping,
                    bool derivatives) {
   if (u.size() != kd.nu) throwSizeError("knotDynamics", "u", kd.nu, u.size());
+  if (!std::isfinite(dt) || !u.allFinite()) {
+    kd.q_next = q;
+    kd.v_next = v;
+    kd.contact.lambda.setZero();
+    return ContactStatus::NonFinite;
+  }
   const int off = model.nv - kd.nu;
   kd.tau.head(off).setZero();
   kd.tau.tail(kd.nu) = u;

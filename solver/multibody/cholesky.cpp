@@ -2,18 +2,20 @@
 
 namespace stride {
 
-void factorizeMassMatrix(const Model& model, Data& data) {
+bool factorizeMassMatrix(const Model& model, Data& data) {
   Eigen::MatrixXd& U = data.Ltdl;
   U = data.M;
   const std::vector<int>& parent = model.parentDof;
   // RBDA Table 6.3 (LTDL), on the transpose so that each column is read top-down.
   for (int k = model.nv - 1; k >= 0; --k) {
+    if (!(U(k, k) > 0.0)) return false;  // also catches NaN
     for (int i = parent[k]; i >= 0; i = parent[i]) {
       const double a = U(i, k) / U(k, k);
       for (int j = i; j >= 0; j = parent[j]) U(j, i) -= a * U(j, k);
       U(i, k) = a;
     }
   }
+  return true;
 }
 
 namespace {

@@ -9,8 +9,9 @@
 
 namespace stride {
 
-// Factorizes data.M (crba first) into data.Ltdl.
-void factorizeMassMatrix(const Model& model, Data& data);
+// Factorizes data.M (crba first) into data.Ltdl. Returns false when M is not positive definite
+// (a moving body without inertia, or non-finite input): the factor is then unusable.
+bool factorizeMassMatrix(const Model& model, Data& data);
 // x <- M^-1 x, with the factorization in data.Ltdl.
 void solveMassMatrix(const Model& model, const Data& data, Eigen::Ref<Eigen::VectorXd> x);
 // B <- M^-1 B for a row-major block: each step of the solve is an operation on whole rows,

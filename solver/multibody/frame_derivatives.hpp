@@ -5,7 +5,8 @@
 // coordinates only the relative terms remain (see rnea_derivatives.cpp):
 //   ∂v_f/∂q_j = X_f^-1 w_j,   ∂a_f/∂q_j = X_f^-1 (u_j + w_j x (v_i - v_λ)),
 //   ∂v_f/∂v_j = ∂a_f/∂a_j = X_f^-1 S_j,   ∂a_f/∂v_j = X_f^-1 (S_j x v_i + e_j),
-// with w_j = v_λ x S_j, u_j = a_λ x S_j (no gravity), e_j = (v_λ + v_J) x S_j.
+// with w_j = v_λ x S_j, u_j = a_λ x S_j (no gravity), e_j = (v_λ + v_J) x S_j, where v_J is
+// the spatial velocity of the body of j's own joint (not the joint rate S_j q̇_j).
 // The derivative of the placement with respect to q is the LOCAL frame Jacobian.
 
 #include "solver/multibody/data.hpp"

@@ -19,7 +19,8 @@
 //   i ⪰ j:  ∂τ_i/∂q_j = A_i . c_j + B_i . w_j,   A_i = Y_i S_i,  B_i = Ẏ_i^T S_i - S_i x* h_i
 //   i ≺ j:  ∂τ_i/∂q_j = S_i . G_j,               G_j = S_j x* F_j + Y_j c_j + Ẏ_j w_j + w_j x* h_j
 // The same steps for the joint rates (∂v_k/∂q̇_j = S_j, ∂a_k/∂q̇_j = S_j x v_k + e_j with
-// e_j = (v_λ + v_J) x S_j, v_J the velocity of j's own joint) give
+// e_j = (v_λ + v_J) x S_j, v_J the spatial velocity of the body of j's own joint, not its joint
+// rate S_j q̇_j) give
 //   i ⪰ j:  ∂τ_i/∂v_j = A_i . e_j + B_i . S_j
 //   i ≺ j:  ∂τ_i/∂v_j = S_i . H_j,               H_j = Ẏ_j S_j + Y_j e_j + S_j x* h_j.
 // Every entry is one 6-vector dot product over pairs of dofs on a common path, like the CRBA.

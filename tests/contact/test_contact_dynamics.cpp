@@ -458,9 +458,66 @@ TEST(ContactDynamics, BadInput) {
   EXPECT_EQ(impulseDynamics(model, data, contacts, cd, s.q, s.v), ContactStatus::NonFinite);
   EXPECT_THROW(contactDynamics(model, data, contacts, cd, s.v, s.v, s.tau), std::invalid_argument);
   // Switching contacts on and off changes the active dimension without reallocating.
-  contacts.setActive(1, false);
+  EXPECT_TRUE(contacts.setActive(1, false));
   EXPECT_EQ(contacts.nc(), 6);
   EXPECT_EQ(contacts.maxNc(), 12);
+  EXPECT_FALSE(contacts.setActive(7, false));
+  // A set that grew after its workspace was built is refused, not written out of bounds.
+  contacts.add(model, "HR_FOOT", 6);
+  EXPECT_THROW(
+      contactDynamics(model, data, contacts, cd, s.q, Eigen::VectorXd::Zero(model.nv), s.tau),
+      std::invalid_argument);
+  // A knot with a non-finite time step is flagged.
+  ContactSet one;
+  one.add(model, "FL_FOOT", 3);
+  KnotData kd(model, one);
+  EXPECT_EQ(knotDynamics(model, data, one, kd, s.q, Eigen::VectorXd::Zero(model.nv),
+                         Eigen::VectorXd::Zero(kd.nu), std::numeric_limits<double>::quiet_NaN()),
+            ContactStatus::NonFinite);
+  // A frame fixed to the world constrains nothing.
+  const Model ur5 = shared("ur5/ur5_robot.urdf", RootJoint::Fixed);
+  ContactSet fixed;
+  EXPECT_THROW(fixed.add(ur5, "base_link", 3), std::invalid_argument);
+}
+
+TEST(ContactDynamics, RedundantPointContactsAreAlwaysSingular) {
+  // The same point twice: K is exactly singular, but rounding often leaves a tiny positive pivot
+  // that a plain LLT accepts, splitting the force arbitrarily. It must be reported every time.
+  const Model model = shared("solo12/solo12.urdf");
+  ContactSet contacts;
+  contacts.add(model, "FL_FOOT", 3);
+  contacts.add(model, "FL_FOOT", 3);
+  Data data(model);
+  ContactData cd(model, contacts);
+  std::mt19937 rng(1);
+  int singular = 0;
+  for (int k = 0; k < 300; ++k) {
+    const State s = randomState(model, rng);
+    singular +=
+        contactDynamics(model, data, contacts, cd, s.q, s.v, s.tau) == ContactStatus::Singular;
+  }
+  EXPECT_EQ(singular, 300);
+}
+
+TEST(ContactDynamics, MasslessBodyIsReportedAsSuch) {
+  // A moving joint carrying no inertia makes M singular: flagged, not reported as a contact issue.
+  Model model = shared("ur5/ur5_robot.urdf", RootJoint::Fixed);
+  const int leaf = model.addJoint(model.getJointId("wrist_3_joint"), JointType::Revolute,
+                                  SE3::Identity(), "leaf", Eigen::Vector3d::UnitX());
+  Frame f;
+  f.name = "leaf_point";
+  f.parentJoint = leaf;
+  f.placement = SE3(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0.1, 0));
+  model.addFrame(f);
+  ContactSet contacts;
+  contacts.add(model, "leaf_point", 3);
+  Data data(model);
+  ContactData cd(model, contacts);
+  const Eigen::VectorXd z = Eigen::VectorXd::Zero(model.nv);
+  EXPECT_EQ(
+      contactDynamics(model, data, contacts, cd, Eigen::VectorXd::Constant(model.nq, 0.3), z, z),
+      ContactStatus::SingularMassMatrix);
+  EXPECT_TRUE(cd.ddq.allFinite());
 }
 
 }  // namespace
