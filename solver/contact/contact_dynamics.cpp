@@ -236,6 +236,43 @@ void kktDerivatives(const Model& model, Data& data, ContactData& cd, Eigen::Matr
   }
 }
 
+// The factorizations both solves share: M (crba + tree-sparse L^T D L), the constraint rows and
+// the Schur complement. With v, also b(q, v) in data.nle and the drift γ; the RNEA sweep of b
+// holds the joint velocities and, at v̇ = 0, the accelerations with gravity a_gf = X^-1 a_0 + a,
+// so removing the gravity term gives the drift's accelerations without another sweep.
+ContactStatus factorKkt(const Model& model, Data& data, const ContactSet& contacts, ContactData& cd,
+                        const Eigen::Ref<const Eigen::VectorXd>& q,
+                        const Eigen::Ref<const Eigen::VectorXd>* v, double damping) {
+  crba(model, data, q);
+  if (!factorizeMassMatrix(model, data)) {
+    clearOutputs(cd);
+    return ContactStatus::SingularMassMatrix;
+  }
+  if (v) {
+    nonLinearEffects(model, data, q, *v);
+    Vector6d a0 = Vector6d::Zero();
+    a0.head<3>() = -model.gravity;
+    for (int i = 1; i < model.njoints(); ++i) data.a[i] = data.a_gf[i] - data.oMi[i].actInv(a0);
+  }
+  constraintRows(model, data, contacts, cd, v != nullptr);
+  if (!factorSchur(model, data, cd, damping)) {
+    clearOutputs(cd);
+    return ContactStatus::Singular;
+  }
+  return ContactStatus::Ok;
+}
+
+// Last step of both solves: a non-finite result is flagged, the forces go to their frames.
+ContactStatus finishSolve(const Model& model, const Data& data, const ContactSet& contacts,
+                          ContactData& cd, const Eigen::VectorXd& primal, Eigen::VectorXd& forces) {
+  if (!primal.allFinite() || !forces.head(cd.nc).allFinite()) {
+    clearOutputs(cd);
+    return ContactStatus::Singular;
+  }
+  rotateForces(model, data, contacts, cd, forces, nullptr, nullptr, nullptr);
+  return ContactStatus::Ok;
+}
+
 }  // namespace
 
 ContactStatus contactDynamics(const Model& model, Data& data, const ContactSet& contacts,
@@ -250,23 +287,8 @@ ContactStatus contactDynamics(const Model& model, Data& data, const ContactSet& 
     clearOutputs(cd);
     return ContactStatus::NonFinite;
   }
-  crba(model, data, q);
-  if (!factorizeMassMatrix(model, data)) {
-    clearOutputs(cd);
-    return ContactStatus::SingularMassMatrix;
-  }
-  nonLinearEffects(model, data, q, v);
-  // The RNEA sweep just run holds the joint velocities and, at v̇ = 0, the accelerations with
-  // gravity a_gf = X^-1 a_0 + a: removing the gravity term gives the accelerations the drift
-  // needs, without another kinematics sweep.
-  Vector6d a0 = Vector6d::Zero();
-  a0.head<3>() = -model.gravity;
-  for (int i = 1; i < model.njoints(); ++i) data.a[i] = data.a_gf[i] - data.oMi[i].actInv(a0);
-  constraintRows(model, data, contacts, cd, true);
-  if (!factorSchur(model, data, cd, damping)) {
-    clearOutputs(cd);
-    return ContactStatus::Singular;
-  }
+  const ContactStatus status = factorKkt(model, data, contacts, cd, q, &v, damping);
+  if (status != ContactStatus::Ok) return status;
   // v̇_free = M^-1 (τ - b); λ = -K^-1 (γ + Jc v̇_free); v̇ = v̇_free + Y λ.
   cd.ddq = tau - data.nle;
   solveMassMatrix(model, data, cd.ddq);
@@ -276,12 +298,7 @@ ContactStatus contactDynamics(const Model& model, Data& data, const ContactSet& 
   lambda.noalias() -= cd.Jc.topRows(nc) * cd.ddq;
   solveSchur(cd, lambda);
   cd.ddq.noalias() += cd.Yt.topRows(nc).transpose() * lambda;
-  if (!cd.ddq.allFinite() || !lambda.allFinite()) {
-    clearOutputs(cd);
-    return ContactStatus::Singular;
-  }
-  rotateForces(model, data, contacts, cd, cd.lambda, nullptr, nullptr, nullptr);
-  return ContactStatus::Ok;
+  return finishSolve(model, data, contacts, cd, cd.ddq, cd.lambda);
 }
 
 ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const ContactSet& contacts,
@@ -353,16 +370,8 @@ ContactStatus impulseDynamics(const Model& model, Data& data, const ContactSet& 
     clearOutputs(cd);
     return ContactStatus::NonFinite;
   }
-  crba(model, data, q);
-  if (!factorizeMassMatrix(model, data)) {
-    clearOutputs(cd);
-    return ContactStatus::SingularMassMatrix;
-  }
-  constraintRows(model, data, contacts, cd, false);
-  if (!factorSchur(model, data, cd, damping)) {
-    clearOutputs(cd);
-    return ContactStatus::Singular;
-  }
+  const ContactStatus status = factorKkt(model, data, contacts, cd, q, nullptr, damping);
+  if (status != ContactStatus::Ok) return status;
   // Jc v⁺ = -r Jc v⁻ with v⁺ = v⁻ + Y Λ:  Λ = -(1 + r) K^-1 Jc v⁻.
   const int nc = cd.nc;
   auto L = cd.impulses.head(nc);
@@ -370,12 +379,7 @@ ContactStatus impulseDynamics(const Model& model, Data& data, const ContactSet& 
   solveSchur(cd, L);
   cd.v_after = v_before;
   cd.v_after.noalias() += cd.Yt.topRows(nc).transpose() * L;
-  if (!cd.v_after.allFinite() || !L.allFinite()) {
-    clearOutputs(cd);
-    return ContactStatus::Singular;
-  }
-  rotateForces(model, data, contacts, cd, cd.impulses, nullptr, nullptr, nullptr);
-  return ContactStatus::Ok;
+  return finishSolve(model, data, contacts, cd, cd.v_after, cd.impulses);
 }
 
 ContactStatus impulseDynamicsDerivatives(const Model& model, Data& data, const ContactSet& contacts,
