@@ -1,0 +1,82 @@
+#pragma once
+// The knot interface the solvers see (paper §III): a discrete dynamics x⁺ = f(x, u) with its
+// Jacobians Fx, Fu, and a cost ℓ(x, u) with its gradient and (Gauss-Newton) Hessian, all in the
+// tangent space of the state. calc computes values, calcDiff values and derivatives; both write
+// into an ActionData built once by the model. New kinds of knots need no solver change.
+
+#include <memory>
+
+#include "solver/multibody/model.hpp"
+
+namespace stride {
+
+// The state manifold: x = [q; v] of a robot (dx = [dq; dv], 2nv), or a vector space R^n.
+class StateSpace {
+ public:
+  explicit StateSpace(const Model& model);
+  explicit StateSpace(int n);
+
+  int nx() const { return nx_; }
+  int ndx() const { return ndx_; }
+  const Model* model() const { return model_; }
+
+  // x ⊕ dx.
+  void integrate(const Eigen::Ref<const Eigen::VectorXd>& x,
+                 const Eigen::Ref<const Eigen::VectorXd>& dx,
+                 Eigen::Ref<Eigen::VectorXd> out) const;
+  // x1 ⊖ x0: the dx with x0 ⊕ dx = x1.
+  void difference(const Eigen::Ref<const Eigen::VectorXd>& x0,
+                  const Eigen::Ref<const Eigen::VectorXd>& x1,
+                  Eigen::Ref<Eigen::VectorXd> out) const;
+  // The neutral state (neutral configuration, zero velocity; zero for R^n).
+  Eigen::VectorXd zero() const;
+
+ private:
+  const Model* model_ = nullptr;
+  int nx_, ndx_;
+};
+
+enum class KnotStatus : std::uint8_t {
+  Ok,
+  NonFinite,        // a non-finite input or result
+  DynamicsFailure,  // the contact dynamics could not be solved (singular KKT system)
+};
+const char* toString(KnotStatus status);
+
+struct ActionData {
+  ActionData(int nx, int ndx, int nu);
+  virtual ~ActionData() = default;
+  KnotStatus status = KnotStatus::Ok;
+  double cost = 0.0;       // ℓ(x, u); +inf when status is not Ok
+  Eigen::VectorXd x_next;  // f(x, u) (terminal knots: unused)
+  Eigen::MatrixXd Fx, Fu;  // ndx x ndx, ndx x nu
+  Eigen::VectorXd Lx, Lu;  // ndx, nu
+  Eigen::MatrixXd Lxx, Lxu, Luu;
+};
+
+class ActionModel {
+ public:
+  ActionModel(const StateSpace& state, int nu) : state_(state), nu_(nu) {}
+  virtual ~ActionModel() = default;
+  ActionModel(const ActionModel&) = delete;
+  ActionModel& operator=(const ActionModel&) = delete;
+
+  const StateSpace& state() const { return state_; }
+  int nu() const { return nu_; }
+
+  virtual std::unique_ptr<ActionData> createData() const = 0;
+  // f(x, u) and ℓ(x, u). Never throws for non-finite numbers: data.status says what went wrong.
+  virtual void calc(ActionData& data, const Eigen::Ref<const Eigen::VectorXd>& x,
+                    const Eigen::Ref<const Eigen::VectorXd>& u) const = 0;
+  // calc and all derivatives.
+  virtual void calcDiff(ActionData& data, const Eigen::Ref<const Eigen::VectorXd>& x,
+                        const Eigen::Ref<const Eigen::VectorXd>& u) const = 0;
+  // Terminal knots have no dynamics; the solvers call them with u of size 0.
+  virtual bool isTerminal() const { return false; }
+
+ private:
+  StateSpace state_;
+  int nu_;
+};
+
+}  // namespace stride
