@@ -1,0 +1,402 @@
+#include "solver/ddp/solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+namespace stride {
+
+namespace {
+constexpr int kMaxRecordedIterations = 1000;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// Makes a square matrix exactly symmetric (the Riccati recursion drifts by rounding otherwise).
+void symmetrize(Eigen::MatrixXd& A) {
+  const int n = static_cast<int>(A.rows());
+  for (int j = 0; j < n; ++j)
+    for (int i = j + 1; i < n; ++i) {
+      const double s = 0.5 * (A(i, j) + A(j, i));
+      A(i, j) = A(j, i) = s;
+    }
+}
+}  // namespace
+
+const char* toString(SolveStatus status) {
+  switch (status) {
+    case SolveStatus::Converged:
+      return "converged";
+    case SolveStatus::MaxIterations:
+      return "iteration limit";
+    case SolveStatus::Deadline:
+      return "deadline";
+    case SolveStatus::NoDescent:
+      return "no descent (regularization limit)";
+    case SolveStatus::NonFinite:
+      return "non-finite value";
+  }
+  return "?";
+}
+
+Solver::Solver(ShootingProblem& problem, SolverKind kind)
+    : problem_(problem), kind_(kind), T_(problem.horizon()), ndx_(problem.ndx()) {
+  const int nx = problem.nx(), m = problem.maxNu(), n = ndx_;
+  xs_.assign(T_ + 1, problem.x0());
+  xs_try_ = xs_;
+  fs_.assign(T_ + 1, Eigen::VectorXd::Zero(n));
+  for (int k = 0; k < T_; ++k) {
+    const int nu = problem.nu(k);
+    us_.push_back(Eigen::VectorXd::Zero(nu));
+    k_.push_back(Eigen::VectorXd::Zero(nu));
+    Qu_.push_back(Eigen::VectorXd::Zero(nu));
+    K_.push_back(Eigen::MatrixXd::Zero(nu, n));
+  }
+  us_try_ = us_;
+  Vx_next_ = Vx_ = Vx_gap_ = Qx_ = Eigen::VectorXd::Zero(n);
+  Vxx_next_ = Vxx_ = Qxx_ = VFx_ = Eigen::MatrixXd::Zero(n, n);
+  Qxu_ = VFu_ = Eigen::MatrixXd::Zero(n, m);
+  Quu_ = Eigen::MatrixXd::Zero(m, m);
+  W_ = Eigen::MatrixXd::Zero(m, n);
+  w_ = Eigen::VectorXd::Zero(m);
+  dx_ = dx_next_ = tmp_x_ = Eigen::VectorXd::Zero(n);
+  du_ = Eigen::VectorXd::Zero(m);
+  box_.emplace_back(m);
+  u_lower_ = Eigen::VectorXd::Constant(m, -kInfinity);
+  u_upper_ = Eigen::VectorXd::Constant(m, kInfinity);
+  stats_.resize(kMaxRecordedIterations);
+  (void)nx;
+}
+
+void Solver::setControlBounds(const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
+  const int m = problem_.maxNu();
+  if (lower.size() != m || upper.size() != m)
+    throw std::invalid_argument("Solver::setControlBounds: bounds must have size " +
+                                std::to_string(m));
+  if ((lower.array() > upper.array()).any())
+    throw std::invalid_argument("Solver::setControlBounds: a lower bound exceeds its upper bound");
+  u_lower_ = lower;
+  u_upper_ = upper;
+  has_bounds_ = true;
+}
+
+bool Solver::setWarmStart(const std::vector<Eigen::VectorXd>& xs,
+                          const std::vector<Eigen::VectorXd>& us) {
+  if (static_cast<int>(xs.size()) != T_ + 1 || static_cast<int>(us.size()) != T_) return false;
+  for (int k = 0; k <= T_; ++k)
+    if (xs[k].size() != problem_.nx() || !xs[k].allFinite()) return false;
+  for (int k = 0; k < T_; ++k)
+    if (us[k].size() != problem_.nu(k) || !us[k].allFinite()) return false;
+  for (int k = 0; k <= T_; ++k) xs_[k] = xs[k];
+  for (int k = 0; k < T_; ++k) us_[k] = us[k];
+  feasible_ = false;
+  return true;
+}
+
+void Solver::shiftWarmStart(int n) {
+  n = std::clamp(n, 0, T_);
+  if (n == 0) return;
+  // Rotations swap the vectors' buffers: no allocation.
+  std::rotate(xs_.begin(), xs_.begin() + n, xs_.end());
+  std::rotate(us_.begin(), us_.begin() + n, us_.end());
+  std::rotate(K_.begin(), K_.begin() + n, K_.end());
+  std::rotate(k_.begin(), k_.begin() + n, k_.end());
+  // The new tail repeats the last state and control of the old trajectory.
+  for (int k = T_ + 1 - n; k <= T_; ++k) xs_[k] = xs_[T_ - n];
+  for (int k = T_ - n; k < T_; ++k)
+    if (k > 0 && us_[k].size() == us_[k - 1].size()) {
+      us_[k] = us_[k - 1];
+      K_[k] = K_[k - 1];
+    }
+  feasible_ = false;
+}
+
+bool Solver::finiteTrajectory() const {
+  for (const auto& x : xs_)
+    if (!x.allFinite()) return false;
+  for (const auto& u : us_)
+    if (!u.allFinite()) return false;
+  return true;
+}
+
+void Solver::rollout() {
+  const StateSpace& state = problem_.state();
+  xs_[0] = problem_.x0();
+  double cost = 0.0;
+  for (int k = 0; k < T_; ++k) {
+    if (has_bounds_ && kind_ == SolverKind::BoxFddp) {
+      const int nu = problem_.nu(k);
+      us_[k] = us_[k].cwiseMax(u_lower_.head(nu)).cwiseMin(u_upper_.head(nu));
+    }
+    ActionData& d = problem_.data(k);
+    problem_.knot(k).calc(d, xs_[k], us_[k]);
+    cost += d.cost;
+    xs_[k + 1] = d.x_next;
+  }
+  (void)state;
+  ActionData& dT = problem_.terminalData();
+  problem_.terminal().calc(dT, xs_[T_], Eigen::VectorXd());
+  cost_ = cost + dT.cost;
+  for (auto& f : fs_) f.setZero();
+  gap_ = 0.0;
+  feasible_ = std::isfinite(cost_);
+}
+
+double Solver::computeGaps() {
+  const StateSpace& state = problem_.state();
+  state.difference(xs_[0], problem_.x0(), fs_[0]);
+  double gap = fs_[0].lpNorm<1>();
+  for (int k = 0; k < T_; ++k) {
+    state.difference(xs_[k + 1], problem_.data(k).x_next, fs_[k + 1]);
+    gap += fs_[k + 1].lpNorm<1>();
+  }
+  return gap;
+}
+
+double Solver::computeDerivatives() {
+  cost_ = problem_.calcDiff(xs_, us_);
+  gap_ = computeGaps();
+  feasible_ = gap_ < options.gap_tolerance;
+  return cost_;
+}
+
+bool Solver::backwardPass() {
+  const bool box = kind_ == SolverKind::BoxFddp && has_bounds_;
+  const ActionData& dT = problem_.terminalData();
+  Vx_next_ = dT.Lx;
+  Vxx_next_ = dT.Lxx;
+  for (int k = T_ - 1; k >= 0; --k) {
+    const ActionData& d = problem_.data(k);
+    const int nu = problem_.nu(k);
+    // The value of the next knot seen from this one: V'x = Vx + Vxx f (the gap, FDDP), and Vxx
+    // regularized by μ I (Tassa et al.: a trust region on the state).
+    Vx_gap_ = Vx_next_;
+    if (!feasible_) Vx_gap_.noalias() += Vxx_next_ * fs_[k + 1];
+    Vxx_next_.diagonal().array() += reg_;
+    // Gauss-Newton Q terms (eq. 12): the knot's cost Hessian plus the value propagated through
+    // the dynamics' Jacobians.
+    VFx_.noalias() = Vxx_next_ * d.Fx;
+    Qxx_ = d.Lxx;
+    Qxx_.noalias() += d.Fx.transpose() * VFx_;
+    Qx_ = d.Lx;
+    Qx_.noalias() += d.Fx.transpose() * Vx_gap_;
+    Vx_ = Qx_;
+    Vxx_ = Qxx_;
+    if (nu > 0) {
+      auto VFu = VFu_.leftCols(nu);
+      auto Quu = Quu_.topLeftCorner(nu, nu);
+      auto Qxu = Qxu_.leftCols(nu);
+      auto W = W_.topRows(nu);
+      Eigen::VectorXd& Qu = Qu_[k];
+      Eigen::VectorXd& kk = k_[k];
+      Eigen::MatrixXd& KK = K_[k];
+      VFu.noalias() = Vxx_next_ * d.Fu;
+      Quu = d.Luu;
+      Quu.noalias() += d.Fu.transpose() * VFu;
+      Quu.diagonal().array() += reg_;  // Levenberg-Marquardt
+      Qxu = d.Lxu;
+      Qxu.noalias() += d.Fx.transpose() * VFu;
+      Qu = d.Lu;
+      Qu.noalias() += d.Fu.transpose() * Vx_gap_;
+      if (box) {
+        // k: the box QP on the control step (bounds shifted by the current control), warm
+        // started from the last k; K on the free controls only, zero on the clamped ones.
+        BoxQP& qp = box_[0];
+        auto lb = w_.head(nu);
+        lb = u_lower_.head(nu) - us_[k];
+        du_.head(nu) = u_upper_.head(nu) - us_[k];
+        if (!qp.solve(Quu, Qu, lb, du_.head(nu), kk)) return false;
+        const int nf = qp.nfree();
+        const Eigen::VectorXi& F = qp.freeIndices();
+        auto Wf = W.topRows(nf);
+        for (int a = 0; a < nf; ++a) Wf.row(a) = -Qxu.col(F[a]).transpose();
+        qp.solveFree(Wf);
+        KK.setZero();
+        for (int a = 0; a < nf; ++a) KK.row(F[a]) = Wf.row(a);
+      } else {
+        Eigen::Ref<Eigen::MatrixXd> Quu_ref(Quu);
+        Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(Quu_ref);  // in place
+        if (llt.info() != Eigen::Success) return false;
+        const auto L = Quu.triangularView<Eigen::Lower>();
+        kk = -Qu;
+        L.solveInPlace(kk);
+        L.adjoint().solveInPlace(kk);
+        W = -Qxu.transpose();
+        L.solveInPlace(W);
+        L.adjoint().solveInPlace(W);
+        KK = W;
+      }
+      // At the (box-)QP solution Kᵀ(Qu + Quu k) = 0 and Kᵀ(Qux + Quu K) = 0 on the free set, so
+      // V'x = Qx + Qxu k and V'xx = Qxx + Qxu K for both branches.
+      Vx_.noalias() += Qxu * kk;
+      Vxx_.noalias() += Qxu * KK;
+    }
+    symmetrize(Vxx_);
+    Vx_next_.swap(Vx_);
+    Vxx_next_.swap(Vxx_);
+  }
+  if (!Vx_next_.allFinite() || !Vxx_next_.allFinite()) return false;
+  expectedChange();
+  return true;
+}
+
+void Solver::expectedChange() {
+  // The step's first- and second-order cost change, d1 and d2, along the linearized rollout at
+  // α = 1 (δx_0 = f_0, δu = k + K δx, δx⁺ = Fx δx + Fu δu + f): the cost's quadratic model at
+  // step α then predicts α d1 + ½ α² d2, exact for linear dynamics and quadratic costs.
+  d1_ = d2_ = 0.0;
+  dx_ = fs_[0];
+  for (int k = 0; k < T_; ++k) {
+    const ActionData& d = problem_.data(k);
+    const int nu = problem_.nu(k);
+    auto du = du_.head(nu);
+    du = k_[k];
+    du.noalias() += K_[k] * dx_;
+    d1_ += d.Lx.dot(dx_) + d.Lu.dot(du);
+    tmp_x_.noalias() = d.Lxx * dx_;
+    tmp_x_.noalias() += 2.0 * (d.Lxu * du);
+    d2_ += dx_.dot(tmp_x_);
+    w_.head(nu).noalias() = d.Luu * du;
+    d2_ += du.dot(w_.head(nu));
+    dx_next_ = fs_[k + 1];
+    dx_next_.noalias() += d.Fx * dx_;
+    dx_next_.noalias() += d.Fu * du;
+    dx_.swap(dx_next_);
+  }
+  const ActionData& dT = problem_.terminalData();
+  d1_ += dT.Lx.dot(dx_);
+  tmp_x_.noalias() = dT.Lxx * dx_;
+  d2_ += dx_.dot(tmp_x_);
+}
+
+double Solver::forwardPass(double alpha) {
+  const StateSpace& state = problem_.state();
+  const bool box = kind_ == SolverKind::BoxFddp && has_bounds_;
+  // x̂_0 = x_0 ⊕ α f_0, û = u + α k + K (x̂ ⊖ x), x̂⁺ = f(x̂, û) ⊕ (α - 1) f: the gaps shrink to
+  // (1 - α) f (zero for a full step).
+  tmp_x_ = alpha * fs_[0];
+  state.integrate(xs_[0], tmp_x_, xs_try_[0]);
+  double cost = 0.0;
+  for (int k = 0; k < T_; ++k) {
+    const int nu = problem_.nu(k);
+    state.difference(xs_[k], xs_try_[k], dx_);
+    Eigen::VectorXd& u = us_try_[k];
+    u = us_[k] + alpha * k_[k];
+    u.noalias() += K_[k] * dx_;
+    if (box) u = u.cwiseMax(u_lower_.head(nu)).cwiseMin(u_upper_.head(nu));
+    ActionData& d = problem_.data(k);
+    problem_.knot(k).calc(d, xs_try_[k], u);
+    if (d.status != KnotStatus::Ok) return kInfinity;
+    cost += d.cost;
+    if (feasible_) {
+      xs_try_[k + 1] = d.x_next;
+    } else {
+      tmp_x_ = (alpha - 1.0) * fs_[k + 1];
+      state.integrate(d.x_next, tmp_x_, xs_try_[k + 1]);
+    }
+  }
+  ActionData& dT = problem_.terminalData();
+  problem_.terminal().calc(dT, xs_try_[T_], Eigen::VectorXd());
+  if (dT.status != KnotStatus::Ok) return kInfinity;
+  cost += dT.cost;
+  return std::isfinite(cost) ? cost : kInfinity;
+}
+
+SolveStatus Solver::solve(int max_iterations, Clock::time_point deadline) {
+  iterations_ = 0;
+  // μ carries over between solves (a receding horizon meets similar problems); the first solve
+  // starts from the option.
+  if (reg_ < 0.0) reg_ = options.reg_initial;
+  if (kind_ == SolverKind::Ddp) {
+    rollout();
+    if (!feasible_) return SolveStatus::NonFinite;
+  }
+  if (!finiteTrajectory()) return SolveStatus::NonFinite;
+  for (int it = 0; it < max_iterations; ++it) {
+    const Clock::time_point start = Clock::now();
+    if (start >= deadline) return SolveStatus::Deadline;
+    IterationStats s;
+    s.iteration = it;
+    const double cost = computeDerivatives();
+    if (!std::isfinite(cost) || !std::isfinite(gap_)) return SolveStatus::NonFinite;
+    // A Quu that is not positive definite: more regularization, until the limit.
+    while (!backwardPass()) {
+      reg_ *= options.reg_factor;
+      if (reg_ > options.reg_max) {
+        reg_ = options.reg_max;
+        return SolveStatus::NoDescent;
+      }
+    }
+    s.stop = std::abs(d1_);
+    if (s.stop < options.stop_tolerance && feasible_) {
+      s.cost = cost_;
+      s.gap = gap_;
+      s.regularization = reg_;
+      s.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+      if (iterations_ < kMaxRecordedIterations) stats_[iterations_] = s;
+      ++iterations_;
+      if (callback) callback(s);
+      return SolveStatus::Converged;
+    }
+    double alpha = 1.0;
+    bool accepted = false;
+    for (int i = 0; i < options.line_search_steps; ++i, alpha *= 0.5) {
+      if (Clock::now() >= deadline) break;
+      const double cost_try = forwardPass(alpha);
+      const double expected = expectedCostChange(alpha);
+      const double actual = cost_try - cost_;
+      // A predicted decrease must be realized at least in part (Armijo-like); closing gaps may
+      // raise the cost, by at most twice the prediction.
+      const double slack = 1e-12 * std::max(1.0, std::abs(cost_));
+      const bool ok = std::isfinite(cost_try) &&
+                      (expected < 0.0 ? actual <= options.accept_ratio * expected + slack
+                                      : actual <= 2.0 * expected + slack);
+      if (ok) {
+        accepted = true;
+        xs_.swap(xs_try_);
+        us_.swap(us_try_);
+        s.expected = expected;
+        s.actual = actual;
+        cost_ = cost_try;
+        if (!feasible_) {
+          for (auto& f : fs_) f *= (1.0 - alpha);
+          gap_ *= (1.0 - alpha);
+          feasible_ = alpha == 1.0 || gap_ < options.gap_tolerance;
+        }
+        break;
+      }
+    }
+    if (accepted) {
+      if (alpha >= options.step_decrease_reg)
+        reg_ = std::max(reg_ / options.reg_factor, options.reg_min);
+      else if (alpha <= options.step_increase_reg)
+        reg_ = std::min(reg_ * options.reg_factor, options.reg_max);
+    } else {
+      reg_ *= options.reg_factor;
+    }
+    s.step = accepted ? alpha : 0.0;
+    s.cost = cost_;
+    s.gap = gap_;
+    s.regularization = reg_;
+    s.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    if (iterations_ < kMaxRecordedIterations) stats_[iterations_] = s;
+    ++iterations_;
+    if (callback) callback(s);
+    if (Clock::now() >= deadline) return SolveStatus::Deadline;
+    if (!accepted && reg_ > options.reg_max) {
+      reg_ = options.reg_max;
+      return SolveStatus::NoDescent;
+    }
+  }
+  return SolveStatus::MaxIterations;
+}
+
+void Solver::printIterationTable(const IterationStats& s) {
+  if (s.iteration % 10 == 0)
+    std::printf("%5s %14s %11s %11s %11s %9s %9s %9s\n", "iter", "cost", "gap", "stop", "expected",
+                "step", "reg", "ms");
+  std::printf("%5d %14.8e %11.3e %11.3e %11.3e %9.4f %9.1e %9.3f\n", s.iteration, s.cost, s.gap,
+              s.stop, s.expected, s.step, s.regularization, s.time_ms);
+}
+
+}  // namespace stride

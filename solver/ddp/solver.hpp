@@ -1,0 +1,145 @@
+#pragma once
+// DDP over a shooting problem (paper §III, eq. 12), in three variants that share one iteration:
+//   Ddp      the paper's DDP: the warm start is first rolled out from x0, so the trajectory is
+//            dynamically feasible and stays so;
+//   Fddp     feasibility-driven DDP (Mastalli et al. 2020): the warm start (xs, us) is kept as
+//            given, gaps f_{k+1} = f(x_k, u_k) ⊖ x_{k+1} included, and a step of length α closes
+//            the fraction α of every gap, so a shifted trajectory is a valid warm start;
+//   BoxFddp  Fddp with bounds on the controls (torque limits): each knot's control step is a box
+//            QP solved by projected Newton, the gains act on the free controls only, and the
+//            rollout clamps the controls.
+// With zero gaps the Fddp iteration is exactly DDP, which is why one iteration serves all three.
+//
+// One iteration: calcDiff of every knot (parallel) → backward Riccati pass with Gauss-Newton Q
+// terms, Levenberg-Marquardt regularization μ on Quu and μ on Vxx (Tassa, Erez & Todorov 2012) →
+// expected cost change of the step from a linearized rollout → backtracking line search from
+// α = 1 on the nonlinear rollout → μ adapted (down after long steps, up after short or failed
+// ones).
+//
+// After construction nothing allocates: solve() works in preallocated trajectories and
+// workspaces and never throws; a non-finite value stops it with a status, keeping the last good
+// iterate.
+
+#include <chrono>
+#include <functional>
+#include <vector>
+
+#include "solver/ddp/box_qp.hpp"
+#include "solver/ocp/problem.hpp"
+
+namespace stride {
+
+enum class SolverKind : std::uint8_t { Ddp, Fddp, BoxFddp };
+
+enum class SolveStatus : std::uint8_t {
+  Converged,      // expected improvement and gaps below the tolerances
+  MaxIterations,  // the iteration budget ran out (the iterate is still the best found)
+  Deadline,       // the deadline passed (idem)
+  NoDescent,      // no step length decreased the cost, even at the largest regularization
+  NonFinite,      // a knot returned a non-finite value or failed; the last good iterate kept
+};
+const char* toString(SolveStatus status);
+
+struct IterationStats {
+  int iteration = 0;
+  double cost = 0.0;      // after the step
+  double gap = 0.0;       // Σ |f_k|₁ after the step
+  double expected = 0.0;  // predicted cost change of the accepted step (negative: decrease)
+  double actual = 0.0;    // actual cost change
+  double stop = 0.0;      // |first-order expected change| before the step
+  double step = 0.0;      // α accepted (0: none)
+  double regularization = 0.0;
+  double time_ms = 0.0;  // wall time of the iteration
+};
+
+struct SolverOptions {
+  double stop_tolerance = 1e-9;  // on |d1|, the first-order expected cost change
+  double gap_tolerance = 1e-9;   // Σ |f_k|₁ below which the trajectory counts as feasible
+  double accept_ratio = 0.1;     // accept a step when the actual change ≥ ratio × expected
+  double reg_initial = 1e-9, reg_min = 1e-9, reg_max = 1e9, reg_factor = 10.0;
+  double step_decrease_reg = 0.5;   // α ≥ this: μ /= factor
+  double step_increase_reg = 0.01;  // α ≤ this: μ *= factor
+  int line_search_steps = 10;       // α = 1, 1/2, ..., 2^-(steps-1)
+};
+
+class Solver {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  Solver(ShootingProblem& problem, SolverKind kind = SolverKind::Fddp);
+
+  SolverKind kind() const { return kind_; }
+  SolverOptions options;
+
+  // Control bounds of every knot for BoxFddp (size maxNu; ±infinity allowed). Throws
+  // std::invalid_argument for wrong sizes or lower > upper. Setup only.
+  void setControlBounds(const Eigen::VectorXd& lower, const Eigen::VectorXd& upper);
+
+  // Warm start (copied, no allocation): xs has T + 1 states, us T controls. False (and nothing
+  // changed) on wrong sizes or non-finite values. Without a warm start: x0 everywhere, u = 0.
+  bool setWarmStart(const std::vector<Eigen::VectorXd>& xs, const std::vector<Eigen::VectorXd>& us);
+  // Shifts the current trajectory by n knots for the next receding-horizon solve: x_k <- x_{k+n},
+  // u_k <- u_{k+n}, the tail repeating the last state and control. (Call problem.shift(n) too.)
+  void shiftWarmStart(int n);
+
+  // Iterates from the current trajectory until converged, max_iterations, or the deadline.
+  SolveStatus solve(int max_iterations, Clock::time_point deadline = Clock::time_point::max());
+
+  const std::vector<Eigen::VectorXd>& xs() const { return xs_; }
+  const std::vector<Eigen::VectorXd>& us() const { return us_; }
+  // Feedback policy of the last backward pass: u_k = us_k + K_k (x ⊖ xs_k) (ARCHITECTURE §3).
+  const std::vector<Eigen::MatrixXd>& K() const { return K_; }
+  double cost() const { return cost_; }
+  double gap() const { return gap_; }
+  double regularization() const { return reg_; }
+  int iterations() const { return iterations_; }
+  // Statistics of the iterations of the last solve (capacity fixed at construction).
+  const IterationStats* stats() const { return stats_.data(); }
+  int statsCount() const { return iterations_; }
+
+  // Called after every iteration (set at setup; the call itself does not allocate, the callback
+  // might). printIterationTable is a ready-made one.
+  std::function<void(const IterationStats&)> callback;
+  static void printIterationTable(const IterationStats& s);
+
+  // The pieces of an iteration, public for the benchmarks (knots/<robot>/{backward,forward}):
+  // calcDiff of all knots and the gaps; the backward pass at regularization μ (false when a Quu is
+  // not positive definite); the nonlinear rollout at step α into the trial trajectory (returns its
+  // cost); the cost change the quadratic model of the last backward pass predicts for step α.
+  double computeDerivatives();
+  bool backwardPass();
+  double forwardPass(double alpha);
+  double expectedCostChange(double alpha) const { return alpha * (d1_ + 0.5 * alpha * d2_); }
+
+ private:
+  void rollout();         // xs from x0 and us (Ddp's feasible start)
+  double computeGaps();   // f_k of the current trajectory from the knots' x_next; Σ |f|₁
+  void expectedChange();  // d1, d2 from the linearized rollout of the step
+  bool finiteTrajectory() const;
+
+  ShootingProblem& problem_;
+  SolverKind kind_;
+  int T_, ndx_;
+  std::vector<Eigen::VectorXd> xs_, us_, xs_try_, us_try_;
+  std::vector<Eigen::VectorXd> fs_;  // gaps f_0 = x0 ⊖ x_0, f_{k+1} = f(x_k, u_k) ⊖ x_{k+1}
+  std::vector<Eigen::VectorXd> k_, Qu_;
+  std::vector<Eigen::MatrixXd> K_;
+  // Value function of the knot after the current one and of the current one (rolling buffers).
+  Eigen::VectorXd Vx_next_, Vx_, Vx_gap_;
+  Eigen::MatrixXd Vxx_next_, Vxx_;
+  // Per-knot Riccati workspaces.
+  Eigen::VectorXd Qx_;
+  Eigen::MatrixXd Qxx_, Qxu_, Quu_, VFx_, VFu_, W_;
+  Eigen::VectorXd w_;
+  // Linearized rollout.
+  Eigen::VectorXd dx_, dx_next_, du_, tmp_x_;
+  std::vector<BoxQP> box_;
+  Eigen::VectorXd u_lower_, u_upper_;
+  bool has_bounds_ = false;
+  bool feasible_ = false;
+  double cost_ = 0.0, gap_ = 0.0, d1_ = 0.0, d2_ = 0.0, reg_ = -1.0;
+  int iterations_ = 0;
+  std::vector<IterationStats> stats_;
+};
+
+}  // namespace stride

@@ -1,0 +1,191 @@
+// The DDP solvers on a linear-quadratic problem, where one iteration must land exactly on the
+// solution of the dense KKT system of the same problem, and the quadratic model of the step must
+// predict the actual cost change.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+#include "ocp/lq_action.hpp"
+#include "solver/ddp/solver.hpp"
+
+namespace stride {
+namespace {
+
+using testing::LqKnot;
+
+struct LqProblem {
+  std::vector<const LqKnot*> knots;  // T running + terminal
+  std::unique_ptr<ShootingProblem> problem;
+  int nx, nu, T;
+};
+
+LqProblem makeLq(int nx, int nu, int T, unsigned seed) {
+  std::mt19937 rng(seed);
+  LqProblem p{{}, nullptr, nx, nu, T};
+  std::vector<std::unique_ptr<ActionModel>> running;
+  for (int k = 0; k < T; ++k) {
+    auto m = LqKnot::random(nx, nu, false, rng);
+    p.knots.push_back(m.get());
+    running.push_back(std::move(m));
+  }
+  auto terminal = LqKnot::random(nx, nu, true, rng);
+  p.knots.push_back(terminal.get());
+  Eigen::VectorXd x0 = Eigen::VectorXd::Random(nx);
+  p.problem = std::make_unique<ShootingProblem>(x0, std::move(running), std::move(terminal));
+  return p;
+}
+
+// The solution (xs, us) of the LQ problem from its dense KKT system.
+void denseSolution(const LqProblem& p, std::vector<Eigen::VectorXd>& xs,
+                   std::vector<Eigen::VectorXd>& us) {
+  const int nx = p.nx, nu = p.nu, T = p.T;
+  const int nz = nx * (T + 1) + nu * T, nc = nx * (T + 1);
+  auto xi = [&](int k) { return nx * k; };
+  auto ui = [&](int k) { return nx * (T + 1) + nu * k; };
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(nz, nz), C = Eigen::MatrixXd::Zero(nc, nz);
+  Eigen::VectorXd h = Eigen::VectorXd::Zero(nz), d = Eigen::VectorXd::Zero(nc);
+  for (int k = 0; k <= T; ++k) {
+    const LqKnot& m = *p.knots[k];
+    H.block(xi(k), xi(k), nx, nx) = m.Q;
+    h.segment(xi(k), nx) = m.q;
+    if (k < T) {
+      H.block(ui(k), ui(k), nu, nu) = m.R;
+      H.block(xi(k), ui(k), nx, nu) = m.N;
+      H.block(ui(k), xi(k), nu, nx) = m.N.transpose();
+      h.segment(ui(k), nu) = m.r;
+      // x_{k+1} - A x_k - B u_k = c
+      C.block(nx * (k + 1), xi(k + 1), nx, nx).setIdentity();
+      C.block(nx * (k + 1), xi(k), nx, nx) = -m.A;
+      C.block(nx * (k + 1), ui(k), nx, nu) = -m.B;
+      d.segment(nx * (k + 1), nx) = m.c;
+    }
+  }
+  C.block(0, 0, nx, nx).setIdentity();
+  d.head(nx) = p.problem->x0();
+  Eigen::MatrixXd KKT = Eigen::MatrixXd::Zero(nz + nc, nz + nc);
+  KKT.topLeftCorner(nz, nz) = H;
+  KKT.topRightCorner(nz, nc) = C.transpose();
+  KKT.bottomLeftCorner(nc, nz) = C;
+  Eigen::VectorXd rhs(nz + nc);
+  rhs << -h, d;
+  const Eigen::VectorXd z = KKT.fullPivLu().solve(rhs);
+  xs.assign(T + 1, Eigen::VectorXd());
+  us.assign(T, Eigen::VectorXd());
+  for (int k = 0; k <= T; ++k) xs[k] = z.segment(xi(k), nx);
+  for (int k = 0; k < T; ++k) us[k] = z.segment(ui(k), nu);
+}
+
+double maxDifference(const std::vector<Eigen::VectorXd>& a, const std::vector<Eigen::VectorXd>& b) {
+  double e = 0.0;
+  for (size_t k = 0; k < a.size(); ++k) e = std::max(e, (a[k] - b[k]).cwiseAbs().maxCoeff());
+  return e;
+}
+
+class LqExact : public ::testing::TestWithParam<SolverKind> {};
+
+TEST_P(LqExact, OneIterationReachesTheKktSolution) {
+  for (unsigned seed : {1u, 2u, 3u}) {
+    LqProblem p = makeLq(6, 3, 20, seed);
+    std::vector<Eigen::VectorXd> xs_ref, us_ref;
+    denseSolution(p, xs_ref, us_ref);
+    Solver solver(*p.problem, GetParam());
+    solver.options.reg_initial = solver.options.reg_min = 0.0;
+    // An infeasible warm start (random states, gaps everywhere), except for Ddp which rolls out.
+    std::vector<Eigen::VectorXd> xs(p.T + 1), us(p.T);
+    std::mt19937 rng(seed + 100);
+    std::normal_distribution<double> n(0.0, 1.0);
+    for (auto& x : xs) x = Eigen::VectorXd::NullaryExpr(p.nx, [&] { return n(rng); });
+    for (auto& u : us) u = Eigen::VectorXd::NullaryExpr(p.nu, [&] { return n(rng); });
+    ASSERT_TRUE(solver.setWarmStart(xs, us));
+    solver.solve(1);
+    ASSERT_EQ(solver.iterations(), 1);
+    const IterationStats& s = solver.stats()[0];
+    EXPECT_EQ(s.step, 1.0);
+    EXPECT_LT(maxDifference(solver.xs(), xs_ref), 1e-9);
+    EXPECT_LT(maxDifference(solver.us(), us_ref), 1e-9);
+    EXPECT_LT(solver.gap(), 1e-12);
+    // The quadratic model is exact for an LQ problem.
+    EXPECT_NEAR(s.expected, s.actual, 1e-9 * std::max(1.0, std::abs(s.actual)));
+    // The next iteration finds nothing left to do.
+    EXPECT_EQ(solver.solve(5), SolveStatus::Converged);
+    EXPECT_EQ(solver.iterations(), 1);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Solvers, LqExact,
+                         ::testing::Values(SolverKind::Ddp, SolverKind::Fddp, SolverKind::BoxFddp),
+                         [](const auto& info) {
+                           return std::string(info.param == SolverKind::Ddp    ? "Ddp"
+                                              : info.param == SolverKind::Fddp ? "Fddp"
+                                                                               : "BoxFddp");
+                         });
+
+// The quadratic model predicts the cost change of any step length on an LQ problem, gaps and all.
+TEST(Fddp, ExpectedChangeMatchesActualForEveryStep) {
+  LqProblem p = makeLq(5, 2, 15, 7);
+  Solver solver(*p.problem, SolverKind::Fddp);
+  solver.options.reg_initial = 0.0;
+  std::vector<Eigen::VectorXd> xs(p.T + 1, Eigen::VectorXd::Ones(p.nx)),
+      us(p.T, Eigen::VectorXd::Ones(p.nu));
+  ASSERT_TRUE(solver.setWarmStart(xs, us));
+  solver.solve(0);  // sets the regularization from the options
+  const double cost = solver.computeDerivatives();
+  ASSERT_GT(solver.gap(), 1.0);
+  ASSERT_TRUE(solver.backwardPass());
+  for (double alpha : {1.0, 0.5, 0.25, 0.125, 0.01}) {
+    const double change = solver.forwardPass(alpha) - cost;
+    EXPECT_NEAR(solver.expectedCostChange(alpha), change, 1e-9 * std::abs(cost)) << alpha;
+  }
+}
+
+// Box-FDDP keeps every control within its bounds and, with bounds that are never reached, gives
+// the unconstrained solution.
+TEST(BoxFddp, RespectsBoundsAndMatchesFddpWhenInactive) {
+  LqProblem p = makeLq(6, 3, 20, 11);
+  std::vector<Eigen::VectorXd> xs_ref, us_ref;
+  denseSolution(p, xs_ref, us_ref);
+  double umax = 0.0;
+  for (const auto& u : us_ref) umax = std::max(umax, u.cwiseAbs().maxCoeff());
+  {
+    Solver solver(*p.problem, SolverKind::BoxFddp);
+    solver.setControlBounds(Eigen::VectorXd::Constant(3, -2 * umax),
+                            Eigen::VectorXd::Constant(3, 2 * umax));
+    solver.solve(10);
+    EXPECT_LT(maxDifference(solver.us(), us_ref), 1e-7);
+  }
+  Solver solver(*p.problem, SolverKind::BoxFddp);
+  const double bound = 0.5 * umax;
+  solver.setControlBounds(Eigen::VectorXd::Constant(3, -bound),
+                          Eigen::VectorXd::Constant(3, bound));
+  const SolveStatus status = solver.solve(50);
+  EXPECT_EQ(status, SolveStatus::Converged) << toString(status);
+  for (const auto& u : solver.us()) EXPECT_LE(u.cwiseAbs().maxCoeff(), bound + 1e-12);
+  // The box solution is optimal among feasible controls: no worse than clamping the unconstrained
+  // optimum, and strictly more expensive than the unconstrained optimum.
+  Solver clamped(*p.problem, SolverKind::Ddp);
+  std::vector<Eigen::VectorXd> us_clamped = us_ref;
+  for (auto& u : us_clamped) u = u.cwiseMax(-bound).cwiseMin(bound);
+  ASSERT_TRUE(clamped.setWarmStart(xs_ref, us_clamped));
+  clamped.solve(0);  // Ddp rolls the controls out from x0: the cost of the clamped optimum
+  const double clamped_cost = clamped.cost();
+  EXPECT_LE(solver.cost(), clamped_cost + 1e-9);
+}
+
+TEST(Solver, WarmStartRejectsBadSizesAndNaN) {
+  LqProblem p = makeLq(4, 2, 5, 3);
+  Solver solver(*p.problem);
+  std::vector<Eigen::VectorXd> xs(p.T + 1, Eigen::VectorXd::Zero(4)),
+      us(p.T, Eigen::VectorXd::Zero(2));
+  EXPECT_TRUE(solver.setWarmStart(xs, us));
+  xs[2][1] = std::nan("");
+  EXPECT_FALSE(solver.setWarmStart(xs, us));
+  xs[2][1] = 0.0;
+  us.pop_back();
+  EXPECT_FALSE(solver.setWarmStart(xs, us));
+  EXPECT_THROW(solver.setControlBounds(Eigen::VectorXd::Ones(2), Eigen::VectorXd::Zero(2)),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace stride
