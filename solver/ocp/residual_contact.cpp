@@ -102,9 +102,8 @@ FrictionConeResidual::FrictionConeResidual(const Model& model, int nu, const Con
 }
 
 Activation FrictionConeResidual::activation(double weight) {
-  return Activation::bounds(
-      Eigen::VectorXd::Constant(5, -std::numeric_limits<double>::infinity()),
-      Eigen::VectorXd::Zero(5), weight);
+  return Activation::bounds(Eigen::VectorXd::Constant(5, -std::numeric_limits<double>::infinity()),
+                            Eigen::VectorXd::Zero(5), weight);
 }
 
 void FrictionConeResidual::setFriction(double mu) {
@@ -135,10 +134,10 @@ void FrictionConeResidual::setMinimumNormalForce(double min_normal_force) {
 void FrictionConeResidual::updateRows() {
   const double m = mu_ / std::sqrt(2.0);
   Eigen::Matrix<double, 5, 3> As;  // in the surface frame
-  As << 1, 0, -m,   //
-      -1, 0, -m,    //
-      0, 1, -m,     //
-      0, -1, -m,    //
+  As << 1, 0, -m,                  //
+      -1, 0, -m,                   //
+      0, 1, -m,                    //
+      0, -1, -m,                   //
       0, 0, -1;
   A_.noalias() = As * R_surface_.transpose();
 }

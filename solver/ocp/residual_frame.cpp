@@ -31,8 +31,8 @@ SE3 FrameResidual::placement(const KnotContext& ctx) const {
 
 // ---------------------------------------------------------------- placement
 
-FramePlacementResidual::FramePlacementResidual(const Model& model, int nu,
-                                               const std::string& frame, const SE3& reference)
+FramePlacementResidual::FramePlacementResidual(const Model& model, int nu, const std::string& frame,
+                                               const SE3& reference)
     : FrameResidual(model, nu, frame, 6, Dependence::Configuration), reference_(reference) {}
 
 void FramePlacementResidual::calc(ResidualData& d, const KnotContext& ctx,

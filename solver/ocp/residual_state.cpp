@@ -33,8 +33,8 @@ StateResidual::StateResidual(const Model& model, int nu, const Eigen::VectorXd& 
 void StateResidual::setReference(const Eigen::Ref<const Eigen::VectorXd>& x_ref) {
   if (x_ref.size() != x_ref_.size())
     throw std::invalid_argument("StateResidual::setReference: reference of size " +
-                                std::to_string(x_ref.size()) + ", expected nq + nv = " +
-                                std::to_string(x_ref_.size()));
+                                std::to_string(x_ref.size()) +
+                                ", expected nq + nv = " + std::to_string(x_ref_.size()));
   x_ref_ = x_ref;
 }
 
@@ -90,8 +90,8 @@ ControlResidual::ControlResidual(const Model& model, int nu, const Eigen::Vector
 void ControlResidual::setReference(const Eigen::Ref<const Eigen::VectorXd>& u_ref) {
   if (u_ref.size() != u_ref_.size())
     throw std::invalid_argument("ControlResidual::setReference: reference of size " +
-                                std::to_string(u_ref.size()) + ", expected nu = " +
-                                std::to_string(u_ref_.size()));
+                                std::to_string(u_ref.size()) +
+                                ", expected nu = " + std::to_string(u_ref_.size()));
   u_ref_ = u_ref;
 }
 
@@ -122,7 +122,9 @@ void ControlResidual::addGaussNewton(const ResidualData&,
 // ---------------------------------------------------------------- JointLimitResidual
 
 namespace {
-int actuatedJoints(const Model& model) { return model.hasFreeFlyer() ? model.nv - 6 : model.nv; }
+int actuatedJoints(const Model& model) {
+  return model.hasFreeFlyer() ? model.nv - 6 : model.nv;
+}
 }  // namespace
 
 JointLimitResidual::JointLimitResidual(const Model& model, int nu)
