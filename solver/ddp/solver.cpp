@@ -65,6 +65,7 @@ Solver::Solver(ShootingProblem& problem, SolverKind kind)
   u_lower_ = Eigen::VectorXd::Constant(m, -kInfinity);
   u_upper_ = Eigen::VectorXd::Constant(m, kInfinity);
   stats_.resize(kMaxRecordedIterations);
+  reg_ = options.reg_initial;
   (void)nx;
 }
 
@@ -304,9 +305,6 @@ double Solver::forwardPass(double alpha) {
 
 SolveStatus Solver::solve(int max_iterations, Clock::time_point deadline) {
   iterations_ = 0;
-  // μ carries over between solves (a receding horizon meets similar problems); the first solve
-  // starts from the option.
-  if (reg_ < 0.0) reg_ = options.reg_initial;
   if (kind_ == SolverKind::Ddp) {
     rollout();
     if (!feasible_) return SolveStatus::NonFinite;

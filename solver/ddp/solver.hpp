@@ -91,7 +91,10 @@ class Solver {
   const std::vector<Eigen::MatrixXd>& K() const { return K_; }
   double cost() const { return cost_; }
   double gap() const { return gap_; }
+  // μ carries over between solves (a receding horizon meets similar problems); it starts at
+  // options.reg_initial.
   double regularization() const { return reg_; }
+  void setRegularization(double mu) { reg_ = mu; }
   int iterations() const { return iterations_; }
   // Statistics of the iterations of the last solve (capacity fixed at construction).
   const IterationStats* stats() const { return stats_.data(); }
@@ -137,7 +140,7 @@ class Solver {
   Eigen::VectorXd u_lower_, u_upper_;
   bool has_bounds_ = false;
   bool feasible_ = false;
-  double cost_ = 0.0, gap_ = 0.0, d1_ = 0.0, d2_ = 0.0, reg_ = -1.0;
+  double cost_ = 0.0, gap_ = 0.0, d1_ = 0.0, d2_ = 0.0, reg_ = 0.0;
   int iterations_ = 0;
   std::vector<IterationStats> stats_;
 };

@@ -90,7 +90,8 @@ TEST_P(LqExact, OneIterationReachesTheKktSolution) {
     std::vector<Eigen::VectorXd> xs_ref, us_ref;
     denseSolution(p, xs_ref, us_ref);
     Solver solver(*p.problem, GetParam());
-    solver.options.reg_initial = solver.options.reg_min = 0.0;
+    solver.options.reg_min = 0.0;
+    solver.setRegularization(0.0);
     // An infeasible warm start (random states, gaps everywhere), except for Ddp which rolls out.
     std::vector<Eigen::VectorXd> xs(p.T + 1), us(p.T);
     std::mt19937 rng(seed + 100);
@@ -125,11 +126,10 @@ INSTANTIATE_TEST_SUITE_P(Solvers, LqExact,
 TEST(Fddp, ExpectedChangeMatchesActualForEveryStep) {
   LqProblem p = makeLq(5, 2, 15, 7);
   Solver solver(*p.problem, SolverKind::Fddp);
-  solver.options.reg_initial = 0.0;
+  solver.setRegularization(0.0);
   std::vector<Eigen::VectorXd> xs(p.T + 1, Eigen::VectorXd::Ones(p.nx)),
       us(p.T, Eigen::VectorXd::Ones(p.nu));
   ASSERT_TRUE(solver.setWarmStart(xs, us));
-  solver.solve(0);  // sets the regularization from the options
   const double cost = solver.computeDerivatives();
   ASSERT_GT(solver.gap(), 1.0);
   ASSERT_TRUE(solver.backwardPass());
