@@ -57,6 +57,10 @@ Solver::Solver(ShootingProblem& problem, SolverKind kind)
   Vxx_next_ = Vxx_ = Qxx_ = VFx_ = Eigen::MatrixXd::Zero(n, n);
   Qxu_ = VFu_ = Eigen::MatrixXd::Zero(n, m);
   Quu_ = Eigen::MatrixXd::Zero(m, m);
+  VB_ = Eigen::MatrixXd::Zero(n, n / 2);
+  BtY_ = EtY_ = Eigen::MatrixXd::Zero(n / 2, std::max(n, m));
+  colwork_ = Eigen::Matrix<double, Eigen::Dynamic, 6>::Zero(n, 6);
+  rowwork_ = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, std::max(n, m));
   W_ = Eigen::MatrixXd::Zero(m, n);
   w_ = Eigen::VectorXd::Zero(m);
   dx_ = dx_next_ = tmp_x_ = Eigen::VectorXd::Zero(n);
@@ -161,6 +165,85 @@ double Solver::computeDerivatives() {
   return cost_;
 }
 
+namespace {
+// X <- X · blockdiag(J_b, I) on the leading nb columns (J_b: nb x nb), through a small copy.
+template <typename Derived>
+void timesBlockRight(Eigen::MatrixBase<Derived>&& X, const Eigen::Matrix<double, 6, 6>& J, int nb,
+                     Eigen::Matrix<double, Eigen::Dynamic, 6>& work) {
+  if (nb == 0) return;
+  auto w = work.topLeftCorner(X.rows(), nb);
+  w.noalias() = X.leftCols(nb) * J.topLeftCorner(nb, nb);
+  X.leftCols(nb) = w;
+}
+// X <- blockdiag(J_b, I)ᵀ · X on the leading nb rows.
+template <typename Derived>
+void transposeTimesBlockLeft(Eigen::MatrixBase<Derived>&& X, const Eigen::Matrix<double, 6, 6>& J,
+                             int nb, Eigen::Matrix<double, 6, Eigen::Dynamic>& work) {
+  if (nb == 0) return;
+  auto w = work.topLeftCorner(nb, X.cols());
+  w.noalias() = J.topLeftCorner(nb, nb).transpose() * X.topRows(nb);
+  X.topRows(nb) = w;
+}
+}  // namespace
+
+// Qxx, Qxu, Quu through the Euler structure (action.hpp): with V the regularized next value
+// Hessian, V Fx = V E + (V B) a_x and Fxᵀ Y = Eᵀ Y + a_xᵀ (Bᵀ Y), where products with E and B cost
+// O(n²) (identities, scaled, but for one 6 x 6 block) and only the products with a_x = [a_q a_v]
+// (nv x 2nv) and a_u are dense: half the flops of Fxᵀ V Fx formed directly.
+void Solver::eulerProducts(const ActionData& d, int nu) {
+  const EulerStructure& e = d.euler;
+  const int n = ndx_ / 2, nb = e.nb;
+  const double dt = e.dt;
+  const Eigen::MatrixXd& V = Vxx_next_;
+  // VB = V B = dt² V_q Jv + dt V_v (2n x n); VE = V E = [V_q Jq, dt V_q Jv + V_v].
+  auto VB = VB_.leftCols(n);
+  VB = V.leftCols(n);
+  timesBlockRight(VB.leftCols(n), e.Jv, nb, colwork_);
+  Eigen::MatrixXd& VE = VFx_;
+  VE.leftCols(n) = V.leftCols(n);
+  timesBlockRight(VE.leftCols(n), e.Jq, nb, colwork_);
+  VE.rightCols(n) = dt * VB + V.rightCols(n);
+  VB = dt * dt * VB + dt * V.rightCols(n);
+  // V Fx = V E + VB [a_q a_v].
+  VFx_.leftCols(n).noalias() += VB * *e.a_q;
+  VFx_.rightCols(n).noalias() += VB * *e.a_v;
+  // Bᵀ (V Fx) (n x 2n) and Eᵀ (V Fx) (2n x 2n).
+  auto BtVFx = BtY_.leftCols(ndx_);
+  BtVFx = VFx_.topRows(n);
+  transposeTimesBlockLeft(BtVFx.leftCols(ndx_), e.Jv, nb, rowwork_);
+  // Qxx = Lxx + Eᵀ V Fx + a_xᵀ Bᵀ V Fx.
+  Qxx_ = d.Lxx;
+  Qxx_.bottomRows(n) += dt * BtVFx + VFx_.bottomRows(n);
+  BtVFx = dt * dt * BtVFx + dt * VFx_.bottomRows(n);
+  auto EtTop = EtY_.leftCols(ndx_);
+  EtTop = VFx_.topRows(n);
+  transposeTimesBlockLeft(EtTop.leftCols(ndx_), e.Jq, nb, rowwork_);
+  Qxx_.topRows(n) += EtTop;
+  Qxx_.topRows(n).noalias() += e.a_q->transpose() * BtVFx;
+  Qxx_.bottomRows(n).noalias() += e.a_v->transpose() * BtVFx;
+  if (nu == 0) return;
+  // V Fu = VB a_u; Bᵀ V Fu; Qxu = Lxu + Eᵀ V Fu + a_xᵀ Bᵀ V Fu; Quu = Luu + a_uᵀ Bᵀ V Fu.
+  const auto a_u = e.a_tau->rightCols(nu);
+  auto VFu = VFu_.leftCols(nu);
+  VFu.noalias() = VB * a_u;
+  auto BtVFu = BtY_.leftCols(nu);
+  BtVFu = VFu.topRows(n);
+  transposeTimesBlockLeft(BtVFu.leftCols(nu), e.Jv, nb, rowwork_);
+  auto Qxu = Qxu_.leftCols(nu);
+  Qxu = d.Lxu;
+  Qxu.bottomRows(n) += dt * BtVFu + VFu.bottomRows(n);
+  BtVFu = dt * dt * BtVFu + dt * VFu.bottomRows(n);
+  auto EtVFu = EtY_.leftCols(nu);
+  EtVFu = VFu.topRows(n);
+  transposeTimesBlockLeft(EtVFu.leftCols(nu), e.Jq, nb, rowwork_);
+  Qxu.topRows(n) += EtVFu;
+  Qxu.topRows(n).noalias() += e.a_q->transpose() * BtVFu;
+  Qxu.bottomRows(n).noalias() += e.a_v->transpose() * BtVFu;
+  auto Quu = Quu_.topLeftCorner(nu, nu);
+  Quu = d.Luu;
+  Quu.noalias() += a_u.transpose() * BtVFu;
+}
+
 bool Solver::backwardPass() {
   const bool box = kind_ == SolverKind::BoxFddp && has_bounds_;
   const ActionData& dT = problem_.terminalData();
@@ -176,9 +259,14 @@ bool Solver::backwardPass() {
     Vxx_next_.diagonal().array() += reg_;
     // Gauss-Newton Q terms (eq. 12): the knot's cost Hessian plus the value propagated through
     // the dynamics' Jacobians.
-    VFx_.noalias() = Vxx_next_ * d.Fx;
-    Qxx_ = d.Lxx;
-    Qxx_.noalias() += d.Fx.transpose() * VFx_;
+    const bool euler = d.euler.valid && options.exploit_structure;
+    if (euler) {
+      eulerProducts(d, nu);
+    } else {
+      VFx_.noalias() = Vxx_next_ * d.Fx;
+      Qxx_ = d.Lxx;
+      Qxx_.noalias() += d.Fx.transpose() * VFx_;
+    }
     Qx_ = d.Lx;
     Qx_.noalias() += d.Fx.transpose() * Vx_gap_;
     Vx_ = Qx_;
@@ -191,12 +279,14 @@ bool Solver::backwardPass() {
       Eigen::VectorXd& Qu = Qu_[k];
       Eigen::VectorXd& kk = k_[k];
       Eigen::MatrixXd& KK = K_[k];
-      VFu.noalias() = Vxx_next_ * d.Fu;
-      Quu = d.Luu;
-      Quu.noalias() += d.Fu.transpose() * VFu;
+      if (!euler) {
+        VFu.noalias() = Vxx_next_ * d.Fu;
+        Quu = d.Luu;
+        Quu.noalias() += d.Fu.transpose() * VFu;
+        Qxu = d.Lxu;
+        Qxu.noalias() += d.Fx.transpose() * VFu;
+      }
       Quu.diagonal().array() += reg_;  // Levenberg-Marquardt
-      Qxu = d.Lxu;
-      Qxu.noalias() += d.Fx.transpose() * VFu;
       Qu = d.Lu;
       Qu.noalias() += d.Fu.transpose() * Vx_gap_;
       if (box) {

@@ -60,6 +60,9 @@ struct SolverOptions {
   double step_decrease_reg = 0.5;   // α ≥ this: μ /= factor
   double step_increase_reg = 0.01;  // α ≤ this: μ *= factor
   int line_search_steps = 10;       // α = 1, 1/2, ..., 2^-(steps-1)
+  // Use the Euler structure of Fx, Fu where knots provide it (action.hpp); off only to compare
+  // with the dense products in tests.
+  bool exploit_structure = true;
 };
 
 class Solver {
@@ -89,6 +92,7 @@ class Solver {
   const std::vector<Eigen::VectorXd>& us() const { return us_; }
   // Feedback policy of the last backward pass: u_k = us_k + K_k (x ⊖ xs_k) (ARCHITECTURE §3).
   const std::vector<Eigen::MatrixXd>& K() const { return K_; }
+  const std::vector<Eigen::VectorXd>& k() const { return k_; }  // feed-forward step
   double cost() const { return cost_; }
   double gap() const { return gap_; }
   // μ carries over between solves (a receding horizon meets similar problems); it starts at
@@ -119,6 +123,7 @@ class Solver {
   double computeGaps();   // f_k of the current trajectory from the knots' x_next; Σ |f|₁
   void expectedChange();  // d1, d2 from the linearized rollout of the step
   bool finiteTrajectory() const;
+  void eulerProducts(const ActionData& d, int nu);  // Qxx, Qxu, Quu of an Euler knot
 
   ShootingProblem& problem_;
   SolverKind kind_;
@@ -134,6 +139,9 @@ class Solver {
   Eigen::VectorXd Qx_;
   Eigen::MatrixXd Qxx_, Qxu_, Quu_, VFx_, VFu_, W_;
   Eigen::VectorXd w_;
+  Eigen::MatrixXd VB_, BtY_, EtY_;  // Euler-structure products
+  Eigen::Matrix<double, Eigen::Dynamic, 6> colwork_;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> rowwork_;
   // Linearized rollout.
   Eigen::VectorXd dx_, dx_next_, du_, tmp_x_;
   std::vector<BoxQP> box_;

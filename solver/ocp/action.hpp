@@ -43,6 +43,21 @@ enum class KnotStatus : std::uint8_t {
 };
 const char* toString(KnotStatus status);
 
+// The structure of a semi-implicit Euler knot's Jacobians (ARCHITECTURE §3), which the Riccati
+// recursion exploits to halve its products: with a = v̇(x, u), v⁺ = v + dt a, q⁺ = q ⊕ dt v⁺,
+//   Fx = E + B [a_q a_v],   Fu = B a_u,   E = [Jq  dt Jv; 0  I],   B = [dt² Jv; dt I],
+// where Jq, Jv (the Jacobians of ⊕) are the identity except a leading nb x nb block (a free-flyer's
+// 6 x 6). a_q, a_v, a_u point into the knot's own data; a_u is the last nu columns of *a_tau.
+struct EulerStructure {
+  bool valid = false;
+  double dt = 0.0;
+  int nb = 0;
+  Eigen::Matrix<double, 6, 6> Jq, Jv;  // leading blocks, top-left nb x nb used
+  const Eigen::MatrixXd* a_q = nullptr;
+  const Eigen::MatrixXd* a_v = nullptr;
+  const Eigen::MatrixXd* a_tau = nullptr;
+};
+
 struct ActionData {
   ActionData(int nx, int ndx, int nu);
   virtual ~ActionData() = default;
@@ -52,6 +67,7 @@ struct ActionData {
   Eigen::MatrixXd Fx, Fu;  // ndx x ndx, ndx x nu
   Eigen::VectorXd Lx, Lu;  // ndx, nu
   Eigen::MatrixXd Lxx, Lxu, Luu;
+  EulerStructure euler;  // set by knots whose Fx, Fu have that structure (after calcDiff)
 };
 
 class ActionModel {

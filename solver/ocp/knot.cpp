@@ -59,6 +59,17 @@ bool KnotModel::dynamics(KnotActionData& d, const Eigen::Ref<const Eigen::Vector
       if (derivatives) {
         d.Fx = kd.Fx;
         d.Fu = kd.Fu;
+        EulerStructure& e = d.euler;
+        e.valid = true;
+        e.dt = dt_;
+        e.nb = model_.hasFreeFlyer() ? 6 : 0;
+        if (e.nb) {
+          e.Jq = kd.Jq.topLeftCorner<6, 6>();
+          e.Jv = kd.Jv.topLeftCorner<6, 6>();
+        }
+        e.a_q = &kd.contact.ddq_dq;
+        e.a_v = &kd.contact.ddq_dv;
+        e.a_tau = &kd.contact.ddq_dtau;
       }
     }
   } else {
@@ -73,6 +84,7 @@ bool KnotModel::dynamics(KnotActionData& d, const Eigen::Ref<const Eigen::Vector
       forwardKinematics(model_, d.data, q, v);
       if (derivatives) {
         // x⁺ = (q, v⁺(q, v⁻)): the configuration passes through.
+        d.euler.valid = false;
         d.Fx.setZero();
         d.Fx.topLeftCorner(nv, nv).setIdentity();
         d.Fx.bottomLeftCorner(nv, nv) = cd.ddq_dq;

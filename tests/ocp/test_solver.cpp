@@ -8,6 +8,11 @@
 
 #include "ocp/lq_action.hpp"
 #include "solver/ddp/solver.hpp"
+#include "solver/multibody/lie_group.hpp"
+#include "solver/multibody/urdf.hpp"
+#include "solver/ocp/knot.hpp"
+#include "solver/ocp/residual_frame.hpp"
+#include "solver/ocp/residual_state.hpp"
 
 namespace stride {
 namespace {
@@ -170,6 +175,63 @@ TEST(BoxFddp, RespectsBoundsAndMatchesFddpWhenInactive) {
   clamped.solve(0);  // Ddp rolls the controls out from x0: the cost of the clamped optimum
   const double clamped_cost = clamped.cost();
   EXPECT_LE(solver.cost(), clamped_cost + 1e-9);
+}
+
+// The Riccati products through the Euler structure of the contact knots equal the dense ones.
+TEST(Solver, EulerStructureMatchesDenseProducts) {
+  for (const char* robot : {"solo12/solo12.urdf", "talos/talos_reduced.urdf"}) {
+    const Model model = buildModelFromUrdf(std::string(STRIDE_SHARED_DIR) + "/robots/" + robot,
+                                           RootJoint::FreeFlyer);
+    const bool solo = std::string(robot).find("solo") != std::string::npos;
+    ContactSet contacts;
+    if (solo) {
+      for (const char* f : {"FL_FOOT", "HR_FOOT"})
+        contacts.add(model, f, 3, ReferenceFrame::LocalWorldAligned, 0.0, 50.0);
+    } else {
+      contacts.add(model, "left_sole_link", 6, ReferenceFrame::LocalWorldAligned, 0.0, 50.0);
+    }
+    const int nu = model.nv - 6, T = 8;
+    std::mt19937 rng(5);
+    std::vector<Eigen::VectorXd> xs(T + 1), us(T);
+    for (auto& x : xs) {
+      x = Eigen::VectorXd::Zero(model.nq + model.nv);
+      x.head(model.nq) = randomConfiguration(model, rng);
+      x.tail(model.nv).setRandom();
+    }
+    for (auto& u : us) u = Eigen::VectorXd::Random(nu);
+    std::vector<std::unique_ptr<ActionModel>> running;
+    for (int k = 0; k < T; ++k) {
+      auto knot = std::make_unique<KnotModel>(model, contacts, 0.01);
+      knot->costs().add("state", std::make_unique<StateResidual>(model, nu),
+                        Activation::quadratic(2 * model.nv), 1e-2);
+      knot->costs().add("control", std::make_unique<ControlResidual>(model, nu),
+                        Activation::quadratic(nu), 1e-3);
+      running.push_back(std::move(knot));
+    }
+    auto terminal = std::make_unique<TerminalModel>(model);
+    terminal->costs().add("hand",
+                          std::make_unique<FrameTranslationResidual>(
+                              model, 0, solo ? "FR_FOOT" : "arm_right_7_link"),
+                          Activation::quadratic(3), 10.0);
+    ShootingProblem problem(xs[0], std::move(running), std::move(terminal));
+    Solver structured(problem), dense(problem);
+    dense.options.exploit_structure = false;
+    for (Solver* s : {&structured, &dense}) {
+      ASSERT_TRUE(s->setWarmStart(xs, us));
+      s->setRegularization(1e-6);
+      s->computeDerivatives();
+      ASSERT_TRUE(s->backwardPass());
+    }
+    for (int k = 0; k < T; ++k) {
+      const double scale = 1.0 + dense.K()[k].cwiseAbs().maxCoeff();
+      EXPECT_LT((structured.K()[k] - dense.K()[k]).cwiseAbs().maxCoeff(), 1e-9 * scale) << k;
+      EXPECT_LT((structured.k()[k] - dense.k()[k]).cwiseAbs().maxCoeff(),
+                1e-9 * (1.0 + dense.k()[k].cwiseAbs().maxCoeff()))
+          << k;
+    }
+    EXPECT_NEAR(structured.expectedCostChange(1.0), dense.expectedCostChange(1.0),
+                1e-9 * std::abs(dense.expectedCostChange(1.0)));
+  }
 }
 
 TEST(Solver, WarmStartRejectsBadSizesAndNaN) {
