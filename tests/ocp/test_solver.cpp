@@ -177,7 +177,8 @@ TEST(BoxFddp, RespectsBoundsAndMatchesFddpWhenInactive) {
   EXPECT_LE(solver.cost(), clamped_cost + 1e-9);
 }
 
-// The Riccati products through the Euler structure of the contact knots equal the dense ones.
+// The Riccati products through the Euler structure of the contact knots equal the dense ones (the
+// structured route runs for nv >= 24: talos here; solo12 checks the dense route against itself).
 TEST(Solver, EulerStructureMatchesDenseProducts) {
   for (const char* robot : {"solo12/solo12.urdf", "talos/talos_reduced.urdf"}) {
     const Model model = buildModelFromUrdf(std::string(STRIDE_SHARED_DIR) + "/robots/" + robot,
@@ -209,10 +210,10 @@ TEST(Solver, EulerStructureMatchesDenseProducts) {
       running.push_back(std::move(knot));
     }
     auto terminal = std::make_unique<TerminalModel>(model);
-    terminal->costs().add("hand",
-                          std::make_unique<FrameTranslationResidual>(
-                              model, 0, solo ? "FR_FOOT" : "arm_right_7_link"),
-                          Activation::quadratic(3), 10.0);
+    terminal->costs().add(
+        "hand",
+        std::make_unique<FrameTranslationResidual>(model, 0, solo ? "FR_FOOT" : "arm_right_7_link"),
+        Activation::quadratic(3), 10.0);
     ShootingProblem problem(xs[0], std::move(running), std::move(terminal));
     Solver structured(problem), dense(problem);
     dense.options.exploit_structure = false;
