@@ -235,6 +235,28 @@ TEST(Solver, EulerStructureMatchesDenseProducts) {
   }
 }
 
+// A non-finite value in a knot stops the solve with a status; the iterate stays the last good one.
+TEST(Solver, NonFiniteKnotStopsWithStatus) {
+  LqProblem p = makeLq(4, 2, 6, 9);
+  for (SolverKind kind : {SolverKind::Ddp, SolverKind::Fddp, SolverKind::BoxFddp}) {
+    Solver solver(*p.problem, kind);
+    ASSERT_EQ(solver.solve(3), SolveStatus::Converged);
+    const auto xs = solver.xs();
+    const_cast<LqKnot*>(p.knots[3])->q[0] = std::nan("");
+    EXPECT_EQ(solver.solve(3), SolveStatus::NonFinite);
+    EXPECT_EQ(maxDifference(solver.xs(), xs), 0.0);
+    const_cast<LqKnot*>(p.knots[3])->q[0] = 0.5;
+  }
+}
+
+TEST(Solver, DeadlineInThePastReturnsAtOnce) {
+  LqProblem p = makeLq(4, 2, 6, 9);
+  Solver solver(*p.problem);
+  EXPECT_EQ(solver.solve(10, Solver::Clock::now() - std::chrono::milliseconds(1)),
+            SolveStatus::Deadline);
+  EXPECT_EQ(solver.iterations(), 0);
+}
+
 TEST(Solver, WarmStartRejectsBadSizesAndNaN) {
   LqProblem p = makeLq(4, 2, 5, 3);
   Solver solver(*p.problem);
