@@ -262,6 +262,89 @@ ContactStatus factorKkt(const Model& model, Data& data, const ContactSet& contac
   return ContactStatus::Ok;
 }
 
+// A_x = ∂(constraint acceleration)/∂(q, v) of the active contacts into cd.dacc_dq, cd.dacc_dv, from
+// the world sweep of computeRNEADerivatives. The frame acceleration derivatives of
+// frame_derivatives.hpp, fused with the constraint's own terms and written only on the columns of
+// the dofs supporting each contact: the generic getFrameAccelerationDerivatives fills and zeroes
+// four 6 x nv blocks per contact, several times the arithmetic needed here. Per supporting dof k
+// (world, spatial; S, w, e as in rnea_derivatives.cpp; i the frame's joint, λ the parent of k's
+// joint):
+//   ∂v/∂q_k = w,  ∂a/∂q_k = a_λ x S + w x (v_i - v_λ),  ∂v/∂v_k = S,  ∂a/∂v_k = S x v_i + e.
+// A point contact's classical acceleration a_lin + ω x ν + kd ν (+ kp R^T (p - p_ref)) is
+// differentiated at the frame origin p in world axes, with scalar 3-vector code, then rotated to
+// LOCAL by R^T: cross products commute with the rotation. ν(m) = m_lin + m_ang x p is the
+// velocity of a motion m at p.
+void constraintDerivatives(const Model& model, Data& data, const ContactSet& contacts,
+                           ContactData& cd) {
+  const int nc = cd.nc;
+  cd.dacc_dq.topRows(nc).setZero();
+  cd.dacc_dv.topRows(nc).setZero();
+  const Eigen::Vector3d a0 = data.oa[0].head<3>();  // the sweep's gravity term, not a motion
+  int r = 0;
+  for (int c = 0; c < contacts.size(); ++c) {
+    if (!contacts.isActive(c)) continue;
+    const ContactModel& cm = contacts[c];
+    const int i = model.frames[cm.frame].parentJoint;
+    const SE3 oMf = framePlacement(model, data, cm.frame);
+    const Eigen::Matrix3d Rt = oMf.R.transpose();
+    const Eigen::Vector3d p = oMf.p;
+    const Eigen::Vector3d vi_lin = data.ov[i].head<3>(), wi = data.ov[i].tail<3>();
+    const Eigen::Vector3d nu_f = vi_lin + wi.cross(p);  // velocity of the frame origin
+    const Eigen::Vector3d err = p - cm.reference.p;     // R e, e the LOCAL position error
+    const double kd = cm.kd, kp = cm.kp;
+    const bool surface_kp = cm.dim == 6 && kp > 0;
+    if (surface_kp) cd.Jframe.setZero();
+    for (int jj = i; jj > 0; jj = model.joints[jj].parent) {
+      const Joint& joint = model.joints[jj];
+      const Vector6d& vp = data.ov[joint.parent];
+      const Eigen::Vector3d ap_lin = data.oa[joint.parent].head<3>() - a0;
+      const Eigen::Vector3d ap_ang = data.oa[joint.parent].tail<3>();
+      const Eigen::Vector3d dv_lin = vi_lin - vp.head<3>(), dv_ang = wi - vp.tail<3>();
+      for (int k = joint.idx_v; k < joint.idx_v + joint.nv; ++k) {
+        const Eigen::Vector3d S_lin = data.J.col(k).head<3>(), S_ang = data.J.col(k).tail<3>();
+        const Eigen::Vector3d w_lin = data.dW.col(k).head<3>(), w_ang = data.dW.col(k).tail<3>();
+        // ∂a/∂q_k = a_λ x S + w x (v_i - v_λ), ∂a/∂v_k = S x v_i + e (motion cross products).
+        const Eigen::Vector3d aq_ang = ap_ang.cross(S_ang) + w_ang.cross(dv_ang);
+        const Eigen::Vector3d aq_lin =
+            ap_ang.cross(S_lin) + ap_lin.cross(S_ang) + w_ang.cross(dv_lin) + w_lin.cross(dv_ang);
+        const Eigen::Vector3d av_ang = S_ang.cross(wi) + data.dE.col(k).tail<3>();
+        const Eigen::Vector3d av_lin =
+            S_ang.cross(vi_lin) + S_lin.cross(wi) + data.dE.col(k).head<3>();
+        if (cm.dim == 3) {
+          const Eigen::Vector3d w_p = w_lin + w_ang.cross(p), S_p = S_lin + S_ang.cross(p);
+          Eigen::Vector3d gq =
+              aq_lin + aq_ang.cross(p) + kd * w_p + wi.cross(w_p) - nu_f.cross(w_ang);
+          const Eigen::Vector3d gv =
+              av_lin + av_ang.cross(p) + kd * S_p + wi.cross(S_p) - nu_f.cross(S_ang);
+          if (kp > 0) gq += kp * (S_p + err.cross(S_ang));
+          cd.dacc_dq.col(k).segment<3>(r).noalias() = Rt * gq;
+          cd.dacc_dv.col(k).segment<3>(r).noalias() = Rt * gv;
+        } else {
+          // LOCAL spatial: X_f^-1 m = [R^T (m_lin - p x m_ang); R^T m_ang].
+          const Eigen::Vector3d q_ang = aq_ang + kd * w_ang, v_ang = av_ang + kd * S_ang;
+          const Eigen::Vector3d q_lin = aq_lin + kd * w_lin - p.cross(q_ang);
+          const Eigen::Vector3d v_lin = av_lin + kd * S_lin - p.cross(v_ang);
+          auto dq = cd.dacc_dq.col(k).segment<6>(r);
+          auto dv = cd.dacc_dv.col(k).segment<6>(r);
+          dq.head<3>().noalias() = Rt * q_lin;
+          dq.tail<3>().noalias() = Rt * q_ang;
+          dv.head<3>().noalias() = Rt * v_lin;
+          dv.tail<3>().noalias() = Rt * v_ang;
+          if (surface_kp) {
+            cd.Jframe.col(k).head<3>().noalias() = Rt * (S_lin - p.cross(S_ang));
+            cd.Jframe.col(k).tail<3>().noalias() = Rt * S_ang;
+          }
+        }
+      }
+    }
+    // α = a + kd v + kp log6(M_ref^-1 M): the position term's derivative is Jlog6 times the LOCAL
+    // frame Jacobian.
+    if (surface_kp)
+      cd.dacc_dq.middleRows<6>(r).noalias() += kp * Jlog6(cm.reference.actInv(oMf)) * cd.Jframe;
+    r += cm.dim;
+  }
+}
+
 // Last step of both solves: a non-finite result is flagged, the forces go to their frames.
 ContactStatus finishSolve(const Model& model, const Data& data, const ContactSet& contacts,
                           ContactData& cd, const Eigen::VectorXd& primal, Eigen::VectorXd& forces) {
@@ -315,43 +398,7 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
   // R_x = ∂(RNEA(q, v, v̇) - Jc^T λ)/∂x at the solution; also the world sweep the frame
   // derivatives read.
   computeRNEADerivatives(model, data, q, v, cd.ddq, cd.fext, true);
-  int r = 0;
-  for (int c = 0; c < contacts.size(); ++c) {
-    if (!contacts.isActive(c)) continue;
-    const ContactModel& cm = contacts[c];
-    getFrameAccelerationDerivatives(model, data, cm.frame, cd.dv_dq, cd.dv_dv, cd.da_dq, cd.da_dv);
-    const Matrix6Xd& J = cd.dv_dv;  // LOCAL frame Jacobian
-    if (cm.dim == 3) {
-      // α = a_lin + ω x ν + kd ν + kp R^T (p - p_ref)
-      const Vector6d vf = frameVelocityFromSweep(model, data, cm.frame);
-      const Eigen::Matrix3d W = skew(vf.tail<3>()), N = skew(vf.head<3>());
-      auto Aq = cd.dacc_dq.middleRows<3>(r);
-      auto Av = cd.dacc_dv.middleRows<3>(r);
-      // One product per statement, with noalias: a product inside a sum would be evaluated into
-      // a heap temporary.
-      Aq = cd.da_dq.topRows<3>() + cm.kd * cd.dv_dq.topRows<3>();
-      Aq.noalias() += W * cd.dv_dq.topRows<3>();
-      Aq.noalias() -= N * cd.dv_dq.bottomRows<3>();
-      Av = cd.da_dv.topRows<3>() + cm.kd * J.topRows<3>();
-      Av.noalias() += W * J.topRows<3>();
-      Av.noalias() -= N * J.bottomRows<3>();
-      if (cm.kp > 0) {
-        const SE3 oMf = framePlacement(model, data, cm.frame);
-        const Eigen::Vector3d e = oMf.R.transpose() * (oMf.p - cm.reference.p);
-        Aq += cm.kp * J.topRows<3>();
-        Aq.noalias() += (cm.kp * skew(e)) * J.bottomRows<3>();
-      }
-    } else {
-      // α = a + kd v + kp log6(M_ref^-1 M)
-      cd.dacc_dq.middleRows<6>(r) = cd.da_dq + cm.kd * cd.dv_dq;
-      cd.dacc_dv.middleRows<6>(r) = cd.da_dv + cm.kd * J;
-      if (cm.kp > 0) {
-        const SE3 oMf = framePlacement(model, data, cm.frame);
-        cd.dacc_dq.middleRows<6>(r).noalias() += cm.kp * Jlog6(cm.reference.actInv(oMf)) * J;
-      }
-    }
-    r += cm.dim;
-  }
+  constraintDerivatives(model, data, contacts, cd);
   kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, &cd.ddq_dv, &cd.lambda_dv, &cd.ddq_dtau,
                  &cd.lambda_dtau);
   // Back to the contacts' force frames (λ itself is already rotated by contactDynamics).
