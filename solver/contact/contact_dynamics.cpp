@@ -396,8 +396,9 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
   if (status != ContactStatus::Ok) return status;
   localForcesToJointWrenches(model, data, contacts, cd, cd.lambda);
   // R_x = ∂(RNEA(q, v, v̇) - Jc^T λ)/∂x at the solution; also the world sweep the frame
-  // derivatives read.
-  computeRNEADerivatives(model, data, q, v, cd.ddq, cd.fext, true);
+  // derivatives read. contactDynamics has just run crba(q), so data.oMi and data.J hold q's
+  // kinematics: the derivative sweep reads them instead of recomputing them.
+  computeRNEADerivativesFromKinematics(model, data, v, cd.ddq, cd.fext, true);
   constraintDerivatives(model, data, contacts, cd);
   kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, &cd.ddq_dv, &cd.lambda_dv, &cd.ddq_dtau,
                  &cd.lambda_dtau);
@@ -440,8 +441,10 @@ ContactStatus impulseDynamicsDerivatives(const Model& model, Data& data, const C
   const int nc = cd.nc;
   // Constraint rows: ∂(Jc(q) (v⁺ + r v⁻))/∂q at fixed velocities, the derivative of the contact
   // velocity at w = v⁺ + r v⁻ (linear in w).
+  // Both derivative sweeps read the kinematics of q that impulseDynamics' crba(q) left in data.
   cd.ddq = cd.v_after + restitution * v_before;  // scratch: w
-  computeRNEADerivatives(model, data, q, cd.ddq, cd.zero);
+  for (auto& f : cd.fext) f.setZero();
+  computeRNEADerivativesFromKinematics(model, data, cd.ddq, cd.zero, cd.fext, true);
   int r = 0;
   for (int c = 0; c < contacts.size(); ++c) {
     if (!contacts.isActive(c)) continue;
@@ -453,7 +456,7 @@ ContactStatus impulseDynamicsDerivatives(const Model& model, Data& data, const C
   // R_q = ∂(M(q)(v⁺ - v⁻) - Jc^T Λ)/∂q: RNEA with zero velocity, no gravity, a = v⁺ - v⁻.
   localForcesToJointWrenches(model, data, contacts, cd, cd.impulses);
   cd.ddq = cd.v_after - v_before;
-  computeRNEADerivatives(model, data, q, cd.zero, cd.ddq, cd.fext, false);
+  computeRNEADerivativesFromKinematics(model, data, cd.zero, cd.ddq, cd.fext, false);
   kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, nullptr, nullptr, nullptr, nullptr);
   // With respect to v⁻: ∂v⁺/∂v⁻ = I - (1 + r) Y K^-1 Jc,  ∂Λ/∂v⁻ = -(1 + r) K^-1 Jc.
   auto dL = cd.lambda_dv.topRows(nc);

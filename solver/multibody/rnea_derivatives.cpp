@@ -29,15 +29,23 @@ namespace stride {
 
 namespace {
 
-// [v x*] Y for a 6x6 inertia matrix Y; Ẏ = P + P^T with P = [v x*] Y (since [v x]^T = -[v x*]).
-Matrix6d inertiaRate(const Vector6d& v, const Inertia& Y) {
-  const Matrix6d Ym = Y.matrix();
-  const Eigen::Matrix3d Nu = skew(v.head<3>()), W = skew(v.tail<3>());
-  // [v x*] = [W, 0; Nu, W]
-  Matrix6d P;
-  P.topRows<3>().noalias() = W * Ym.topRows<3>();
-  P.bottomRows<3>().noalias() = Nu * Ym.topRows<3>() + W * Ym.bottomRows<3>();
-  return P + P.transpose();
+// Ẏ = [v x*] Y - Y [v x] for a body inertia Y = [m Id, -[h]x; [h]x, I] moving with v = [ν; ω].
+// Y keeps that form at every instant (in the world frame only its h and I change), so Ẏ is
+// symmetric with the same structure and zero mass: Ẏ = [0, -[ḣ]x; [ḣ]x, İ] with
+//   ḣ = m ν + ω x h,   İ = X + X^T,   X = [ω]x I - h ν^T + (ν . h) Id
+// (from [ν]x[h]x + [h]x[ν]x = h ν^T + ν h^T - 2 (ν . h) Id). Stored as an Inertia with m = 0: it
+// sums over a subtree like an inertia, and applying it costs a third of a 6x6 product.
+Inertia inertiaRate(const Vector6d& v, const Inertia& Y) {
+  const Eigen::Vector3d nu = v.head<3>(), w = v.tail<3>();
+  Inertia r;
+  r.m = 0.0;
+  r.h = Y.m * nu + w.cross(Y.h);
+  Eigen::Matrix3d X;
+  X.noalias() = skew(w) * Y.I;
+  X.noalias() -= Y.h * nu.transpose();
+  X.diagonal().array() += nu.dot(Y.h);
+  r.I = X + X.transpose();
+  return r;
 }
 
 inline double dot6(const double* a, const Vector6d& b) {
@@ -47,11 +55,13 @@ inline double dot6(const double* a, const Vector6d& b) {
 }  // namespace
 
 namespace {
-void rneaDerivatives(const Model& model, Data& data, const Eigen::Ref<const Eigen::VectorXd>& q,
+// kReuse: data.oMi and data.J already hold the placements and world motion subspaces for this q
+// (q is then not read).
+template <bool kReuse>
+void rneaDerivatives(const Model& model, Data& data, const double* q,
                      const Eigen::Ref<const Eigen::VectorXd>& v,
                      const Eigen::Ref<const Eigen::VectorXd>& a, const std::vector<Vector6d>* fext,
                      bool with_gravity) {
-  model.checkConfiguration(q, "computeRNEADerivatives");
   model.checkVelocity(v, "computeRNEADerivatives");
   if (a.size() != model.nv) throwSizeError("computeRNEADerivatives", "a", model.nv, a.size());
   const int n = model.njoints();
@@ -67,14 +77,16 @@ void rneaDerivatives(const Model& model, Data& data, const Eigen::Ref<const Eige
   data.oa[0].tail<3>().setZero();
   for (int i = 1; i < n; ++i) {
     const Joint& j = model.joints[i];
-    jointPlacement(j, q.data() + j.idx_q, data.liMi[i]);
-    data.oMi[i] = data.oMi[j.parent] * data.liMi[i];
-    const SE3& oMi = data.oMi[i];
     auto S = data.J.middleCols(j.idx_v, j.nv);
-    if (j.type == JointType::FreeFlyer)
-      S = oMi.toActionMatrix();
-    else
-      S.col(0) = jointSubspaceWorld(j, oMi);
+    if constexpr (!kReuse) {
+      jointPlacement(j, q + j.idx_q, data.liMi[i]);
+      data.oMi[i] = data.oMi[j.parent] * data.liMi[i];
+      if (j.type == JointType::FreeFlyer)
+        S = data.oMi[i].toActionMatrix();
+      else
+        S.col(0) = jointSubspaceWorld(j, data.oMi[i]);
+    }
+    const SE3& oMi = data.oMi[i];
     const Vector6d vJ = S * v.segment(j.idx_v, j.nv);
     const Vector6d& vp = data.ov[j.parent];
     const Vector6d& ap = data.oa[j.parent];
@@ -104,20 +116,19 @@ void rneaDerivatives(const Model& model, Data& data, const Eigen::Ref<const Eige
   for (int i = n - 1; i > 0; --i) {
     const Joint& j = model.joints[i];
     const Inertia& Y = data.oYcrb[i];
-    const Matrix6d& B = data.oBcrb[i];
+    const Inertia& B = data.oBcrb[i];
     const Vector6d& h = data.oh[i];
     const Vector6d& F = data.oF[i];
     for (int k = j.idx_v; k < j.idx_v + j.nv; ++k) {
       const Vector6d Sk = data.J.col(k);
       const Vector6d w = data.dW.col(k), c = data.dC.col(k), e = data.dE.col(k);
       data.tau[k] = Sk.dot(F);
+      // Ẏ is symmetric: Ẏ^T S = Ẏ S serves B and H.
+      const Vector6d BS = B * Sk, Sh = forceCross(Sk, h);
       data.dA.col(k) = Y * Sk;
-      data.dB.col(k).noalias() = B.transpose() * Sk;
-      data.dB.col(k) -= forceCross(Sk, h);
-      data.dG.col(k) = forceCross(Sk, F) + Y * c + forceCross(w, h);
-      data.dG.col(k).noalias() += B * w;
-      data.dH.col(k) = Y * e + forceCross(Sk, h);
-      data.dH.col(k).noalias() += B * Sk;
+      data.dB.col(k) = BS - Sh;
+      data.dG.col(k) = forceCross(Sk, F) + Y * c + forceCross(w, h) + B * w;
+      data.dH.col(k) = Y * e + Sh + BS;
     }
     const int first = j.idx_v, end = first + model.nvSubtree[first];
     for (int col = first; col < first + j.nv; ++col) {
@@ -151,7 +162,8 @@ void computeRNEADerivatives(const Model& model, Data& data,
                             const Eigen::Ref<const Eigen::VectorXd>& q,
                             const Eigen::Ref<const Eigen::VectorXd>& v,
                             const Eigen::Ref<const Eigen::VectorXd>& a) {
-  rneaDerivatives(model, data, q, v, a, nullptr, true);
+  model.checkConfiguration(q, "computeRNEADerivatives");
+  rneaDerivatives<false>(model, data, q.data(), v, a, nullptr, true);
 }
 
 void computeRNEADerivatives(const Model& model, Data& data,
@@ -159,7 +171,15 @@ void computeRNEADerivatives(const Model& model, Data& data,
                             const Eigen::Ref<const Eigen::VectorXd>& v,
                             const Eigen::Ref<const Eigen::VectorXd>& a,
                             const std::vector<Vector6d>& fext, bool with_gravity) {
-  rneaDerivatives(model, data, q, v, a, &fext, with_gravity);
+  model.checkConfiguration(q, "computeRNEADerivatives");
+  rneaDerivatives<false>(model, data, q.data(), v, a, &fext, with_gravity);
+}
+
+void computeRNEADerivativesFromKinematics(const Model& model, Data& data,
+                                          const Eigen::Ref<const Eigen::VectorXd>& v,
+                                          const Eigen::Ref<const Eigen::VectorXd>& a,
+                                          const std::vector<Vector6d>& fext, bool with_gravity) {
+  rneaDerivatives<true>(model, data, nullptr, v, a, &fext, with_gravity);
 }
 
 }  // namespace stride
