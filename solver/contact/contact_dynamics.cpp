@@ -37,6 +37,7 @@ ContactData::ContactData(const Model& model, const ContactSet& contacts) {
   rhs3 = RowMatrixXd::Zero(nv, 3 * nv);
   work = Eigen::MatrixXd::Zero(m, nv);
   Kinv = Eigen::MatrixXd::Zero(m, m);
+  dual_rows = RowMatrixXd::Zero(m, nv);
   K = Eigen::MatrixXd::Zero(m, m);
   Jframe = dv_dq = dv_dv = da_dq = da_dv = Matrix6Xd::Zero(6, nv);
   rows3 = Eigen::Matrix3Xd::Zero(3, nv);
@@ -158,9 +159,10 @@ void localForcesToJointWrenches(const Model& model, const Data& data, const Cont
 // Rotates LOCAL forces (and their derivatives) of LOCAL_WORLD_ALIGNED contacts to world axes.
 // λ_w = R λ_l, so ∂λ_w = R ∂λ_l + (∂R) λ_l, and ∂R/∂q_j λ_l = ω_j x λ_w (ω_j: world angular
 // Jacobian column of the frame).
+// Only the columns [tau_first, nv) of dtau are touched.
 void rotateForces(const Model& model, const Data& data, const ContactSet& contacts, ContactData& cd,
                   Eigen::VectorXd& forces, Eigen::MatrixXd* dq, Eigen::MatrixXd* dv,
-                  Eigen::MatrixXd* dtau) {
+                  Eigen::MatrixXd* dtau, int tau_first = 0) {
   int r = 0;
   for (int c = 0; c < contacts.size(); ++c) {
     if (!contacts.isActive(c)) continue;
@@ -173,13 +175,57 @@ void rotateForces(const Model& model, const Data& data, const ContactSet& contac
         f = oMf.R * Eigen::Vector3d(f);
         for (Eigen::MatrixXd* m : {dq, dv, dtau}) {
           if (!m) continue;
-          cd.rows3.noalias() = oMf.R * m->middleRows<3>(r + b);  // no aliased product temporary
-          m->middleRows<3>(r + b) = cd.rows3;
+          const Eigen::Index first = m == dtau ? tau_first : 0, cols = m->cols() - first;
+          auto rows = m->middleRows<3>(r + b).rightCols(cols);
+          auto tmp = cd.rows3.leftCols(cols);
+          tmp.noalias() = oMf.R * rows;  // no aliased product temporary
+          rows = tmp;
         }
         if (dq) dq->middleRows<3>(r + b).noalias() -= skew(f) * cd.Jframe.bottomRows<3>();
       }
     }
     r += cm.dim;
+  }
+}
+
+// K^-1 into cd.Kinv from the Cholesky factor in K's lower triangle: L^-1 by forward substitution,
+// then K^-1 = L^-T L^-1. Plain loops: for a dozen rows, Eigen's blocked triangular solves spend
+// more time in their setup than in the arithmetic.
+void invertSchur(ContactData& cd) {
+  const int nc = cd.nc;
+  const Eigen::MatrixXd& L = cd.K;
+  Eigen::MatrixXd& X = cd.Kinv;  // L^-1 in the lower triangle first, then K^-1
+  for (int j = 0; j < nc; ++j) {
+    X(j, j) = 1.0 / L(j, j);
+    for (int i = j + 1; i < nc; ++i) {
+      double s = 0.0;
+      for (int k = j; k < i; ++k) s -= L(i, k) * X(k, j);
+      X(i, j) = s / L(i, i);
+    }
+  }
+  // (L^-T L^-1)(i, j) = Σ_{k >= max(i, j)} X(k, i) X(k, j); upper triangle first, so that the
+  // lower triangle still holds L^-1 while it is read.
+  for (int j = 0; j < nc; ++j)
+    for (int i = 0; i <= j; ++i) {
+      double s = 0.0;
+      for (int k = j; k < nc; ++k) s += X(k, i) * X(k, j);
+      X(i, j) = s;
+    }
+  for (int j = 0; j < nc; ++j)
+    for (int i = j + 1; i < nc; ++i) X(i, j) = X(j, i);
+}
+
+// row += Σ_r jc[r] d_r for Dim rows d_r of length n (stride ld): the rows of Jc^T ∂λ/∂x a contact
+// adds to, one pass over each output row with the Dim coefficients in registers.
+template <int Dim>
+void addTransposedRows(const double* jc, const double* d, Eigen::Index ld, double* __restrict row,
+                       int n) {
+  double c[Dim];
+  for (int r = 0; r < Dim; ++r) c[r] = jc[r];
+  for (int j = 0; j < n; ++j) {
+    double acc = row[j];
+    for (int r = 0; r < Dim; ++r) acc += c[r] * d[r * ld + j];
+    row[j] = acc;
   }
 }
 
@@ -189,18 +235,22 @@ void rotateForces(const Model& model, const Data& data, const ContactSet& contac
 //   ∂v̇/∂x = M^-1 (-R_x + Jc^T ∂λ/∂x),   ∂v̇/∂τ = M^-1 (I + Jc^T ∂λ/∂τ),
 // the second line from the first block row of the differentiated KKT system. The primal
 // derivatives then share one solve with M on the stacked right-hand sides [q | v | τ], and M^-1
-// itself is never formed.
-void kktDerivatives(const Model& model, Data& data, ContactData& cd, Eigen::MatrixXd& primal_dq,
-                    Eigen::MatrixXd& dual_dq, Eigen::MatrixXd* primal_dv, Eigen::MatrixXd* dual_dv,
-                    Eigen::MatrixXd* primal_dtau, Eigen::MatrixXd* dual_dtau) {
+// itself is never formed. The τ block covers the columns [tau_first, nv) only (the knot needs
+// the actuated ones).
+//
+// Jc^T ∂λ/∂x is written for Jc's sparsity (a contact's rows are zero outside the dofs supporting
+// it) instead of as a dense GEMM: on talos_reduced a third of the arithmetic, and no packing.
+// Yt R_x stays a dense GEMM: R_x has M's tree pattern too, but exploiting it needs one short
+// update of nc entries per nonzero, and their loop overhead measured slower than the GEMM.
+void kktDerivatives(const Model& model, Data& data, const ContactSet& contacts, ContactData& cd,
+                    Eigen::MatrixXd& primal_dq, Eigen::MatrixXd& dual_dq,
+                    Eigen::MatrixXd* primal_dv, Eigen::MatrixXd* dual_dv,
+                    Eigen::MatrixXd* primal_dtau, Eigen::MatrixXd* dual_dtau, int tau_first) {
   const int nc = cd.nc, nv = model.nv;
-  const auto Yt = cd.Yt.topRows(nc);
-  const auto Jc = cd.Jc.topRows(nc);
   // K^-1 explicitly: it is at most a few dozen rows, and one small product per block is cheaper
   // than a triangular solve per block.
-  auto Kinv = cd.Kinv.topLeftCorner(nc, nc);
-  Kinv.setIdentity();
-  solveSchur(cd, Kinv);
+  invertSchur(cd);
+  const auto Kinv = cd.Kinv.topLeftCorner(nc, nc);
   const struct {
     const Eigen::MatrixXd* R;  // null for τ
     const Eigen::MatrixXd* A;
@@ -209,30 +259,53 @@ void kktDerivatives(const Model& model, Data& data, ContactData& cd, Eigen::Matr
   } blocks[] = {{&data.dtau_dq, &cd.dacc_dq, &primal_dq, &dual_dq},
                 {&data.dtau_dv, &cd.dacc_dv, primal_dv, dual_dv},
                 {nullptr, nullptr, primal_dtau, dual_dtau}};
+  const Eigen::Index stride = cd.rhs3.outerStride();
   int used = 0;
   for (const auto& b : blocks) {
     if (!b.primal) continue;
-    auto work = cd.work.topRows(nc);
-    auto dual = b.dual->topRows(nc);
-    auto rhs = cd.rhs3.middleCols(used, nv);
+    const int first = b.R ? 0 : tau_first, cols = nv - first;
+    double* rhs = cd.rhs3.data() + used;
     if (b.R) {
-      work.noalias() = Yt * *b.R;
+      auto work = cd.work.topLeftCorner(nc, nv);
+      work.noalias() = cd.Yt.topRows(nc) * *b.R;
       work -= b.A->topRows(nc);
-      rhs = -*b.R;
+      cd.rhs3.middleCols(used, nv) = -*b.R;
     } else {
-      work = -Yt;
-      rhs.setIdentity();
+      cd.work.topLeftCorner(nc, cols) = -cd.Yt.topRows(nc).rightCols(cols);
+      auto id = cd.rhs3.middleCols(used, cols);
+      id.setZero();
+      id.bottomRows(cols).diagonal().setOnes();
     }
-    dual.noalias() = Kinv * work;
-    rhs.noalias() += Jc.transpose() * dual;
-    used += nv;
+    // ∂λ/∂x, row-major for the row updates below, then to its output.
+    auto dual = cd.dual_rows.topLeftCorner(nc, cols);
+    dual.noalias() = Kinv * cd.work.topLeftCorner(nc, cols);
+    b.dual->topRows(nc).rightCols(cols) = dual;
+    // rhs += Jc^T dual on the supporting rows of each contact.
+    const Eigen::Index ldd = cd.dual_rows.outerStride();
+    int r = 0;
+    for (int c = 0; c < contacts.size(); ++c) {
+      if (!contacts.isActive(c)) continue;
+      const ContactModel& cm = contacts[c];
+      const Joint& jt = model.joints[model.frames[cm.frame].parentJoint];
+      const double* d = cd.dual_rows.data() + r * ldd;
+      for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
+        double* row = rhs + k * stride;
+        if (cm.dim == 3)
+          addTransposedRows<3>(&cd.Jc(r, k), d, ldd, row, cols);
+        else
+          addTransposedRows<6>(&cd.Jc(r, k), d, ldd, row, cols);
+      }
+      r += cm.dim;
+    }
+    used += cols;
   }
   solveMassMatrixRows(model, data, cd.rhs3.leftCols(used));
   used = 0;
   for (Eigen::MatrixXd* p : {&primal_dq, primal_dv, primal_dtau}) {
     if (!p) continue;
-    *p = cd.rhs3.middleCols(used, nv);
-    used += nv;
+    const int cols = p == primal_dtau ? nv - tau_first : nv;
+    p->rightCols(cols) = cd.rhs3.middleCols(used, cols);
+    used += cols;
   }
 }
 
@@ -390,6 +463,17 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
                                          const Eigen::Ref<const Eigen::VectorXd>& v,
                                          const Eigen::Ref<const Eigen::VectorXd>& tau,
                                          double damping) {
+  return contactDynamicsDerivatives(model, data, contacts, cd, q, v, tau, damping, 0);
+}
+
+ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const ContactSet& contacts,
+                                         ContactData& cd,
+                                         const Eigen::Ref<const Eigen::VectorXd>& q,
+                                         const Eigen::Ref<const Eigen::VectorXd>& v,
+                                         const Eigen::Ref<const Eigen::VectorXd>& tau,
+                                         double damping, int tau_first) {
+  if (tau_first < 0 || tau_first > model.nv)
+    throwSizeError("contactDynamicsDerivatives", "tau_first", model.nv, tau_first);
   // λ comes back in each contact's force frame; the derivatives are taken in LOCAL coordinates
   // and rotated at the end (rotateForces).
   const ContactStatus status = contactDynamics(model, data, contacts, cd, q, v, tau, damping);
@@ -400,10 +484,11 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
   // kinematics: the derivative sweep reads them instead of recomputing them.
   computeRNEADerivativesFromKinematics(model, data, v, cd.ddq, cd.fext, true);
   constraintDerivatives(model, data, contacts, cd);
-  kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, &cd.ddq_dv, &cd.lambda_dv, &cd.ddq_dtau,
-                 &cd.lambda_dtau);
+  kktDerivatives(model, data, contacts, cd, cd.ddq_dq, cd.lambda_dq, &cd.ddq_dv, &cd.lambda_dv,
+                 &cd.ddq_dtau, &cd.lambda_dtau, tau_first);
   // Back to the contacts' force frames (λ itself is already rotated by contactDynamics).
-  rotateForces(model, data, contacts, cd, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, &cd.lambda_dtau);
+  rotateForces(model, data, contacts, cd, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, &cd.lambda_dtau,
+               tau_first);
   return ContactStatus::Ok;
 }
 
@@ -457,7 +542,8 @@ ContactStatus impulseDynamicsDerivatives(const Model& model, Data& data, const C
   localForcesToJointWrenches(model, data, contacts, cd, cd.impulses);
   cd.ddq = cd.v_after - v_before;
   computeRNEADerivativesFromKinematics(model, data, cd.zero, cd.ddq, cd.fext, false);
-  kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, nullptr, nullptr, nullptr, nullptr);
+  kktDerivatives(model, data, contacts, cd, cd.ddq_dq, cd.lambda_dq, nullptr, nullptr, nullptr,
+                 nullptr, 0);
   // With respect to v⁻: ∂v⁺/∂v⁻ = I - (1 + r) Y K^-1 Jc,  ∂Λ/∂v⁻ = -(1 + r) K^-1 Jc.
   auto dL = cd.lambda_dv.topRows(nc);
   dL = -(1.0 + restitution) * cd.Jc.topRows(nc);

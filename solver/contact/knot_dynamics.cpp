@@ -41,9 +41,9 @@ ContactStatus step(const Model& model, Data& data, const ContactSet& contacts, K
   kd.tau.head(off).setZero();
   kd.tau.tail(kd.nu) = u;
   ContactStatus status =
-      derivatives
-          ? contactDynamicsDerivatives(model, data, contacts, kd.contact, q, v, kd.tau, damping)
-          : contactDynamics(model, data, contacts, kd.contact, q, v, kd.tau, damping);
+      derivatives ? contactDynamicsDerivatives(model, data, contacts, kd.contact, q, v, kd.tau,
+                                               damping, off)
+                  : contactDynamics(model, data, contacts, kd.contact, q, v, kd.tau, damping);
   if (status != ContactStatus::Ok) {
     kd.q_next = q;
     kd.v_next = v;
