@@ -322,7 +322,8 @@ ContactStatus factorKkt(const Model& model, Data& data, const ContactSet& contac
     return ContactStatus::SingularMassMatrix;
   }
   if (v) {
-    nonLinearEffects(model, data, q, *v);
+    // crba(q) has just left q's placements in data.liMi and data.oMi.
+    nonLinearEffectsFromKinematics(model, data, *v);
     Vector6d a0 = Vector6d::Zero();
     a0.head<3>() = -model.gravity;
     for (int i = 1; i < model.njoints(); ++i) data.a[i] = data.a_gf[i] - data.oMi[i].actInv(a0);

@@ -6,10 +6,11 @@ namespace stride {
 
 namespace {
 
-// The shared sweeps. kHasV / kHasA skip the velocity and acceleration terms at compile time.
-template <bool kHasV, bool kHasA>
-void rneaSweeps(const Model& model, Data& data, const Eigen::Ref<const Eigen::VectorXd>& q,
-                const double* v, const double* a, Eigen::VectorXd& tau) {
+// The shared sweeps. kHasV / kHasA skip the velocity and acceleration terms at compile time;
+// kReuse reads the placements already in data.liMi instead of computing them from q (null then).
+template <bool kHasV, bool kHasA, bool kReuse = false>
+void rneaSweeps(const Model& model, Data& data, const double* q, const double* v, const double* a,
+                Eigen::VectorXd& tau) {
   data.v[0].setZero();
   data.a_gf[0].head<3>() = -model.gravity;
   data.a_gf[0].tail<3>().setZero();
@@ -18,8 +19,10 @@ void rneaSweeps(const Model& model, Data& data, const Eigen::Ref<const Eigen::Ve
     const Joint& j = model.joints[i];
     const int parent = j.parent;
     SE3& liMi = data.liMi[i];
-    jointPlacement(j, q.data() + j.idx_q, liMi);
-    data.oMi[i] = data.oMi[parent] * liMi;
+    if constexpr (!kReuse) {
+      jointPlacement(j, q + j.idx_q, liMi);
+      data.oMi[i] = data.oMi[parent] * liMi;
+    }
 
     Vector6d& ai = data.a_gf[i];
     ai = liMi.actInv(data.a_gf[parent]);
@@ -51,7 +54,7 @@ const Eigen::VectorXd& rnea(const Model& model, Data& data,
   model.checkConfiguration(q, "rnea");
   model.checkVelocity(v, "rnea");
   if (a.size() != model.nv) throwSizeError("rnea", "a", model.nv, a.size());
-  rneaSweeps<true, true>(model, data, q, v.data(), a.data(), data.tau);
+  rneaSweeps<true, true>(model, data, q.data(), v.data(), a.data(), data.tau);
   return data.tau;
 }
 
@@ -60,14 +63,21 @@ const Eigen::VectorXd& nonLinearEffects(const Model& model, Data& data,
                                         const Eigen::Ref<const Eigen::VectorXd>& v) {
   model.checkConfiguration(q, "nonLinearEffects");
   model.checkVelocity(v, "nonLinearEffects");
-  rneaSweeps<true, false>(model, data, q, v.data(), nullptr, data.nle);
+  rneaSweeps<true, false>(model, data, q.data(), v.data(), nullptr, data.nle);
+  return data.nle;
+}
+
+const Eigen::VectorXd& nonLinearEffectsFromKinematics(const Model& model, Data& data,
+                                                      const Eigen::Ref<const Eigen::VectorXd>& v) {
+  model.checkVelocity(v, "nonLinearEffectsFromKinematics");
+  rneaSweeps<true, false, true>(model, data, nullptr, v.data(), nullptr, data.nle);
   return data.nle;
 }
 
 const Eigen::VectorXd& computeGeneralizedGravity(const Model& model, Data& data,
                                                  const Eigen::Ref<const Eigen::VectorXd>& q) {
   model.checkConfiguration(q, "computeGeneralizedGravity");
-  rneaSweeps<false, false>(model, data, q, nullptr, nullptr, data.g);
+  rneaSweeps<false, false>(model, data, q.data(), nullptr, nullptr, data.g);
   return data.g;
 }
 
