@@ -70,12 +70,21 @@ void constraintRows(const Model& model, Data& data, const ContactSet& contacts, 
   for (int c = 0; c < contacts.size(); ++c) {
     if (!contacts.isActive(c)) continue;
     const ContactModel& cm = contacts[c];
-    getFrameJacobian(model, data, cm.frame, ReferenceFrame::Local, cd.Jframe);
-    cd.Jc.middleRows(r, cm.dim) = cd.Jframe.topRows(cm.dim);
+    // The LOCAL frame Jacobian's rows, written straight into Jc and only on the supporting
+    // columns: X_f^-1 S = [R^T (S_lin - p x S_ang); R^T S_ang].
+    const SE3 oMf = framePlacement(model, data, cm.frame);
+    const Eigen::Matrix3d Rt = oMf.R.transpose();
+    auto rows = cd.Jc.middleRows(r, cm.dim);
+    rows.setZero();
+    const Joint& jt = model.joints[model.frames[cm.frame].parentJoint];
+    for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
+      const Eigen::Vector3d S_lin = data.J.col(k).head<3>(), S_ang = data.J.col(k).tail<3>();
+      rows.col(k).head<3>().noalias() = Rt * (S_lin - oMf.p.cross(S_ang));
+      if (cm.dim == 6) rows.col(k).tail<3>().noalias() = Rt * S_ang;
+    }
     if (with_drift) {
       const Vector6d vf = getFrameVelocity(model, data, cm.frame, ReferenceFrame::Local);
       const Vector6d af = getFrameAcceleration(model, data, cm.frame, ReferenceFrame::Local);
-      const SE3 oMf = framePlacement(model, data, cm.frame);
       if (cm.dim == 3) {
         Eigen::Vector3d g = af.head<3>() + vf.tail<3>().cross(vf.head<3>()) + cm.kd * vf.head<3>();
         if (cm.kp > 0) g += cm.kp * (oMf.R.transpose() * (oMf.p - cm.reference.p));
