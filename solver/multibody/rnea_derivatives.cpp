@@ -119,16 +119,53 @@ void rneaDerivatives(const Model& model, Data& data, const double* q,
     const Inertia& B = data.oBcrb[i];
     const Vector6d& h = data.oh[i];
     const Vector6d& F = data.oF[i];
+    // In 3-vector halves ([linear; angular]) with the products written out: built from 6-vector
+    // temporaries, every sum stored its halves to the stack and reloaded them whole, stalling on
+    // store forwarding.
+    const Eigen::Vector3d h_l = h.head<3>(), h_a = h.tail<3>(), F_l = F.head<3>(),
+                          F_a = F.tail<3>();
+    // Y x = [m x_l - hY x x_a; I x_a + hY x x_l]; Ẏ x the same with m = 0.
+    auto mulY = [&Y](const Eigen::Vector3d& l, const Eigen::Vector3d& a, Eigen::Vector3d& out_l,
+                     Eigen::Vector3d& out_a) {
+      out_l = Y.m * l - Y.h.cross(a);
+      out_a.noalias() = Y.I * a;
+      out_a += Y.h.cross(l);
+    };
+    auto mulB = [&B](const Eigen::Vector3d& l, const Eigen::Vector3d& a, Eigen::Vector3d& out_l,
+                     Eigen::Vector3d& out_a) {
+      out_l = -B.h.cross(a);
+      out_a.noalias() = B.I * a;
+      out_a += B.h.cross(l);
+    };
     for (int k = j.idx_v; k < j.idx_v + j.nv; ++k) {
-      const Vector6d Sk = data.J.col(k);
-      const Vector6d w = data.dW.col(k), c = data.dC.col(k), e = data.dE.col(k);
-      data.tau[k] = Sk.dot(F);
-      // Ẏ is symmetric: Ẏ^T S = Ẏ S serves B and H.
-      const Vector6d BS = B * Sk, Sh = forceCross(Sk, h);
-      data.dA.col(k) = Y * Sk;
-      data.dB.col(k) = BS - Sh;
-      data.dG.col(k) = forceCross(Sk, F) + Y * c + forceCross(w, h) + B * w;
-      data.dH.col(k) = Y * e + Sh + BS;
+      const Eigen::Vector3d S_l = data.J.col(k).head<3>(), S_a = data.J.col(k).tail<3>();
+      const Eigen::Vector3d w_l = data.dW.col(k).head<3>(), w_a = data.dW.col(k).tail<3>();
+      const Eigen::Vector3d c_l = data.dC.col(k).head<3>(), c_a = data.dC.col(k).tail<3>();
+      const Eigen::Vector3d e_l = data.dE.col(k).head<3>(), e_a = data.dE.col(k).tail<3>();
+      data.tau[k] = S_l.dot(F_l) + S_a.dot(F_a);
+      // Ẏ is symmetric: Ẏ^T S = Ẏ S serves B and H. S x* h = [S_a x h_l; S_a x h_a + S_l x h_l].
+      Eigen::Vector3d BS_l, BS_a, A_l, A_a, Yc_l, Yc_a, Bw_l, Bw_a, Ye_l, Ye_a;
+      mulB(S_l, S_a, BS_l, BS_a);
+      mulY(S_l, S_a, A_l, A_a);
+      mulY(c_l, c_a, Yc_l, Yc_a);
+      mulB(w_l, w_a, Bw_l, Bw_a);
+      mulY(e_l, e_a, Ye_l, Ye_a);
+      const Eigen::Vector3d Sh_l = S_a.cross(h_l), Sh_a = S_a.cross(h_a) + S_l.cross(h_l);
+      auto dA = data.dA.col(k);
+      auto dB = data.dB.col(k);
+      auto dG = data.dG.col(k);
+      auto dH = data.dH.col(k);
+      dA.head<3>() = A_l;
+      dA.tail<3>() = A_a;
+      dB.head<3>() = BS_l - Sh_l;
+      dB.tail<3>() = BS_a - Sh_a;
+      // G = S x* F + Y c + w x* h + Ẏ w
+      dG.head<3>() = S_a.cross(F_l) + Yc_l + w_a.cross(h_l) + Bw_l;
+      dG.tail<3>() =
+          S_a.cross(F_a) + S_l.cross(F_l) + Yc_a + w_a.cross(h_a) + w_l.cross(h_l) + Bw_a;
+      // H = Y e + S x* h + Ẏ S
+      dH.head<3>() = Ye_l + Sh_l + BS_l;
+      dH.tail<3>() = Ye_a + Sh_a + BS_a;
     }
     const int first = j.idx_v, end = first + model.nvSubtree[first];
     for (int col = first; col < first + j.nv; ++col) {
