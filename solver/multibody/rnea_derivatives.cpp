@@ -92,19 +92,34 @@ void rneaDerivatives(const Model& model, Data& data, const double* q,
     const Vector6d& ap = data.oa[j.parent];
     data.ov[i] = vp + vJ;
     data.oa[i] = ap + S * a.segment(j.idx_v, j.nv) + motionCross(data.ov[i], vJ);
-    const Vector6d vsum = vp + data.ov[i];
+    // In 3-vector halves, as the backward sweep (motion cross: a x b = [a_a x b_l + a_l x b_a;
+    // a_a x b_a]).
+    const Eigen::Vector3d vp_l = vp.head<3>(), vp_a = vp.tail<3>(), ap_l = ap.head<3>(),
+                          ap_a = ap.tail<3>();
+    const Eigen::Vector3d vs_l = vp_l + data.ov[i].head<3>(), vs_a = vp_a + data.ov[i].tail<3>();
     for (int k = 0; k < j.nv; ++k) {
-      const Vector6d Sk = S.col(k);
+      const Eigen::Vector3d S_l = S.col(k).head<3>(), S_a = S.col(k).tail<3>();
       const int d = j.idx_v + k;
-      const Vector6d w = motionCross(vp, Sk);  // -S x v_λ
-      data.dW.col(d) = w;
-      data.dC.col(d) = motionCross(ap, Sk) - motionCross(w, vp);
-      data.dE.col(d) = motionCross(vsum, Sk);
+      // w = v_λ x S (= -S x v_λ), c = a_λ x S - w x v_λ, e = (v_λ + v_i) x S.
+      const Eigen::Vector3d w_l = vp_a.cross(S_l) + vp_l.cross(S_a), w_a = vp_a.cross(S_a);
+      data.dW.col(d).head<3>() = w_l;
+      data.dW.col(d).tail<3>() = w_a;
+      data.dC.col(d).head<3>() =
+          ap_a.cross(S_l) + ap_l.cross(S_a) - w_a.cross(vp_l) - w_l.cross(vp_a);
+      data.dC.col(d).tail<3>() = ap_a.cross(S_a) - w_a.cross(vp_a);
+      data.dE.col(d).head<3>() = vs_a.cross(S_l) + vs_l.cross(S_a);
+      data.dE.col(d).tail<3>() = vs_a.cross(S_a);
     }
     const Inertia oY = model.inertias[i].transformedBy(oMi);
     data.oYcrb[i] = oY;
-    data.oh[i] = oY * data.ov[i];
-    data.oF[i] = oY * data.oa[i] + forceCross(data.ov[i], data.oh[i]);
+    // h = Y v, F = Y a + v x* h - f_ext.
+    const Eigen::Vector3d v_l = data.ov[i].head<3>(), v_a = data.ov[i].tail<3>();
+    const Eigen::Vector3d a_l = data.oa[i].head<3>(), a_a = data.oa[i].tail<3>();
+    const Eigen::Vector3d h_l = oY.m * v_l - oY.h.cross(v_a), h_a = oY.I * v_a + oY.h.cross(v_l);
+    data.oh[i].head<3>() = h_l;
+    data.oh[i].tail<3>() = h_a;
+    data.oF[i].head<3>() = oY.m * a_l - oY.h.cross(a_a) + v_a.cross(h_l);
+    data.oF[i].tail<3>() = oY.I * a_a + oY.h.cross(a_l) + v_a.cross(h_a) + v_l.cross(h_l);
     if (fext) data.oF[i] -= oMi.actForce((*fext)[i]);
     data.oBcrb[i] = inertiaRate(data.ov[i], oY);
   }
