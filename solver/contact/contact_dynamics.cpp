@@ -37,6 +37,7 @@ ContactData::ContactData(const Model& model, const ContactSet& contacts) {
   rhs3 = RowMatrixXd::Zero(nv, 3 * nv);
   work = Eigen::MatrixXd::Zero(m, nv);
   Kinv = Eigen::MatrixXd::Zero(m, m);
+  dual_rows = RowMatrixXd::Zero(m, nv);
   K = Eigen::MatrixXd::Zero(m, m);
   Jframe = dv_dq = dv_dv = da_dq = da_dv = Matrix6Xd::Zero(6, nv);
   rows3 = Eigen::Matrix3Xd::Zero(3, nv);
@@ -69,12 +70,21 @@ void constraintRows(const Model& model, Data& data, const ContactSet& contacts, 
   for (int c = 0; c < contacts.size(); ++c) {
     if (!contacts.isActive(c)) continue;
     const ContactModel& cm = contacts[c];
-    getFrameJacobian(model, data, cm.frame, ReferenceFrame::Local, cd.Jframe);
-    cd.Jc.middleRows(r, cm.dim) = cd.Jframe.topRows(cm.dim);
+    // The LOCAL frame Jacobian's rows, written straight into Jc and only on the supporting
+    // columns: X_f^-1 S = [R^T (S_lin - p x S_ang); R^T S_ang].
+    const SE3 oMf = framePlacement(model, data, cm.frame);
+    const Eigen::Matrix3d Rt = oMf.R.transpose();
+    auto rows = cd.Jc.middleRows(r, cm.dim);
+    rows.setZero();
+    const Joint& jt = model.joints[model.frames[cm.frame].parentJoint];
+    for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
+      const Eigen::Vector3d S_lin = data.J.col(k).head<3>(), S_ang = data.J.col(k).tail<3>();
+      rows.col(k).head<3>().noalias() = Rt * (S_lin - oMf.p.cross(S_ang));
+      if (cm.dim == 6) rows.col(k).tail<3>().noalias() = Rt * S_ang;
+    }
     if (with_drift) {
       const Vector6d vf = getFrameVelocity(model, data, cm.frame, ReferenceFrame::Local);
       const Vector6d af = getFrameAcceleration(model, data, cm.frame, ReferenceFrame::Local);
-      const SE3 oMf = framePlacement(model, data, cm.frame);
       if (cm.dim == 3) {
         Eigen::Vector3d g = af.head<3>() + vf.tail<3>().cross(vf.head<3>()) + cm.kd * vf.head<3>();
         if (cm.kp > 0) g += cm.kp * (oMf.R.transpose() * (oMf.p - cm.reference.p));
@@ -158,9 +168,10 @@ void localForcesToJointWrenches(const Model& model, const Data& data, const Cont
 // Rotates LOCAL forces (and their derivatives) of LOCAL_WORLD_ALIGNED contacts to world axes.
 // λ_w = R λ_l, so ∂λ_w = R ∂λ_l + (∂R) λ_l, and ∂R/∂q_j λ_l = ω_j x λ_w (ω_j: world angular
 // Jacobian column of the frame).
+// Only the columns [tau_first, nv) of dtau are touched.
 void rotateForces(const Model& model, const Data& data, const ContactSet& contacts, ContactData& cd,
                   Eigen::VectorXd& forces, Eigen::MatrixXd* dq, Eigen::MatrixXd* dv,
-                  Eigen::MatrixXd* dtau) {
+                  Eigen::MatrixXd* dtau, int tau_first = 0) {
   int r = 0;
   for (int c = 0; c < contacts.size(); ++c) {
     if (!contacts.isActive(c)) continue;
@@ -173,13 +184,57 @@ void rotateForces(const Model& model, const Data& data, const ContactSet& contac
         f = oMf.R * Eigen::Vector3d(f);
         for (Eigen::MatrixXd* m : {dq, dv, dtau}) {
           if (!m) continue;
-          cd.rows3.noalias() = oMf.R * m->middleRows<3>(r + b);  // no aliased product temporary
-          m->middleRows<3>(r + b) = cd.rows3;
+          const Eigen::Index first = m == dtau ? tau_first : 0, cols = m->cols() - first;
+          auto rows = m->middleRows<3>(r + b).rightCols(cols);
+          auto tmp = cd.rows3.leftCols(cols);
+          tmp.noalias() = oMf.R * rows;  // no aliased product temporary
+          rows = tmp;
         }
         if (dq) dq->middleRows<3>(r + b).noalias() -= skew(f) * cd.Jframe.bottomRows<3>();
       }
     }
     r += cm.dim;
+  }
+}
+
+// K^-1 into cd.Kinv from the Cholesky factor in K's lower triangle: L^-1 by forward substitution,
+// then K^-1 = L^-T L^-1. Plain loops: for a dozen rows, Eigen's blocked triangular solves spend
+// more time in their setup than in the arithmetic.
+void invertSchur(ContactData& cd) {
+  const int nc = cd.nc;
+  const Eigen::MatrixXd& L = cd.K;
+  Eigen::MatrixXd& X = cd.Kinv;  // L^-1 in the lower triangle first, then K^-1
+  for (int j = 0; j < nc; ++j) {
+    X(j, j) = 1.0 / L(j, j);
+    for (int i = j + 1; i < nc; ++i) {
+      double s = 0.0;
+      for (int k = j; k < i; ++k) s -= L(i, k) * X(k, j);
+      X(i, j) = s / L(i, i);
+    }
+  }
+  // (L^-T L^-1)(i, j) = Σ_{k >= max(i, j)} X(k, i) X(k, j); upper triangle first, so that the
+  // lower triangle still holds L^-1 while it is read.
+  for (int j = 0; j < nc; ++j)
+    for (int i = 0; i <= j; ++i) {
+      double s = 0.0;
+      for (int k = j; k < nc; ++k) s += X(k, i) * X(k, j);
+      X(i, j) = s;
+    }
+  for (int j = 0; j < nc; ++j)
+    for (int i = j + 1; i < nc; ++i) X(i, j) = X(j, i);
+}
+
+// row += Σ_r jc[r] d_r for Dim rows d_r of length n (stride ld): the rows of Jc^T ∂λ/∂x a contact
+// adds to, one pass over each output row with the Dim coefficients in registers.
+template <int Dim>
+void addTransposedRows(const double* jc, const double* d, Eigen::Index ld, double* __restrict row,
+                       int n) {
+  double c[Dim];
+  for (int r = 0; r < Dim; ++r) c[r] = jc[r];
+  for (int j = 0; j < n; ++j) {
+    double acc = row[j];
+    for (int r = 0; r < Dim; ++r) acc += c[r] * d[r * ld + j];
+    row[j] = acc;
   }
 }
 
@@ -189,18 +244,22 @@ void rotateForces(const Model& model, const Data& data, const ContactSet& contac
 //   ∂v̇/∂x = M^-1 (-R_x + Jc^T ∂λ/∂x),   ∂v̇/∂τ = M^-1 (I + Jc^T ∂λ/∂τ),
 // the second line from the first block row of the differentiated KKT system. The primal
 // derivatives then share one solve with M on the stacked right-hand sides [q | v | τ], and M^-1
-// itself is never formed.
-void kktDerivatives(const Model& model, Data& data, ContactData& cd, Eigen::MatrixXd& primal_dq,
-                    Eigen::MatrixXd& dual_dq, Eigen::MatrixXd* primal_dv, Eigen::MatrixXd* dual_dv,
-                    Eigen::MatrixXd* primal_dtau, Eigen::MatrixXd* dual_dtau) {
+// itself is never formed. The τ block covers the columns [tau_first, nv) only (the knot needs
+// the actuated ones).
+//
+// Jc^T ∂λ/∂x is written for Jc's sparsity (a contact's rows are zero outside the dofs supporting
+// it) instead of as a dense GEMM: on talos_reduced a third of the arithmetic, and no packing.
+// Yt R_x stays a dense GEMM: R_x has M's tree pattern too, but exploiting it needs one short
+// update of nc entries per nonzero, and their loop overhead measured slower than the GEMM.
+void kktDerivatives(const Model& model, Data& data, const ContactSet& contacts, ContactData& cd,
+                    Eigen::MatrixXd& primal_dq, Eigen::MatrixXd& dual_dq,
+                    Eigen::MatrixXd* primal_dv, Eigen::MatrixXd* dual_dv,
+                    Eigen::MatrixXd* primal_dtau, Eigen::MatrixXd* dual_dtau, int tau_first) {
   const int nc = cd.nc, nv = model.nv;
-  const auto Yt = cd.Yt.topRows(nc);
-  const auto Jc = cd.Jc.topRows(nc);
   // K^-1 explicitly: it is at most a few dozen rows, and one small product per block is cheaper
   // than a triangular solve per block.
-  auto Kinv = cd.Kinv.topLeftCorner(nc, nc);
-  Kinv.setIdentity();
-  solveSchur(cd, Kinv);
+  invertSchur(cd);
+  const auto Kinv = cd.Kinv.topLeftCorner(nc, nc);
   const struct {
     const Eigen::MatrixXd* R;  // null for τ
     const Eigen::MatrixXd* A;
@@ -209,30 +268,53 @@ void kktDerivatives(const Model& model, Data& data, ContactData& cd, Eigen::Matr
   } blocks[] = {{&data.dtau_dq, &cd.dacc_dq, &primal_dq, &dual_dq},
                 {&data.dtau_dv, &cd.dacc_dv, primal_dv, dual_dv},
                 {nullptr, nullptr, primal_dtau, dual_dtau}};
+  const Eigen::Index stride = cd.rhs3.outerStride();
   int used = 0;
   for (const auto& b : blocks) {
     if (!b.primal) continue;
-    auto work = cd.work.topRows(nc);
-    auto dual = b.dual->topRows(nc);
-    auto rhs = cd.rhs3.middleCols(used, nv);
+    const int first = b.R ? 0 : tau_first, cols = nv - first;
+    double* rhs = cd.rhs3.data() + used;
     if (b.R) {
-      work.noalias() = Yt * *b.R;
+      auto work = cd.work.topLeftCorner(nc, nv);
+      work.noalias() = cd.Yt.topRows(nc) * *b.R;
       work -= b.A->topRows(nc);
-      rhs = -*b.R;
+      cd.rhs3.middleCols(used, nv) = -*b.R;
     } else {
-      work = -Yt;
-      rhs.setIdentity();
+      cd.work.topLeftCorner(nc, cols) = -cd.Yt.topRows(nc).rightCols(cols);
+      auto id = cd.rhs3.middleCols(used, cols);
+      id.setZero();
+      id.bottomRows(cols).diagonal().setOnes();
     }
-    dual.noalias() = Kinv * work;
-    rhs.noalias() += Jc.transpose() * dual;
-    used += nv;
+    // ∂λ/∂x, row-major for the row updates below, then to its output.
+    auto dual = cd.dual_rows.topLeftCorner(nc, cols);
+    dual.noalias() = Kinv * cd.work.topLeftCorner(nc, cols);
+    b.dual->topRows(nc).rightCols(cols) = dual;
+    // rhs += Jc^T dual on the supporting rows of each contact.
+    const Eigen::Index ldd = cd.dual_rows.outerStride();
+    int r = 0;
+    for (int c = 0; c < contacts.size(); ++c) {
+      if (!contacts.isActive(c)) continue;
+      const ContactModel& cm = contacts[c];
+      const Joint& jt = model.joints[model.frames[cm.frame].parentJoint];
+      const double* d = cd.dual_rows.data() + r * ldd;
+      for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
+        double* row = rhs + k * stride;
+        if (cm.dim == 3)
+          addTransposedRows<3>(&cd.Jc(r, k), d, ldd, row, cols);
+        else
+          addTransposedRows<6>(&cd.Jc(r, k), d, ldd, row, cols);
+      }
+      r += cm.dim;
+    }
+    used += cols;
   }
   solveMassMatrixRows(model, data, cd.rhs3.leftCols(used));
   used = 0;
   for (Eigen::MatrixXd* p : {&primal_dq, primal_dv, primal_dtau}) {
     if (!p) continue;
-    *p = cd.rhs3.middleCols(used, nv);
-    used += nv;
+    const int cols = p == primal_dtau ? nv - tau_first : nv;
+    p->rightCols(cols) = cd.rhs3.middleCols(used, cols);
+    used += cols;
   }
 }
 
@@ -249,7 +331,8 @@ ContactStatus factorKkt(const Model& model, Data& data, const ContactSet& contac
     return ContactStatus::SingularMassMatrix;
   }
   if (v) {
-    nonLinearEffects(model, data, q, *v);
+    // crba(q) has just left q's placements in data.liMi and data.oMi.
+    nonLinearEffectsFromKinematics(model, data, *v);
     Vector6d a0 = Vector6d::Zero();
     a0.head<3>() = -model.gravity;
     for (int i = 1; i < model.njoints(); ++i) data.a[i] = data.a_gf[i] - data.oMi[i].actInv(a0);
@@ -260,6 +343,89 @@ ContactStatus factorKkt(const Model& model, Data& data, const ContactSet& contac
     return ContactStatus::Singular;
   }
   return ContactStatus::Ok;
+}
+
+// A_x = ∂(constraint acceleration)/∂(q, v) of the active contacts into cd.dacc_dq, cd.dacc_dv, from
+// the world sweep of computeRNEADerivatives. The frame acceleration derivatives of
+// frame_derivatives.hpp, fused with the constraint's own terms and written only on the columns of
+// the dofs supporting each contact: the generic getFrameAccelerationDerivatives fills and zeroes
+// four 6 x nv blocks per contact, several times the arithmetic needed here. Per supporting dof k
+// (world, spatial; S, w, e as in rnea_derivatives.cpp; i the frame's joint, λ the parent of k's
+// joint):
+//   ∂v/∂q_k = w,  ∂a/∂q_k = a_λ x S + w x (v_i - v_λ),  ∂v/∂v_k = S,  ∂a/∂v_k = S x v_i + e.
+// A point contact's classical acceleration a_lin + ω x ν + kd ν (+ kp R^T (p - p_ref)) is
+// differentiated at the frame origin p in world axes, with scalar 3-vector code, then rotated to
+// LOCAL by R^T: cross products commute with the rotation. ν(m) = m_lin + m_ang x p is the
+// velocity of a motion m at p.
+void constraintDerivatives(const Model& model, Data& data, const ContactSet& contacts,
+                           ContactData& cd) {
+  const int nc = cd.nc;
+  cd.dacc_dq.topRows(nc).setZero();
+  cd.dacc_dv.topRows(nc).setZero();
+  const Eigen::Vector3d a0 = data.oa[0].head<3>();  // the sweep's gravity term, not a motion
+  int r = 0;
+  for (int c = 0; c < contacts.size(); ++c) {
+    if (!contacts.isActive(c)) continue;
+    const ContactModel& cm = contacts[c];
+    const int i = model.frames[cm.frame].parentJoint;
+    const SE3 oMf = framePlacement(model, data, cm.frame);
+    const Eigen::Matrix3d Rt = oMf.R.transpose();
+    const Eigen::Vector3d p = oMf.p;
+    const Eigen::Vector3d vi_lin = data.ov[i].head<3>(), wi = data.ov[i].tail<3>();
+    const Eigen::Vector3d nu_f = vi_lin + wi.cross(p);  // velocity of the frame origin
+    const Eigen::Vector3d err = p - cm.reference.p;     // R e, e the LOCAL position error
+    const double kd = cm.kd, kp = cm.kp;
+    const bool surface_kp = cm.dim == 6 && kp > 0;
+    if (surface_kp) cd.Jframe.setZero();
+    for (int jj = i; jj > 0; jj = model.joints[jj].parent) {
+      const Joint& joint = model.joints[jj];
+      const Vector6d& vp = data.ov[joint.parent];
+      const Eigen::Vector3d ap_lin = data.oa[joint.parent].head<3>() - a0;
+      const Eigen::Vector3d ap_ang = data.oa[joint.parent].tail<3>();
+      const Eigen::Vector3d dv_lin = vi_lin - vp.head<3>(), dv_ang = wi - vp.tail<3>();
+      for (int k = joint.idx_v; k < joint.idx_v + joint.nv; ++k) {
+        const Eigen::Vector3d S_lin = data.J.col(k).head<3>(), S_ang = data.J.col(k).tail<3>();
+        const Eigen::Vector3d w_lin = data.dW.col(k).head<3>(), w_ang = data.dW.col(k).tail<3>();
+        // ∂a/∂q_k = a_λ x S + w x (v_i - v_λ), ∂a/∂v_k = S x v_i + e (motion cross products).
+        const Eigen::Vector3d aq_ang = ap_ang.cross(S_ang) + w_ang.cross(dv_ang);
+        const Eigen::Vector3d aq_lin =
+            ap_ang.cross(S_lin) + ap_lin.cross(S_ang) + w_ang.cross(dv_lin) + w_lin.cross(dv_ang);
+        const Eigen::Vector3d av_ang = S_ang.cross(wi) + data.dE.col(k).tail<3>();
+        const Eigen::Vector3d av_lin =
+            S_ang.cross(vi_lin) + S_lin.cross(wi) + data.dE.col(k).head<3>();
+        if (cm.dim == 3) {
+          const Eigen::Vector3d w_p = w_lin + w_ang.cross(p), S_p = S_lin + S_ang.cross(p);
+          Eigen::Vector3d gq =
+              aq_lin + aq_ang.cross(p) + kd * w_p + wi.cross(w_p) - nu_f.cross(w_ang);
+          const Eigen::Vector3d gv =
+              av_lin + av_ang.cross(p) + kd * S_p + wi.cross(S_p) - nu_f.cross(S_ang);
+          if (kp > 0) gq += kp * (S_p + err.cross(S_ang));
+          cd.dacc_dq.col(k).segment<3>(r).noalias() = Rt * gq;
+          cd.dacc_dv.col(k).segment<3>(r).noalias() = Rt * gv;
+        } else {
+          // LOCAL spatial: X_f^-1 m = [R^T (m_lin - p x m_ang); R^T m_ang].
+          const Eigen::Vector3d q_ang = aq_ang + kd * w_ang, v_ang = av_ang + kd * S_ang;
+          const Eigen::Vector3d q_lin = aq_lin + kd * w_lin - p.cross(q_ang);
+          const Eigen::Vector3d v_lin = av_lin + kd * S_lin - p.cross(v_ang);
+          auto dq = cd.dacc_dq.col(k).segment<6>(r);
+          auto dv = cd.dacc_dv.col(k).segment<6>(r);
+          dq.head<3>().noalias() = Rt * q_lin;
+          dq.tail<3>().noalias() = Rt * q_ang;
+          dv.head<3>().noalias() = Rt * v_lin;
+          dv.tail<3>().noalias() = Rt * v_ang;
+          if (surface_kp) {
+            cd.Jframe.col(k).head<3>().noalias() = Rt * (S_lin - p.cross(S_ang));
+            cd.Jframe.col(k).tail<3>().noalias() = Rt * S_ang;
+          }
+        }
+      }
+    }
+    // α = a + kd v + kp log6(M_ref^-1 M): the position term's derivative is Jlog6 times the LOCAL
+    // frame Jacobian.
+    if (surface_kp)
+      cd.dacc_dq.middleRows<6>(r).noalias() += kp * Jlog6(cm.reference.actInv(oMf)) * cd.Jframe;
+    r += cm.dim;
+  }
 }
 
 // Last step of both solves: a non-finite result is flagged, the forces go to their frames.
@@ -307,55 +473,32 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
                                          const Eigen::Ref<const Eigen::VectorXd>& v,
                                          const Eigen::Ref<const Eigen::VectorXd>& tau,
                                          double damping) {
+  return contactDynamicsDerivatives(model, data, contacts, cd, q, v, tau, damping, 0);
+}
+
+ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const ContactSet& contacts,
+                                         ContactData& cd,
+                                         const Eigen::Ref<const Eigen::VectorXd>& q,
+                                         const Eigen::Ref<const Eigen::VectorXd>& v,
+                                         const Eigen::Ref<const Eigen::VectorXd>& tau,
+                                         double damping, int tau_first) {
+  if (tau_first < 0 || tau_first > model.nv)
+    throwSizeError("contactDynamicsDerivatives", "tau_first", model.nv, tau_first);
   // λ comes back in each contact's force frame; the derivatives are taken in LOCAL coordinates
   // and rotated at the end (rotateForces).
   const ContactStatus status = contactDynamics(model, data, contacts, cd, q, v, tau, damping);
   if (status != ContactStatus::Ok) return status;
   localForcesToJointWrenches(model, data, contacts, cd, cd.lambda);
   // R_x = ∂(RNEA(q, v, v̇) - Jc^T λ)/∂x at the solution; also the world sweep the frame
-  // derivatives read.
-  computeRNEADerivatives(model, data, q, v, cd.ddq, cd.fext, true);
-  int r = 0;
-  for (int c = 0; c < contacts.size(); ++c) {
-    if (!contacts.isActive(c)) continue;
-    const ContactModel& cm = contacts[c];
-    getFrameAccelerationDerivatives(model, data, cm.frame, cd.dv_dq, cd.dv_dv, cd.da_dq, cd.da_dv);
-    const Matrix6Xd& J = cd.dv_dv;  // LOCAL frame Jacobian
-    if (cm.dim == 3) {
-      // α = a_lin + ω x ν + kd ν + kp R^T (p - p_ref)
-      const Vector6d vf = frameVelocityFromSweep(model, data, cm.frame);
-      const Eigen::Matrix3d W = skew(vf.tail<3>()), N = skew(vf.head<3>());
-      auto Aq = cd.dacc_dq.middleRows<3>(r);
-      auto Av = cd.dacc_dv.middleRows<3>(r);
-      // One product per statement, with noalias: a product inside a sum would be evaluated into
-      // a heap temporary.
-      Aq = cd.da_dq.topRows<3>() + cm.kd * cd.dv_dq.topRows<3>();
-      Aq.noalias() += W * cd.dv_dq.topRows<3>();
-      Aq.noalias() -= N * cd.dv_dq.bottomRows<3>();
-      Av = cd.da_dv.topRows<3>() + cm.kd * J.topRows<3>();
-      Av.noalias() += W * J.topRows<3>();
-      Av.noalias() -= N * J.bottomRows<3>();
-      if (cm.kp > 0) {
-        const SE3 oMf = framePlacement(model, data, cm.frame);
-        const Eigen::Vector3d e = oMf.R.transpose() * (oMf.p - cm.reference.p);
-        Aq += cm.kp * J.topRows<3>();
-        Aq.noalias() += (cm.kp * skew(e)) * J.bottomRows<3>();
-      }
-    } else {
-      // α = a + kd v + kp log6(M_ref^-1 M)
-      cd.dacc_dq.middleRows<6>(r) = cd.da_dq + cm.kd * cd.dv_dq;
-      cd.dacc_dv.middleRows<6>(r) = cd.da_dv + cm.kd * J;
-      if (cm.kp > 0) {
-        const SE3 oMf = framePlacement(model, data, cm.frame);
-        cd.dacc_dq.middleRows<6>(r).noalias() += cm.kp * Jlog6(cm.reference.actInv(oMf)) * J;
-      }
-    }
-    r += cm.dim;
-  }
-  kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, &cd.ddq_dv, &cd.lambda_dv, &cd.ddq_dtau,
-                 &cd.lambda_dtau);
+  // derivatives read. contactDynamics has just run crba(q), so data.oMi and data.J hold q's
+  // kinematics: the derivative sweep reads them instead of recomputing them.
+  computeRNEADerivativesFromKinematics(model, data, v, cd.ddq, cd.fext, true);
+  constraintDerivatives(model, data, contacts, cd);
+  kktDerivatives(model, data, contacts, cd, cd.ddq_dq, cd.lambda_dq, &cd.ddq_dv, &cd.lambda_dv,
+                 &cd.ddq_dtau, &cd.lambda_dtau, tau_first);
   // Back to the contacts' force frames (λ itself is already rotated by contactDynamics).
-  rotateForces(model, data, contacts, cd, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, &cd.lambda_dtau);
+  rotateForces(model, data, contacts, cd, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, &cd.lambda_dtau,
+               tau_first);
   return ContactStatus::Ok;
 }
 
@@ -393,8 +536,10 @@ ContactStatus impulseDynamicsDerivatives(const Model& model, Data& data, const C
   const int nc = cd.nc;
   // Constraint rows: ∂(Jc(q) (v⁺ + r v⁻))/∂q at fixed velocities, the derivative of the contact
   // velocity at w = v⁺ + r v⁻ (linear in w).
+  // Both derivative sweeps read the kinematics of q that impulseDynamics' crba(q) left in data.
   cd.ddq = cd.v_after + restitution * v_before;  // scratch: w
-  computeRNEADerivatives(model, data, q, cd.ddq, cd.zero);
+  for (auto& f : cd.fext) f.setZero();
+  computeRNEADerivativesFromKinematics(model, data, cd.ddq, cd.zero, cd.fext, true);
   int r = 0;
   for (int c = 0; c < contacts.size(); ++c) {
     if (!contacts.isActive(c)) continue;
@@ -406,8 +551,9 @@ ContactStatus impulseDynamicsDerivatives(const Model& model, Data& data, const C
   // R_q = ∂(M(q)(v⁺ - v⁻) - Jc^T Λ)/∂q: RNEA with zero velocity, no gravity, a = v⁺ - v⁻.
   localForcesToJointWrenches(model, data, contacts, cd, cd.impulses);
   cd.ddq = cd.v_after - v_before;
-  computeRNEADerivatives(model, data, q, cd.zero, cd.ddq, cd.fext, false);
-  kktDerivatives(model, data, cd, cd.ddq_dq, cd.lambda_dq, nullptr, nullptr, nullptr, nullptr);
+  computeRNEADerivativesFromKinematics(model, data, cd.zero, cd.ddq, cd.fext, false);
+  kktDerivatives(model, data, contacts, cd, cd.ddq_dq, cd.lambda_dq, nullptr, nullptr, nullptr,
+                 nullptr, 0);
   // With respect to v⁻: ∂v⁺/∂v⁻ = I - (1 + r) Y K^-1 Jc,  ∂Λ/∂v⁻ = -(1 + r) K^-1 Jc.
   auto dL = cd.lambda_dv.topRows(nc);
   dL = -(1.0 + restitution) * cd.Jc.topRows(nc);

@@ -55,6 +55,7 @@ struct ContactData {
   RowMatrixXd rhs3;                  // nv x 3nv, right-hand sides of the primal derivatives
   Eigen::MatrixXd work;              // maxNc x nv
   Eigen::MatrixXd Kinv;              // K^-1 (derivatives only)
+  RowMatrixXd dual_rows;             // maxNc x nv, a block of ∂λ/∂x row by row
   Matrix6Xd Jframe, dv_dq, dv_dv, da_dq, da_dv;
   Eigen::Matrix3Xd rows3;
   std::vector<Vector6d> fext;  // contact forces as joint wrenches
@@ -72,6 +73,15 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
                                          const Eigen::Ref<const Eigen::VectorXd>& v,
                                          const Eigen::Ref<const Eigen::VectorXd>& tau,
                                          double damping = 0.0);
+// The same with the τ derivatives restricted to the columns [tau_first, nv) of cdata.ddq_dtau and
+// cdata.lambda_dtau (their other columns are left as they were): the knot needs only the actuated
+// columns, ∂/∂u = ∂/∂τ [0; I], and each column costs a solve with M.
+ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const ContactSet& contacts,
+                                         ContactData& cdata,
+                                         const Eigen::Ref<const Eigen::VectorXd>& q,
+                                         const Eigen::Ref<const Eigen::VectorXd>& v,
+                                         const Eigen::Ref<const Eigen::VectorXd>& tau,
+                                         double damping, int tau_first);
 
 // v⁺ and Λ (cdata.v_after, cdata.impulses) when the active contacts close at velocity v⁻.
 ContactStatus impulseDynamics(const Model& model, Data& data, const ContactSet& contacts,

@@ -20,7 +20,8 @@ KnotData::KnotData(const Model& model, const ContactSet& contacts)
   Fu = Eigen::MatrixXd::Zero(2 * nv, nu);
   Gx = Eigen::MatrixXd::Zero(m, 2 * nv);
   Gu = Eigen::MatrixXd::Zero(m, nu);
-  Jq = Jv = Eigen::MatrixXd::Zero(nv, nv);
+  // dIntegrate is the identity but for a free-flyer's 6 x 6 block: only that block is updated.
+  Jq = Jv = Eigen::MatrixXd::Identity(nv, nv);
   rows6 = Matrix6Xd::Zero(6, nv);
 }
 
@@ -41,9 +42,9 @@ ContactStatus step(const Model& model, Data& data, const ContactSet& contacts, K
   kd.tau.head(off).setZero();
   kd.tau.tail(kd.nu) = u;
   ContactStatus status =
-      derivatives
-          ? contactDynamicsDerivatives(model, data, contacts, kd.contact, q, v, kd.tau, damping)
-          : contactDynamics(model, data, contacts, kd.contact, q, v, kd.tau, damping);
+      derivatives ? contactDynamicsDerivatives(model, data, contacts, kd.contact, q, v, kd.tau,
+                                               damping, off)
+                  : contactDynamics(model, data, contacts, kd.contact, q, v, kd.tau, damping);
   if (status != ContactStatus::Ok) {
     kd.q_next = q;
     kd.v_next = v;
@@ -84,8 +85,12 @@ ContactStatus knotDynamicsDerivatives(const Model& model, Data& data, const Cont
   dvu = dt * cd.ddq_dtau.rightCols(nu);
   // Configuration rows: q⁺ = q ⊕ dt v⁺, so ∂q⁺ = Jq dq + Jv dt ∂v⁺. Jq and Jv are the identity
   // except for a free-flyer's 6 x 6 block, so only those rows need a product.
-  dIntegrate(model, q, kd.step, kd.Jq, ArgumentPosition::First);
-  dIntegrate(model, q, kd.step, kd.Jv, ArgumentPosition::Second);
+  // dIntegrate(q, dt v⁺) without rewriting its identity part (set at construction).
+  if (model.hasFreeFlyer()) {
+    const Vector6d step6 = kd.step.head<6>();
+    kd.Jq.topLeftCorner<6, 6>() = exp6(step6).inverse().toActionMatrix();
+    kd.Jv.topLeftCorner<6, 6>() = Jexp6(step6);
+  }
   auto dqq = kd.Fx.topLeftCorner(nv, nv);
   auto dqv = kd.Fx.topRightCorner(nv, nv);
   auto dqu = kd.Fu.topRows(nv);

@@ -22,7 +22,9 @@ struct KnotData {
   Eigen::MatrixXd Gx, Gu;          // maxNc x 2nv, maxNc x nu (top nc rows)
   Eigen::MatrixXd Jq, Jv;          // dIntegrate at (q, dt v⁺)
   Matrix6Xd rows6;                 // workspace
-  ContactData contact;             // v̇ (contact.ddq), λ (contact.lambda), ...
+  // v̇ (contact.ddq), λ (contact.lambda), ... After knotDynamicsDerivatives, contact.ddq_dtau and
+  // contact.lambda_dtau hold only their actuated columns (the last nu): the knot skips the rest.
+  ContactData contact;
 };
 
 // x⁺ and λ (data in kd); returns the contact dynamics status. Unless Ok, the state is held

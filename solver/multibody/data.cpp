@@ -27,7 +27,7 @@ Data::Data(const Model& model) {
   Dinv = Eigen::VectorXd::Zero(nv);
   u = Eigen::VectorXd::Zero(nv);
   ddq = Eigen::VectorXd::Zero(nv);
-  oBcrb.assign(n, Matrix6d::Zero());
+  oBcrb.assign(n, Inertia::Zero());
   oh.assign(n, Vector6d::Zero());
   oF.assign(n, Vector6d::Zero());
   for (Matrix6Xd* m : {&dW, &dC, &dE, &dA, &dB, &dG, &dH}) *m = Matrix6Xd::Zero(6, nv);

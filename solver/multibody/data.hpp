@@ -45,9 +45,11 @@ struct Data {
   Eigen::VectorXd ddq;           // aba output
 
   // RNEA derivatives (rnea_derivatives.hpp), world frame. Composite (subtree) quantities:
-  std::vector<Matrix6d> oBcrb;  // time derivative of the composite inertia, v x* Y - Y v x
-  std::vector<Vector6d> oh;     // composite momentum
-  std::vector<Vector6d> oF;     // composite force
+  // Time derivative of the composite inertia, Σ v x* Y - Y v x, stored in inertia form (m = 0,
+  // h = ḣ, I = İ): it is symmetric with an inertia's structure (rnea_derivatives.cpp).
+  std::vector<Inertia> oBcrb;
+  std::vector<Vector6d> oh;  // composite momentum
+  std::vector<Vector6d> oF;  // composite force
   // Per-dof 6-vectors (columns), see rnea_derivatives.cpp for their meaning.
   Matrix6Xd dW, dC, dE, dA, dB, dG, dH;
   Eigen::MatrixXd dtau_dq, dtau_dv;  // nv x nv

@@ -6,10 +6,11 @@ namespace stride {
 
 namespace {
 
-// The shared sweeps. kHasV / kHasA skip the velocity and acceleration terms at compile time.
-template <bool kHasV, bool kHasA>
-void rneaSweeps(const Model& model, Data& data, const Eigen::Ref<const Eigen::VectorXd>& q,
-                const double* v, const double* a, Eigen::VectorXd& tau) {
+// The shared sweeps. kHasV / kHasA skip the velocity and acceleration terms at compile time;
+// kReuse reads the placements already in data.liMi instead of computing them from q (null then).
+template <bool kHasV, bool kHasA, bool kReuse = false>
+void rneaSweeps(const Model& model, Data& data, const double* q, const double* v, const double* a,
+                Eigen::VectorXd& tau) {
   data.v[0].setZero();
   data.a_gf[0].head<3>() = -model.gravity;
   data.a_gf[0].tail<3>().setZero();
@@ -18,22 +19,46 @@ void rneaSweeps(const Model& model, Data& data, const Eigen::Ref<const Eigen::Ve
     const Joint& j = model.joints[i];
     const int parent = j.parent;
     SE3& liMi = data.liMi[i];
-    jointPlacement(j, q.data() + j.idx_q, liMi);
-    data.oMi[i] = data.oMi[parent] * liMi;
+    if constexpr (!kReuse) {
+      jointPlacement(j, q + j.idx_q, liMi);
+      data.oMi[i] = data.oMi[parent] * liMi;
+    }
 
-    Vector6d& ai = data.a_gf[i];
-    ai = liMi.actInv(data.a_gf[parent]);
-    if constexpr (kHasA) ai += jointMotion(j, a + j.idx_v);
+    // In 3-vector halves [linear; angular]: sums of 6-vector temporaries store their halves to
+    // the stack and reload them whole, stalling on store forwarding.
+    const Eigen::Matrix3d& R = liMi.R;
+    const Eigen::Vector3d& p = liMi.p;
+    // X^-1 m = [R^T (m_l - p x m_a); R^T m_a]
+    const Vector6d& apar = data.a_gf[parent];
+    Eigen::Vector3d a_a = R.transpose() * apar.tail<3>();
+    Eigen::Vector3d a_l = R.transpose() * (apar.head<3>() - p.cross(apar.tail<3>()));
+    if constexpr (kHasA) {
+      const Vector6d aJ = jointMotion(j, a + j.idx_v);
+      a_l += aJ.head<3>();
+      a_a += aJ.tail<3>();
+    }
     const Inertia& Y = model.inertias[i];
     if constexpr (kHasV) {
       const Vector6d vJ = jointMotion(j, v + j.idx_v);
-      Vector6d& vi = data.v[i];
-      vi = liMi.actInv(data.v[parent]) + vJ;
-      ai += motionCross(vi, vJ);
-      data.f[i] = Y * ai + forceCross(vi, Y * vi);
+      const Eigen::Vector3d j_l = vJ.head<3>(), j_a = vJ.tail<3>();
+      const Vector6d& vpar = data.v[parent];
+      const Eigen::Vector3d v_a = R.transpose() * vpar.tail<3>() + j_a;
+      const Eigen::Vector3d v_l = R.transpose() * (vpar.head<3>() - p.cross(vpar.tail<3>())) + j_l;
+      data.v[i].head<3>() = v_l;
+      data.v[i].tail<3>() = v_a;
+      // a += v x vJ;  f = Y a + v x* (Y v)
+      a_l += v_a.cross(j_l) + v_l.cross(j_a);
+      a_a += v_a.cross(j_a);
+      const Eigen::Vector3d h_l = Y.m * v_l - Y.h.cross(v_a);
+      const Eigen::Vector3d h_a = Y.I * v_a + Y.h.cross(v_l);
+      data.f[i].head<3>() = Y.m * a_l - Y.h.cross(a_a) + v_a.cross(h_l);
+      data.f[i].tail<3>() = Y.I * a_a + Y.h.cross(a_l) + v_a.cross(h_a) + v_l.cross(h_l);
     } else {
-      data.f[i] = Y * ai;
+      data.f[i].head<3>() = Y.m * a_l - Y.h.cross(a_a);
+      data.f[i].tail<3>() = Y.I * a_a + Y.h.cross(a_l);
     }
+    data.a_gf[i].head<3>() = a_l;
+    data.a_gf[i].tail<3>() = a_a;
   }
   for (int i = n - 1; i > 0; --i) {
     const Joint& j = model.joints[i];
@@ -51,7 +76,7 @@ const Eigen::VectorXd& rnea(const Model& model, Data& data,
   model.checkConfiguration(q, "rnea");
   model.checkVelocity(v, "rnea");
   if (a.size() != model.nv) throwSizeError("rnea", "a", model.nv, a.size());
-  rneaSweeps<true, true>(model, data, q, v.data(), a.data(), data.tau);
+  rneaSweeps<true, true>(model, data, q.data(), v.data(), a.data(), data.tau);
   return data.tau;
 }
 
@@ -60,14 +85,21 @@ const Eigen::VectorXd& nonLinearEffects(const Model& model, Data& data,
                                         const Eigen::Ref<const Eigen::VectorXd>& v) {
   model.checkConfiguration(q, "nonLinearEffects");
   model.checkVelocity(v, "nonLinearEffects");
-  rneaSweeps<true, false>(model, data, q, v.data(), nullptr, data.nle);
+  rneaSweeps<true, false>(model, data, q.data(), v.data(), nullptr, data.nle);
+  return data.nle;
+}
+
+const Eigen::VectorXd& nonLinearEffectsFromKinematics(const Model& model, Data& data,
+                                                      const Eigen::Ref<const Eigen::VectorXd>& v) {
+  model.checkVelocity(v, "nonLinearEffectsFromKinematics");
+  rneaSweeps<true, false, true>(model, data, nullptr, v.data(), nullptr, data.nle);
   return data.nle;
 }
 
 const Eigen::VectorXd& computeGeneralizedGravity(const Model& model, Data& data,
                                                  const Eigen::Ref<const Eigen::VectorXd>& q) {
   model.checkConfiguration(q, "computeGeneralizedGravity");
-  rneaSweeps<false, false>(model, data, q, nullptr, nullptr, data.g);
+  rneaSweeps<false, false>(model, data, q.data(), nullptr, nullptr, data.g);
   return data.g;
 }
 

@@ -18,6 +18,13 @@ const Eigen::VectorXd& rnea(const Model& model, Data& data,
 const Eigen::VectorXd& nonLinearEffects(const Model& model, Data& data,
                                         const Eigen::Ref<const Eigen::VectorXd>& q,
                                         const Eigen::Ref<const Eigen::VectorXd>& v);
+// The same, reading the placements of q from data.liMi instead of computing them: PRECONDITION
+// data.liMi and data.oMi hold the placements of the configuration q to evaluate at, as crba(q),
+// rnea(q, ...) or forwardKinematics(q) leave them (nothing checks it; a stale Data gives a silently
+// wrong b). Saves the trigonometry and the SE3 products when the caller has just run crba for the
+// same q, as contact dynamics does.
+const Eigen::VectorXd& nonLinearEffectsFromKinematics(const Model& model, Data& data,
+                                                      const Eigen::Ref<const Eigen::VectorXd>& v);
 // g(q) = rnea(q, 0, 0), written to data.g (no velocity terms computed).
 const Eigen::VectorXd& computeGeneralizedGravity(const Model& model, Data& data,
                                                  const Eigen::Ref<const Eigen::VectorXd>& q);

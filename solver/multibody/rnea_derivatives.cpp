@@ -29,15 +29,23 @@ namespace stride {
 
 namespace {
 
-// [v x*] Y for a 6x6 inertia matrix Y; Ẏ = P + P^T with P = [v x*] Y (since [v x]^T = -[v x*]).
-Matrix6d inertiaRate(const Vector6d& v, const Inertia& Y) {
-  const Matrix6d Ym = Y.matrix();
-  const Eigen::Matrix3d Nu = skew(v.head<3>()), W = skew(v.tail<3>());
-  // [v x*] = [W, 0; Nu, W]
-  Matrix6d P;
-  P.topRows<3>().noalias() = W * Ym.topRows<3>();
-  P.bottomRows<3>().noalias() = Nu * Ym.topRows<3>() + W * Ym.bottomRows<3>();
-  return P + P.transpose();
+// Ẏ = [v x*] Y - Y [v x] for a body inertia Y = [m Id, -[h]x; [h]x, I] moving with v = [ν; ω].
+// Y keeps that form at every instant (in the world frame only its h and I change), so Ẏ is
+// symmetric with the same structure and zero mass: Ẏ = [0, -[ḣ]x; [ḣ]x, İ] with
+//   ḣ = m ν + ω x h,   İ = X + X^T,   X = [ω]x I - h ν^T + (ν . h) Id
+// (from [ν]x[h]x + [h]x[ν]x = h ν^T + ν h^T - 2 (ν . h) Id). Stored as an Inertia with m = 0: it
+// sums over a subtree like an inertia, and applying it costs a third of a 6x6 product.
+Inertia inertiaRate(const Vector6d& v, const Inertia& Y) {
+  const Eigen::Vector3d nu = v.head<3>(), w = v.tail<3>();
+  Inertia r;
+  r.m = 0.0;
+  r.h = Y.m * nu + w.cross(Y.h);
+  Eigen::Matrix3d X;
+  X.noalias() = skew(w) * Y.I;
+  X.noalias() -= Y.h * nu.transpose();
+  X.diagonal().array() += nu.dot(Y.h);
+  r.I = X + X.transpose();
+  return r;
 }
 
 inline double dot6(const double* a, const Vector6d& b) {
@@ -47,11 +55,13 @@ inline double dot6(const double* a, const Vector6d& b) {
 }  // namespace
 
 namespace {
-void rneaDerivatives(const Model& model, Data& data, const Eigen::Ref<const Eigen::VectorXd>& q,
+// kReuse: data.oMi and data.J already hold the placements and world motion subspaces for this q
+// (q is then not read).
+template <bool kReuse>
+void rneaDerivatives(const Model& model, Data& data, const double* q,
                      const Eigen::Ref<const Eigen::VectorXd>& v,
                      const Eigen::Ref<const Eigen::VectorXd>& a, const std::vector<Vector6d>* fext,
                      bool with_gravity) {
-  model.checkConfiguration(q, "computeRNEADerivatives");
   model.checkVelocity(v, "computeRNEADerivatives");
   if (a.size() != model.nv) throwSizeError("computeRNEADerivatives", "a", model.nv, a.size());
   const int n = model.njoints();
@@ -67,32 +77,49 @@ void rneaDerivatives(const Model& model, Data& data, const Eigen::Ref<const Eige
   data.oa[0].tail<3>().setZero();
   for (int i = 1; i < n; ++i) {
     const Joint& j = model.joints[i];
-    jointPlacement(j, q.data() + j.idx_q, data.liMi[i]);
-    data.oMi[i] = data.oMi[j.parent] * data.liMi[i];
-    const SE3& oMi = data.oMi[i];
     auto S = data.J.middleCols(j.idx_v, j.nv);
-    if (j.type == JointType::FreeFlyer)
-      S = oMi.toActionMatrix();
-    else
-      S.col(0) = jointSubspaceWorld(j, oMi);
+    if constexpr (!kReuse) {
+      jointPlacement(j, q + j.idx_q, data.liMi[i]);
+      data.oMi[i] = data.oMi[j.parent] * data.liMi[i];
+      if (j.type == JointType::FreeFlyer)
+        S = data.oMi[i].toActionMatrix();
+      else
+        S.col(0) = jointSubspaceWorld(j, data.oMi[i]);
+    }
+    const SE3& oMi = data.oMi[i];
     const Vector6d vJ = S * v.segment(j.idx_v, j.nv);
     const Vector6d& vp = data.ov[j.parent];
     const Vector6d& ap = data.oa[j.parent];
     data.ov[i] = vp + vJ;
     data.oa[i] = ap + S * a.segment(j.idx_v, j.nv) + motionCross(data.ov[i], vJ);
-    const Vector6d vsum = vp + data.ov[i];
+    // In 3-vector halves, as the backward sweep (motion cross: a x b = [a_a x b_l + a_l x b_a;
+    // a_a x b_a]).
+    const Eigen::Vector3d vp_l = vp.head<3>(), vp_a = vp.tail<3>(), ap_l = ap.head<3>(),
+                          ap_a = ap.tail<3>();
+    const Eigen::Vector3d vs_l = vp_l + data.ov[i].head<3>(), vs_a = vp_a + data.ov[i].tail<3>();
     for (int k = 0; k < j.nv; ++k) {
-      const Vector6d Sk = S.col(k);
+      const Eigen::Vector3d S_l = S.col(k).head<3>(), S_a = S.col(k).tail<3>();
       const int d = j.idx_v + k;
-      const Vector6d w = motionCross(vp, Sk);  // -S x v_λ
-      data.dW.col(d) = w;
-      data.dC.col(d) = motionCross(ap, Sk) - motionCross(w, vp);
-      data.dE.col(d) = motionCross(vsum, Sk);
+      // w = v_λ x S (= -S x v_λ), c = a_λ x S - w x v_λ, e = (v_λ + v_i) x S.
+      const Eigen::Vector3d w_l = vp_a.cross(S_l) + vp_l.cross(S_a), w_a = vp_a.cross(S_a);
+      data.dW.col(d).head<3>() = w_l;
+      data.dW.col(d).tail<3>() = w_a;
+      data.dC.col(d).head<3>() =
+          ap_a.cross(S_l) + ap_l.cross(S_a) - w_a.cross(vp_l) - w_l.cross(vp_a);
+      data.dC.col(d).tail<3>() = ap_a.cross(S_a) - w_a.cross(vp_a);
+      data.dE.col(d).head<3>() = vs_a.cross(S_l) + vs_l.cross(S_a);
+      data.dE.col(d).tail<3>() = vs_a.cross(S_a);
     }
     const Inertia oY = model.inertias[i].transformedBy(oMi);
     data.oYcrb[i] = oY;
-    data.oh[i] = oY * data.ov[i];
-    data.oF[i] = oY * data.oa[i] + forceCross(data.ov[i], data.oh[i]);
+    // h = Y v, F = Y a + v x* h - f_ext.
+    const Eigen::Vector3d v_l = data.ov[i].head<3>(), v_a = data.ov[i].tail<3>();
+    const Eigen::Vector3d a_l = data.oa[i].head<3>(), a_a = data.oa[i].tail<3>();
+    const Eigen::Vector3d h_l = oY.m * v_l - oY.h.cross(v_a), h_a = oY.I * v_a + oY.h.cross(v_l);
+    data.oh[i].head<3>() = h_l;
+    data.oh[i].tail<3>() = h_a;
+    data.oF[i].head<3>() = oY.m * a_l - oY.h.cross(a_a) + v_a.cross(h_l);
+    data.oF[i].tail<3>() = oY.I * a_a + oY.h.cross(a_l) + v_a.cross(h_a) + v_l.cross(h_l);
     if (fext) data.oF[i] -= oMi.actForce((*fext)[i]);
     data.oBcrb[i] = inertiaRate(data.ov[i], oY);
   }
@@ -104,20 +131,56 @@ void rneaDerivatives(const Model& model, Data& data, const Eigen::Ref<const Eige
   for (int i = n - 1; i > 0; --i) {
     const Joint& j = model.joints[i];
     const Inertia& Y = data.oYcrb[i];
-    const Matrix6d& B = data.oBcrb[i];
+    const Inertia& B = data.oBcrb[i];
     const Vector6d& h = data.oh[i];
     const Vector6d& F = data.oF[i];
+    // In 3-vector halves ([linear; angular]) with the products written out: built from 6-vector
+    // temporaries, every sum stored its halves to the stack and reloaded them whole, stalling on
+    // store forwarding.
+    const Eigen::Vector3d h_l = h.head<3>(), h_a = h.tail<3>(), F_l = F.head<3>(),
+                          F_a = F.tail<3>();
+    // Y x = [m x_l - hY x x_a; I x_a + hY x x_l]; Ẏ x the same with m = 0.
+    auto mulY = [&Y](const Eigen::Vector3d& l, const Eigen::Vector3d& a, Eigen::Vector3d& out_l,
+                     Eigen::Vector3d& out_a) {
+      out_l = Y.m * l - Y.h.cross(a);
+      out_a.noalias() = Y.I * a;
+      out_a += Y.h.cross(l);
+    };
+    auto mulB = [&B](const Eigen::Vector3d& l, const Eigen::Vector3d& a, Eigen::Vector3d& out_l,
+                     Eigen::Vector3d& out_a) {
+      out_l = -B.h.cross(a);
+      out_a.noalias() = B.I * a;
+      out_a += B.h.cross(l);
+    };
     for (int k = j.idx_v; k < j.idx_v + j.nv; ++k) {
-      const Vector6d Sk = data.J.col(k);
-      const Vector6d w = data.dW.col(k), c = data.dC.col(k), e = data.dE.col(k);
-      data.tau[k] = Sk.dot(F);
-      data.dA.col(k) = Y * Sk;
-      data.dB.col(k).noalias() = B.transpose() * Sk;
-      data.dB.col(k) -= forceCross(Sk, h);
-      data.dG.col(k) = forceCross(Sk, F) + Y * c + forceCross(w, h);
-      data.dG.col(k).noalias() += B * w;
-      data.dH.col(k) = Y * e + forceCross(Sk, h);
-      data.dH.col(k).noalias() += B * Sk;
+      const Eigen::Vector3d S_l = data.J.col(k).head<3>(), S_a = data.J.col(k).tail<3>();
+      const Eigen::Vector3d w_l = data.dW.col(k).head<3>(), w_a = data.dW.col(k).tail<3>();
+      const Eigen::Vector3d c_l = data.dC.col(k).head<3>(), c_a = data.dC.col(k).tail<3>();
+      const Eigen::Vector3d e_l = data.dE.col(k).head<3>(), e_a = data.dE.col(k).tail<3>();
+      data.tau[k] = S_l.dot(F_l) + S_a.dot(F_a);
+      // Ẏ is symmetric: Ẏ^T S = Ẏ S serves B and H. S x* h = [S_a x h_l; S_a x h_a + S_l x h_l].
+      Eigen::Vector3d BS_l, BS_a, A_l, A_a, Yc_l, Yc_a, Bw_l, Bw_a, Ye_l, Ye_a;
+      mulB(S_l, S_a, BS_l, BS_a);
+      mulY(S_l, S_a, A_l, A_a);
+      mulY(c_l, c_a, Yc_l, Yc_a);
+      mulB(w_l, w_a, Bw_l, Bw_a);
+      mulY(e_l, e_a, Ye_l, Ye_a);
+      const Eigen::Vector3d Sh_l = S_a.cross(h_l), Sh_a = S_a.cross(h_a) + S_l.cross(h_l);
+      auto dA = data.dA.col(k);
+      auto dB = data.dB.col(k);
+      auto dG = data.dG.col(k);
+      auto dH = data.dH.col(k);
+      dA.head<3>() = A_l;
+      dA.tail<3>() = A_a;
+      dB.head<3>() = BS_l - Sh_l;
+      dB.tail<3>() = BS_a - Sh_a;
+      // G = S x* F + Y c + w x* h + Ẏ w
+      dG.head<3>() = S_a.cross(F_l) + Yc_l + w_a.cross(h_l) + Bw_l;
+      dG.tail<3>() =
+          S_a.cross(F_a) + S_l.cross(F_l) + Yc_a + w_a.cross(h_a) + w_l.cross(h_l) + Bw_a;
+      // H = Y e + S x* h + Ẏ S
+      dH.head<3>() = Ye_l + Sh_l + BS_l;
+      dH.tail<3>() = Ye_a + Sh_a + BS_a;
     }
     const int first = j.idx_v, end = first + model.nvSubtree[first];
     for (int col = first; col < first + j.nv; ++col) {
@@ -151,7 +214,8 @@ void computeRNEADerivatives(const Model& model, Data& data,
                             const Eigen::Ref<const Eigen::VectorXd>& q,
                             const Eigen::Ref<const Eigen::VectorXd>& v,
                             const Eigen::Ref<const Eigen::VectorXd>& a) {
-  rneaDerivatives(model, data, q, v, a, nullptr, true);
+  model.checkConfiguration(q, "computeRNEADerivatives");
+  rneaDerivatives<false>(model, data, q.data(), v, a, nullptr, true);
 }
 
 void computeRNEADerivatives(const Model& model, Data& data,
@@ -159,7 +223,15 @@ void computeRNEADerivatives(const Model& model, Data& data,
                             const Eigen::Ref<const Eigen::VectorXd>& v,
                             const Eigen::Ref<const Eigen::VectorXd>& a,
                             const std::vector<Vector6d>& fext, bool with_gravity) {
-  rneaDerivatives(model, data, q, v, a, &fext, with_gravity);
+  model.checkConfiguration(q, "computeRNEADerivatives");
+  rneaDerivatives<false>(model, data, q.data(), v, a, &fext, with_gravity);
+}
+
+void computeRNEADerivativesFromKinematics(const Model& model, Data& data,
+                                          const Eigen::Ref<const Eigen::VectorXd>& v,
+                                          const Eigen::Ref<const Eigen::VectorXd>& a,
+                                          const std::vector<Vector6d>& fext, bool with_gravity) {
+  rneaDerivatives<true>(model, data, nullptr, v, a, &fext, with_gravity);
 }
 
 }  // namespace stride

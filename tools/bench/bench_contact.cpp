@@ -14,8 +14,10 @@ namespace stride::bench {
 namespace {
 
 struct ContactRobot {
+  std::string name;  // <algorithm>/<name>
   const BenchRobot* robot;
   ContactSet contacts;
+  double dt;  // knot time step
 };
 
 std::vector<ContactRobot>& contactRobots() {
@@ -27,63 +29,92 @@ std::vector<ContactRobot>& contactRobots() {
         for (const char* f : {"FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"}) c.add(b.model, f, 3);
       } else if (b.name == "talos_reduced") {
         for (const char* f : {"left_sole_link", "right_sole_link"}) c.add(b.model, f, 6);
+        // The DDP benchmark's humanoid problem: ankle contacts, world-aligned forces, velocity
+        // Baumgarte term, dt = 5 ms.
+        ContactSet c2;
+        for (const char* f : {"leg_right_6_joint", "leg_left_6_joint"})
+          c2.add(b.model, f, 6, ReferenceFrame::LocalWorldAligned, 0.0, 50.0);
+        r.push_back({"talos_2c", &b, std::move(c2), 0.005});
       } else {
         continue;
       }
-      r.push_back({&b, std::move(c)});
+      r.push_back({b.name, &b, std::move(c), 0.01});
+    }
+    // The DDP benchmark's quadruped problem: solo8 with two point contacts (FR and HL knees),
+    // world-aligned forces, velocity Baumgarte term, dt = 5 ms.
+    if (const BenchRobot* solo8 = solo8Robot()) {
+      ContactSet c;
+      for (const char* f : {"FR_KFE", "HL_KFE"})
+        c.add(solo8->model, f, 3, ReferenceFrame::LocalWorldAligned, 0.0, 50.0);
+      r.push_back({"solo8_2c", solo8, std::move(c), 0.005});
     }
     return r;
   }();
   return out;
 }
 
-using Kernel = std::function<void(const BenchRobot&, const ContactSet&, Data&, KnotData&, int)>;
+using Kernel = std::function<void(const ContactRobot&, Data&, KnotData&, int)>;
 
-void registerKernel(const std::string& algorithm, const Kernel& kernel) {
+// Contact-free kernels run once per robot, not once per contact set.
+void registerKernel(const std::string& algorithm, const Kernel& kernel, bool uses_contacts = true) {
   for (const ContactRobot& cr : contactRobots()) {
-    benchmark::RegisterBenchmark((algorithm + "/" + cr.robot->name).c_str(),
-                                 [&cr, kernel](benchmark::State& state) {
-                                   Data data(cr.robot->model);
-                                   KnotData kd(cr.robot->model, cr.contacts);
-                                   int k = 0;
-                                   for (auto _ : state) {
-                                     kernel(*cr.robot, cr.contacts, data, kd, k);
-                                     benchmark::ClobberMemory();
-                                     k = (k + 1) % kBatch;
-                                   }
-                                 })
-        ->Unit(benchmark::kMicrosecond);
+    if (!uses_contacts && cr.name != cr.robot->name) continue;
+    benchmark::RegisterBenchmark((algorithm + "/" + cr.name).c_str(), [&cr, kernel](
+                                                                          benchmark::State& state) {
+      Data data(cr.robot->model);
+      KnotData kd(cr.robot->model, cr.contacts);
+      int k = 0;
+      for (auto _ : state) {
+        kernel(cr, data, kd, k);
+        benchmark::ClobberMemory();
+        k = (k + 1) % kBatch;
+      }
+    })->Unit(benchmark::kMicrosecond);
   }
 }
 
 }  // namespace
 
 void registerContactBenchmarks() {
-  registerKernel("rnea_derivatives",
-                 [](const BenchRobot& r, const ContactSet&, Data& d, KnotData&, int k) {
-                   computeRNEADerivatives(r.model, d, r.q[k], r.v[k], r.a[k]);
-                 });
-  registerKernel("aba_derivatives",
-                 [](const BenchRobot& r, const ContactSet&, Data& d, KnotData&, int k) {
-                   computeABADerivatives(r.model, d, r.q[k], r.v[k], r.tau[k]);
-                 });
-  registerKernel("contact_dynamics",
-                 [](const BenchRobot& r, const ContactSet& c, Data& d, KnotData& kd, int k) {
-                   contactDynamics(r.model, d, c, kd.contact, r.q[k], r.v[k], r.tau[k]);
-                 });
-  registerKernel("contact_dynamics_derivatives",
-                 [](const BenchRobot& r, const ContactSet& c, Data& d, KnotData& kd, int k) {
-                   contactDynamicsDerivatives(r.model, d, c, kd.contact, r.q[k], r.v[k], r.tau[k]);
-                 });
-  registerKernel("impulse_dynamics_derivatives",
-                 [](const BenchRobot& r, const ContactSet& c, Data& d, KnotData& kd, int k) {
-                   impulseDynamicsDerivatives(r.model, d, c, kd.contact, r.q[k], r.v[k]);
-                 });
-  // The full knot: KKT dynamics, Euler step, Fx, Fu, Gx, Gu (dt = 10 ms).
   registerKernel(
-      "knot", [](const BenchRobot& r, const ContactSet& c, Data& d, KnotData& kd, int k) {
-        knotDynamicsDerivatives(r.model, d, c, kd, r.q[k], r.v[k], r.tau[k].tail(kd.nu), 0.01);
+      "rnea_derivatives",
+      [](const ContactRobot& c, Data& d, KnotData&, int k) {
+        const BenchRobot& r = *c.robot;
+        computeRNEADerivatives(r.model, d, r.q[k], r.v[k], r.a[k]);
+      },
+      false);
+  registerKernel(
+      "aba_derivatives",
+      [](const ContactRobot& c, Data& d, KnotData&, int k) {
+        const BenchRobot& r = *c.robot;
+        computeABADerivatives(r.model, d, r.q[k], r.v[k], r.tau[k]);
+      },
+      false);
+  registerKernel("contact_dynamics", [](const ContactRobot& c, Data& d, KnotData& kd, int k) {
+    const BenchRobot& r = *c.robot;
+    contactDynamics(r.model, d, c.contacts, kd.contact, r.q[k], r.v[k], r.tau[k]);
+  });
+  registerKernel(
+      "contact_dynamics_derivatives", [](const ContactRobot& c, Data& d, KnotData& kd, int k) {
+        const BenchRobot& r = *c.robot;
+        contactDynamicsDerivatives(r.model, d, c.contacts, kd.contact, r.q[k], r.v[k], r.tau[k]);
       });
+  registerKernel("impulse_dynamics_derivatives",
+                 [](const ContactRobot& c, Data& d, KnotData& kd, int k) {
+                   const BenchRobot& r = *c.robot;
+                   impulseDynamicsDerivatives(r.model, d, c.contacts, kd.contact, r.q[k], r.v[k]);
+                 });
+  // The full knot: KKT dynamics, Euler step, Fx, Fu, Gx, Gu (dt = 10 ms, 5 ms for the DDP
+  // benchmark's problems).
+  registerKernel("knot", [](const ContactRobot& c, Data& d, KnotData& kd, int k) {
+    const BenchRobot& r = *c.robot;
+    knotDynamicsDerivatives(r.model, d, c.contacts, kd, r.q[k], r.v[k], r.tau[k].tail(kd.nu), c.dt);
+  });
+  // The knot without derivatives (the DDP forward pass).
+  registerKernel("knot_calc", [](const ContactRobot& c, Data& d, KnotData& kd, int k) {
+    const BenchRobot& r = *c.robot;
+    knotDynamics(r.model, d, c.contacts, kd, r.q[k], r.v[k], r.tau[k].tail(kd.nu), c.dt);
+  });
 }
 
 }  // namespace stride::bench

@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <random>
 
 #include "config/robot_config.hpp"
@@ -23,13 +24,28 @@ BenchRobot withSamples(std::string name, Model model) {
   }
   return r;
 }
+std::filesystem::path sharedDir() {
+  const char* env = std::getenv("STRIDE_SHARED_DIR");
+  return env ? env : STRIDE_SHARED_DIR;
+}
 }  // namespace
+
+const BenchRobot* solo8Robot() {
+  static const std::optional<BenchRobot> robot = []() -> std::optional<BenchRobot> {
+    const auto path = sharedDir() / "robots/solo12/solo.urdf";
+    if (!std::filesystem::exists(path)) {
+      std::cerr << "note: " << path << " not found, solo8 is not benchmarked\n";
+      return std::nullopt;
+    }
+    return withSamples("solo8", buildModelFromUrdf(path.string(), RootJoint::FreeFlyer));
+  }();
+  return robot ? &*robot : nullptr;
+}
 
 const std::vector<BenchRobot>& benchRobots() {
   static const std::vector<BenchRobot> robots = [] {
     std::vector<BenchRobot> out;
-    const char* env = std::getenv("STRIDE_SHARED_DIR");
-    const std::filesystem::path shared = env ? env : STRIDE_SHARED_DIR;
+    const std::filesystem::path shared = sharedDir();
     const struct {
       const char* name;
       const char* urdf;

@@ -20,5 +20,7 @@ constexpr int kBatch = 64;
 // solo12, talos_reduced, ur5 from the shared robots folder (STRIDE_SHARED_DIR at run time, else
 // the path configured at build time; skipped with a note when absent), and the in-house robots.
 const std::vector<BenchRobot>& benchRobots();
+// solo8 (solo.urdf), for the contact benchmarks only; null when the shared folder lacks it.
+const BenchRobot* solo8Robot();
 
 }  // namespace stride::bench
