@@ -167,8 +167,6 @@ inline Case make(Problem p, const std::string& shared,
   ContactPlan plan;
   switch (p) {
     case Problem::SoloStand:
-      o.dt = 0.02;
-      o.knots = 50;
       plan = standing(*c.robot, 1.0);
       break;
     case Problem::SoloTrot:
