@@ -85,7 +85,8 @@ ContactSchedule::ContactSchedule(const ContactPlan& plan, const ContactSet& cont
   period_ = start_.back();
   closed_.assign(P_ * nc_, 0);
   for (int i = 0; i < P_; ++i)
-    for (const std::string& name : plan.phases[i].contacts) closed_[i * nc_ + contacts.find(name)] = 1;
+    for (const std::string& name : plan.phases[i].contacts)
+      closed_[i * nc_ + contacts.find(name)] = 1;
   // A touch-down at boundary i: closed in phase i, open in the phase before (across the wrap for
   // a cyclic plan; boundary 0 of a plan that does not repeat is its start, not a touch-down).
   td_prefix_.assign(P_ * nc_, 0);

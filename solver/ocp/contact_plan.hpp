@@ -74,9 +74,9 @@ class ContactSchedule {
   int nc_, P_;
   bool cyclic_;
   double period_;
-  std::vector<double> start_;     // P + 1 entries: phase starts in the first pass, then the period
-  std::vector<char> closed_;      // P × nc
-  std::vector<int> td_prefix_;    // P × nc: touch-downs at boundaries 0..i within a pass
+  std::vector<double> start_;   // P + 1 entries: phase starts in the first pass, then the period
+  std::vector<char> closed_;    // P × nc
+  std::vector<int> td_prefix_;  // P × nc: touch-downs at boundaries 0..i within a pass
 };
 
 }  // namespace stride

@@ -23,8 +23,8 @@ Eigen::VectorXd stateWeights(const Model& model, const LocomotionWeights& w) {
   if (w.state.size() > 0) {
     if (w.state.size() != 2 * nv)
       throw std::invalid_argument("LocomotionProblem: weights.state has size " +
-                                  std::to_string(w.state.size()) + ", expected 2 nv = " +
-                                  std::to_string(2 * nv));
+                                  std::to_string(w.state.size()) +
+                                  ", expected 2 nv = " + std::to_string(2 * nv));
     return w.state;
   }
   Eigen::VectorXd s(2 * nv);
@@ -109,10 +109,10 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
                                     model, nu, contacts_, name, options.mu,
                                     Eigen::Matrix3d::Identity(), options.min_normal_force),
                                 FrictionConeResidual::activation(), w.friction);
-      swing_term_[c] = costs.add(
-          "swing_" + name,
-          std::make_unique<FrameTranslationResidual>(model, nu, name, initial_feet_[c]),
-          Activation::quadratic(3), w.swing);
+      swing_term_[c] =
+          costs.add("swing_" + name,
+                    std::make_unique<FrameTranslationResidual>(model, nu, name, initial_feet_[c]),
+                    Activation::quadratic(3), w.swing);
     }
     running.push_back(std::move(knot));
   }

@@ -37,8 +37,8 @@ struct LocomotionWeights {
   double joint_velocity = 1.0;
   Eigen::VectorXd state;
   double control = 1e-2;
-  double swing = 1e4;       // per axis, on the foot position error [m]
-  double friction = 1e2;    // on the cone rows' violation [N]
+  double swing = 1e4;            // per axis, on the foot position error [m]
+  double friction = 1e2;         // on the cone rows' violation [N]
   double terminal_state = 10.0;  // the terminal state weights are the running ones times this
 };
 
@@ -105,7 +105,7 @@ class LocomotionProblem {
   // Term indices, the same in every running knot (all are built alike).
   int state_term_ = -1, control_term_ = -1;
   std::vector<int> cone_term_, swing_term_;
-  Eigen::VectorXd x_ref_;        // scratch for the state references
+  Eigen::VectorXd x_ref_;  // scratch for the state references
   double t0_ = 0.0;
 };
 

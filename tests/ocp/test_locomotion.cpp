@@ -197,11 +197,12 @@ TEST(LocomotionProblem, UpdateConfiguresKnots) {
 
 // What a solution looks like, measured.
 struct Measures {
-  double min_cone_margin = HUGE_VAL;  // contact knots: min over closed contacts of μ f_z - |f_t| [N]
-  double min_normal = HUGE_VAL;       // [N]
-  double min_impulse_margin = HUGE_VAL;  // impulse knots: the same on the impulses [N s]
-  double max_lift = 0.0;     // lowest over swings of the highest foot point [m]
-  double max_landing = 0.0;  // largest distance between a landed foot and its foothold [m]
+  // Contact knots: the least μ f_z - |f_t| over closed contacts [N], and the least f_z [N].
+  double min_cone_margin = HUGE_VAL;
+  double min_normal = HUGE_VAL;
+  double min_impulse_margin = HUGE_VAL;  // impulse knots: μ Λ_z - |Λ_t| [N s]
+  double lowest_apex = 0.0;              // the lowest, over swings, of the foot's highest point [m]
+  double max_landing = 0.0;  // the largest distance between a landed foot and its foothold [m]
   int swings = 0;
 };
 
@@ -215,7 +216,7 @@ Measures measure(LocomotionProblem& loco, const Solver& solver) {
   Data data(model);
   const int T = problem.horizon(), nc = loco.contacts().size();
   std::vector<double> highest(nc, 0.0);
-  double lowest_apex = HUGE_VAL;
+  double apex = HUGE_VAL;
   for (int k = 0; k <= T; ++k) {
     const double t = t0 + k * dt;
     framesForwardKinematics(model, data, solver.xs()[k].head(model.nq));
@@ -225,11 +226,7 @@ Measures measure(LocomotionProblem& loco, const Solver& solver) {
       if (!closed) highest[c] = std::max(highest[c], p.z());
       if (closed && k > 0 && !s.closedAt(c, t - dt)) {  // landed at this knot
         m.max_landing = std::max(m.max_landing, (p - loco.footReference(c, t)).norm());
-        if (std::getenv("STRIDE_DEBUG"))
-          std::printf("land %d t %.3f p %.4f %.4f %.4f ref %.4f %.4f %.4f\n", c, t, p.x(), p.y(),
-                      p.z(), loco.footReference(c, t).x(), loco.footReference(c, t).y(),
-                      loco.footReference(c, t).z());
-        lowest_apex = std::min(lowest_apex, highest[c]);
+        apex = std::min(apex, highest[c]);
         highest[c] = 0.0;
         ++m.swings;
       }
@@ -237,8 +234,8 @@ Measures measure(LocomotionProblem& loco, const Solver& solver) {
     if (k == T) break;
     const auto& knot = static_cast<const KnotModel&>(problem.knot(k));
     const auto& d = static_cast<const KnotActionData&>(problem.data(k));
-    const Eigen::VectorXd& f = knot.mode() == KnotMode::Impulse ? d.knot.contact.impulses
-                                                                  : d.knot.contact.lambda;
+    const Eigen::VectorXd& f =
+        knot.mode() == KnotMode::Impulse ? d.knot.contact.impulses : d.knot.contact.lambda;
     int offset = 0;
     for (int c = 0; c < nc; ++c) {
       if (!knot.contacts().isActive(c)) continue;
@@ -253,7 +250,7 @@ Measures measure(LocomotionProblem& loco, const Solver& solver) {
       offset += knot.contacts()[c].dim;
     }
   }
-  m.max_lift = m.swings > 0 ? lowest_apex : 0.0;
+  m.lowest_apex = m.swings > 0 ? apex : 0.0;
   return m;
 }
 
@@ -286,8 +283,9 @@ void push(LocomotionProblem& loco, const Eigen::Vector3d& v_base) {
   const Eigen::MatrixXd Jc = cd.Jc.topRows(all.nc());
   Eigen::VectorXd v = Eigen::VectorXd::Zero(model.nv);
   v.head<3>() = v_base;  // base at the identity orientation: local = world axes
-  v.tail(model.nv - 6) =
-      -Jc.rightCols(model.nv - 6).completeOrthogonalDecomposition().solve(Jc.leftCols(6) * v.head(6));
+  v.tail(model.nv - 6) = -Jc.rightCols(model.nv - 6)
+                              .completeOrthogonalDecomposition()
+                              .solve(Jc.leftCols(6) * v.head(6));
   ASSERT_LT((Jc * v).norm(), 1e-9);
   Eigen::VectorXd x0 = loco.nominal();
   x0.tail(model.nv) = v;
@@ -325,12 +323,13 @@ TEST_P(LocomotionSolve, FddpConvergesToAFeasibleGait) {
   const Measures m = measure(loco, solver);
   const Model& model = c.robot->model;
   const double weight_impulse = model.totalMass() * 9.81 * loco.options().dt;
-  std::printf("[ %s ] %d iterations, cost %.9g (standing start %.6g), gap %.2e, min cone margin "
-              "%.4g N, min normal %.4g N, min impulse cone margin %.3g N s (weight x dt %.3g N s), "
-              "swings %d, lowest apex %.4f m, worst landing %.2e m\n",
-              loco_cases::name(sc.problem), solver.iterations(), solver.cost(), cost0,
-              solver.gap(), m.min_cone_margin, m.min_normal, m.min_impulse_margin, weight_impulse,
-              m.swings, m.max_lift, m.max_landing);
+  std::printf(
+      "[ %s ] %d iterations, cost %.9g (standing start %.6g), gap %.2e, min cone margin "
+      "%.4g N, min normal %.4g N, min impulse cone margin %.3g N s (weight x dt %.3g N s), "
+      "swings %d, lowest apex %.4f m, worst landing %.2e m\n",
+      loco_cases::name(sc.problem), solver.iterations(), solver.cost(), cost0, solver.gap(),
+      m.min_cone_margin, m.min_normal, m.min_impulse_margin, weight_impulse, m.swings,
+      m.lowest_apex, m.max_landing);
   EXPECT_GE(m.min_cone_margin, 0.0);
   EXPECT_GT(m.min_normal, 0.0);
   // A soft landing has near-zero impulses, so the cone on them is met up to rounding-sized
@@ -338,7 +337,7 @@ TEST_P(LocomotionSolve, FddpConvergesToAFeasibleGait) {
   if (m.min_impulse_margin < HUGE_VAL) EXPECT_GE(m.min_impulse_margin, -1e-2 * weight_impulse);
   if (sc.problem == Problem::SoloTrot || sc.problem == Problem::TalosStep) {
     EXPECT_GE(m.swings, sc.problem == Problem::SoloTrot ? 4 : 1);
-    EXPECT_GE(m.max_lift, 0.5 * loco.options().swing_height);
+    EXPECT_GE(m.lowest_apex, 0.5 * loco.options().swing_height);
     EXPECT_LT(m.max_landing, 5e-3);
   }
 }
@@ -388,16 +387,17 @@ TEST(LocomotionBox, TrotWithinTightTorqueLimits) {
     at_bound += (u.cwiseAbs().array() >= limit - 1e-9).count();
   }
   const Measures m = measure(*c.loco, solver);
-  std::printf("[ box ] unconstrained peak %.4f N m, limit %.4f, box solution max %.4f, %d controls "
-              "at the bound, %d iterations, cost %.9g (unconstrained %.9g), min cone margin %.4g N, "
-              "lowest apex %.4f m\n",
-              peak, limit, max_u, at_bound, solver.iterations(), solver.cost(),
-              unconstrained.cost(), m.min_cone_margin, m.max_lift);
+  std::printf(
+      "[ box ] unconstrained peak %.4f N m, limit %.4f, box solution max %.4f, %d controls "
+      "at the bound, %d iterations, cost %.9g (unconstrained %.9g), min cone margin %.4g N, "
+      "lowest apex %.4f m\n",
+      peak, limit, max_u, at_bound, solver.iterations(), solver.cost(), unconstrained.cost(),
+      m.min_cone_margin, m.lowest_apex);
   EXPECT_LE(max_u, limit + 1e-12);
   EXPECT_GT(at_bound, 0);
   EXPECT_GE(solver.cost(), unconstrained.cost());
   EXPECT_GE(m.min_cone_margin, 0.0);
-  EXPECT_GE(m.max_lift, 0.5 * c.loco->options().swing_height);
+  EXPECT_GE(m.lowest_apex, 0.5 * c.loco->options().swing_height);
 
   // The model's own effort limits (solo12's URDF: 1000 N m, never active) through the options.
   Case lim = loco_cases::make(Problem::SoloTrot, kShared,
@@ -413,8 +413,8 @@ TEST(LocomotionSolvers, DdpAndFddpAgreeOnStanding) {
   double costs[2];
   int iterations[2];
   for (int i = 0; i < 2; ++i) {
-    Case c = loco_cases::make(Problem::SoloStand, kShared,
-                              [](LocomotionOptions& o) { o.knots = 50; });
+    Case c =
+        loco_cases::make(Problem::SoloStand, kShared, [](LocomotionOptions& o) { o.knots = 50; });
     push(*c.loco, Eigen::Vector3d(0.05, 0.0, 0.0));
     std::vector<Eigen::VectorXd> xs, us;
     c.loco->standingWarmStart(xs, us);
