@@ -318,7 +318,9 @@ TEST_P(LocomotionSolve, FddpConvergesToAFeasibleGait) {
   const SolveStatus status = solveFromStanding(loco, solver, sc.max_iterations);
   EXPECT_EQ(status, SolveStatus::Converged) << toString(status);
   EXPECT_LT(solver.gap(), 1e-9);
-  if (!pushed) EXPECT_LE(solver.cost(), cost0);  // (a pushed robot starts elsewhere)
+  if (!pushed) {  // (a pushed robot starts elsewhere)
+    EXPECT_LE(solver.cost(), cost0);
+  }
   expectMonotonicOnceFeasible(solver);
   const Measures m = measure(loco, solver);
   const Model& model = c.robot->model;
@@ -334,7 +336,9 @@ TEST_P(LocomotionSolve, FddpConvergesToAFeasibleGait) {
   EXPECT_GT(m.min_normal, 0.0);
   // A soft landing has near-zero impulses, so the cone on them is met up to rounding-sized
   // violations of the penalty: at most 1 % of the impulse of the robot's weight over one knot.
-  if (m.min_impulse_margin < HUGE_VAL) EXPECT_GE(m.min_impulse_margin, -1e-2 * weight_impulse);
+  if (m.min_impulse_margin < HUGE_VAL) {
+    EXPECT_GE(m.min_impulse_margin, -1e-2 * weight_impulse);
+  }
   if (sc.problem == Problem::SoloTrot || sc.problem == Problem::TalosStep) {
     EXPECT_GE(m.swings, sc.problem == Problem::SoloTrot ? 4 : 1);
     EXPECT_GE(m.lowest_apex, 0.5 * loco.options().swing_height);
