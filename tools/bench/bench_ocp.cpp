@@ -21,6 +21,7 @@
 #include "solver/ocp/knot.hpp"
 #include "solver/ocp/residual_frame.hpp"
 #include "solver/ocp/residual_state.hpp"
+#include "tests/ocp/locomotion_cases.hpp"
 
 namespace stride::bench {
 namespace {
@@ -159,6 +160,28 @@ void runPart(benchmark::State& state, const KnotsSpec& spec, Part part) {
   }
 }
 
+// fddp_iteration/<problem>/<threads>: solver.solve(1) from the problem's standing warm start,
+// restored (trajectory and regularization) outside the timing before every iteration, so each
+// timed iteration does the same work: calcDiff, backward pass, line search.
+void fddpIteration(benchmark::State& state, loco_cases::Problem which) {
+  const char* env = std::getenv("STRIDE_SHARED_DIR");
+  const std::string shared = env ? env : STRIDE_SHARED_DIR;
+  loco_cases::Case c = loco_cases::make(which, shared);
+  c.loco->problem().setThreads(static_cast<int>(state.range(0)));
+  Solver solver(c.loco->problem(), SolverKind::Fddp);
+  std::vector<Eigen::VectorXd> xs, us;
+  c.loco->standingWarmStart(xs, us);
+  const double reg = solver.regularization();
+  for (auto _ : state) {
+    state.PauseTiming();
+    solver.setWarmStart(xs, us);
+    solver.setRegularization(reg);
+    state.ResumeTiming();
+    solver.solve(1);
+  }
+  state.counters["step"] = solver.stats()[0].step;
+}
+
 const bool registered = [] {
   const std::pair<const char*, Part> parts[] = {{"calc", Part::Calc},
                                                 {"calcDiff", Part::CalcDiff},
@@ -173,6 +196,13 @@ const bool registered = [] {
           ->Arg(2)
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime();
+  for (loco_cases::Problem p : {loco_cases::Problem::SoloTrot, loco_cases::Problem::TalosStep})
+    benchmark::RegisterBenchmark((std::string("fddp_iteration/") + loco_cases::name(p)).c_str(),
+                                 [p](benchmark::State& s) { fddpIteration(s, p); })
+        ->Arg(1)
+        ->Arg(2)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
   return true;
 }();
 

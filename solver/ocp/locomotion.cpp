@@ -1,0 +1,224 @@
+#include "solver/ocp/locomotion.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "solver/contact/contact_dynamics.hpp"
+#include "solver/multibody/frames.hpp"
+#include "solver/multibody/rnea.hpp"
+#include "solver/ocp/residual_contact.hpp"
+#include "solver/ocp/residual_frame.hpp"
+#include "solver/ocp/residual_state.hpp"
+
+namespace stride {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+Eigen::VectorXd stateWeights(const Model& model, const LocomotionWeights& w) {
+  const int nv = model.nv;
+  if (w.state.size() > 0) {
+    if (w.state.size() != 2 * nv)
+      throw std::invalid_argument("LocomotionProblem: weights.state has size " +
+                                  std::to_string(w.state.size()) +
+                                  ", expected 2 nv = " + std::to_string(2 * nv));
+    return w.state;
+  }
+  Eigen::VectorXd s(2 * nv);
+  s.head(nv).setConstant(w.joint_position);
+  s.tail(nv).setConstant(w.joint_velocity);
+  if (model.hasFreeFlyer()) {
+    s.head<3>().setConstant(w.base_position);
+    s.segment<3>(3).setConstant(w.base_orientation);
+    s.segment<3>(nv).setConstant(w.base_velocity);
+    s.segment<3>(nv + 3).setConstant(w.base_velocity);
+  }
+  return s;
+}
+
+void checkOptions(const Model& model, const Eigen::VectorXd& x_nominal,
+                  const LocomotionOptions& o) {
+  if (x_nominal.size() != model.nq + model.nv || !x_nominal.allFinite())
+    throw std::invalid_argument("LocomotionProblem: x_nominal must be finite of size nq + nv = " +
+                                std::to_string(model.nq + model.nv));
+  if (!(o.dt > 0.0) || !std::isfinite(o.dt))
+    throw std::invalid_argument("LocomotionProblem: dt must be positive and finite");
+  if (o.knots < 1) throw std::invalid_argument("LocomotionProblem: knots must be at least 1");
+  if (!(o.mu > 0.0)) throw std::invalid_argument("LocomotionProblem: mu must be positive");
+  if (!o.step.allFinite() || !std::isfinite(o.swing_height))
+    throw std::invalid_argument("LocomotionProblem: step and swing height must be finite");
+}
+}  // namespace
+
+LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& contacts,
+                                     const ContactPlan& plan, const Eigen::VectorXd& x_nominal,
+                                     const LocomotionOptions& options)
+    : model_(model),
+      contacts_(contacts),
+      schedule_(plan, contacts),
+      x_nominal_(x_nominal),
+      options_(options) {
+  checkOptions(model, x_nominal, options);
+  const int nq = model.nq, nv = model.nv, nu = actuatedDimension(model);
+  const int nc = contacts_.size();
+  const LocomotionWeights& w = options.weights;
+  const Eigen::VectorXd w_state = stateWeights(model, w);
+  const auto q = x_nominal.head(nq);
+
+  Data data(model);
+  framesForwardKinematics(model, data, q);
+  for (int c = 0; c < nc; ++c) initial_feet_.push_back(data.oMf[contacts_[c].frame].p);
+
+  // Holding torques per phase: g(q) = Sᵀ u + Jcᵀ λ at rest; the base rows fix λ (minimum norm
+  // among the forces that carry the weight), the joint rows then give u.
+  const Eigen::VectorXd g = computeGeneralizedGravity(model, data, q);
+  ContactSet set = contacts_;
+  ContactData cd(model, set);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(nv);
+  const int na = nv - nu;  // unactuated (base) dofs
+  for (int i = 0; i < schedule_.phases(); ++i) {
+    for (int c = 0; c < nc; ++c) set.setActive(c, schedule_.closed(c, i));
+    Eigen::VectorXd u = g.tail(nu);
+    if (na > 0 && set.nc() > 0 &&
+        contactDynamics(model, data, set, cd, q, zero, zero) == ContactStatus::Ok) {
+      const Eigen::MatrixXd Jc = cd.Jc.topRows(set.nc());
+      const Eigen::VectorXd lambda =
+          Jc.leftCols(na).transpose().completeOrthogonalDecomposition().solve(g.head(na));
+      u -= Jc.rightCols(nu).transpose() * lambda;
+    }
+    u_hold_.push_back(u);
+  }
+
+  cone_term_.resize(nc);
+  swing_term_.resize(nc);
+  std::vector<std::unique_ptr<ActionModel>> running;
+  for (int k = 0; k < options.knots; ++k) {
+    auto knot = std::make_unique<KnotModel>(model, contacts_, options.dt);
+    CostModel& costs = knot->costs();
+    state_term_ = costs.add("state", std::make_unique<StateResidual>(model, nu, x_nominal),
+                            Activation::weightedQuadratic(w_state));
+    control_term_ = costs.add("control", std::make_unique<ControlResidual>(model, nu),
+                              Activation::quadratic(nu), w.control);
+    for (int c = 0; c < nc; ++c) {
+      const std::string& name = contacts_[c].name;
+      cone_term_[c] = costs.add("cone_" + name,
+                                std::make_unique<FrictionConeResidual>(
+                                    model, nu, contacts_, name, options.mu,
+                                    Eigen::Matrix3d::Identity(), options.min_normal_force),
+                                FrictionConeResidual::activation(), w.friction);
+      swing_term_[c] =
+          costs.add("swing_" + name,
+                    std::make_unique<FrameTranslationResidual>(model, nu, name, initial_feet_[c]),
+                    Activation::quadratic(3), w.swing);
+    }
+    running.push_back(std::move(knot));
+  }
+  auto terminal = std::make_unique<TerminalModel>(model);
+  terminal->costs().add("state", std::make_unique<StateResidual>(model, 0, x_nominal),
+                        Activation::weightedQuadratic(w.terminal_state * w_state));
+  problem_ = std::make_unique<ShootingProblem>(x_nominal, std::move(running), std::move(terminal));
+
+  const double inf = std::numeric_limits<double>::infinity();
+  u_lower_ = Eigen::VectorXd::Constant(nu, -inf);
+  u_upper_ = Eigen::VectorXd::Constant(nu, inf);
+  if (options.torque_limits) {
+    u_upper_ = model.effortLimit.tail(nu);
+    u_lower_ = -u_upper_;
+  }
+  x_ref_ = x_nominal_;
+  update(0.0);
+}
+
+Eigen::Vector3d LocomotionProblem::footReference(int contact, double t) const {
+  const long g = schedule_.phaseAt(t);
+  if (schedule_.closed(contact, g)) return foothold(contact, schedule_.touchdowns(contact, g));
+  const ContactSchedule::Swing s = schedule_.swing(contact, g);
+  Eigen::Vector3d p = foothold(contact, s.footholds);
+  if (!std::isfinite(s.touch_down)) return p;  // never lands again: hold the lift-off point
+  const double r = std::clamp((t - s.lift_off) / (s.touch_down - s.lift_off), 0.0, 1.0);
+  // Forward on a cosine ramp (no horizontal speed at lift-off and touch-down, so landing needs no
+  // tangential impulse), up and down on a sine arch.
+  p += 0.5 * (1.0 - std::cos(kPi * r)) * options_.step;
+  p.z() += options_.swing_height * std::sin(kPi * r);
+  return p;
+}
+
+void LocomotionProblem::setStateReference(Eigen::VectorXd& x_ref, double t) const {
+  x_ref = x_nominal_;
+  const int nc = contacts_.size();
+  if (!model_.hasFreeFlyer() || nc == 0) return;
+  // The base follows the feet: its reference moves by their mean planned progress (in steps,
+  // fractional during a swing), so it is continuous through lift-offs and touch-downs.
+  const long g = schedule_.phaseAt(t);
+  double steps = 0.0;
+  for (int c = 0; c < nc; ++c) {
+    if (schedule_.closed(c, g)) {
+      steps += static_cast<double>(schedule_.touchdowns(c, g));
+      continue;
+    }
+    const ContactSchedule::Swing s = schedule_.swing(c, g);
+    steps += static_cast<double>(s.footholds);
+    if (std::isfinite(s.touch_down))
+      steps += std::clamp((t - s.lift_off) / (s.touch_down - s.lift_off), 0.0, 1.0);
+  }
+  x_ref.head<3>() += (steps / nc) * options_.step;
+}
+
+void LocomotionProblem::update(double t0) {
+  t0_ = t0;
+  const int T = problem_->horizon(), nc = contacts_.size();
+  const double dt = options_.dt;
+  for (int k = 0; k < T; ++k) {
+    const double t = t0 + k * dt;
+    // Every running knot was built as a KnotModel (shift only reorders them).
+    auto& knot = static_cast<KnotModel&>(problem_->knot(k));
+    CostModel& costs = knot.costs();
+    const long g = schedule_.phaseAt(t), g_before = schedule_.phaseAt(t - dt);
+    bool touchdown = false;
+    for (int c = 0; c < nc; ++c) {
+      const bool closed = schedule_.closed(c, g);
+      const bool lands = closed && !schedule_.closed(c, g_before);
+      touchdown = touchdown || lands;
+      knot.contacts().setActive(c, closed);
+      costs[cone_term_[c]].active = closed;
+      CostTerm& swing = costs[swing_term_[c]];
+      swing.active = !closed || lands;
+      if (swing.active)
+        static_cast<FrameTranslationResidual&>(*swing.residual).setReference(footReference(c, t));
+    }
+    const bool impulse = touchdown && options_.impulses;
+    knot.setMode(impulse ? KnotMode::Impulse : KnotMode::Contact);
+    // An impulse knot's cones bound impulses Λ ≈ f dt [N s], weighted as the same mean force. No
+    // minimum there: a soft landing (no impact speed) has zero impulses, and rightly so.
+    const double f_min = impulse ? 0.0 : options_.min_normal_force;
+    const double w_cone = options_.weights.friction / (impulse ? dt * dt : 1.0);
+    for (int c = 0; c < nc; ++c) {
+      CostTerm& cone = costs[cone_term_[c]];
+      cone.weight = w_cone;
+      static_cast<FrictionConeResidual&>(*cone.residual).setMinimumNormalForce(f_min);
+    }
+    static_cast<ControlResidual&>(*costs[control_term_].residual)
+        .setReference(u_hold_[schedule_.localPhase(g)]);
+    setStateReference(x_ref_, t);
+    static_cast<StateResidual&>(*costs[state_term_].residual).setReference(x_ref_);
+  }
+  auto& terminal = static_cast<TerminalModel&>(problem_->terminal());
+  setStateReference(x_ref_, t0 + T * dt);
+  static_cast<StateResidual&>(*terminal.costs()[0].residual).setReference(x_ref_);
+}
+
+void LocomotionProblem::standingWarmStart(std::vector<Eigen::VectorXd>& xs,
+                                          std::vector<Eigen::VectorXd>& us) const {
+  const int T = problem_->horizon();
+  xs.assign(T + 1, x_nominal_);
+  us.resize(T);
+  for (int k = 0; k < T; ++k) {
+    const auto& knot = static_cast<const KnotModel&>(problem_->knot(k));
+    us[k] = static_cast<const ControlResidual&>(*knot.costs()[control_term_].residual).reference();
+  }
+}
+
+}  // namespace stride

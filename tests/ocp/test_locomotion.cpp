@@ -1,0 +1,458 @@
+// Contact plans and the locomotion problem: plan queries and validation, the knots update() sets
+// up, and FDDP / box-FDDP solves of solo12 standing and trotting and talos_reduced standing and
+// stepping from a standing warm start, checked for convergence, monotonic cost, closed gaps,
+// friction, swing-foot lift and landing, and torque bounds; DDP and FDDP agree; the solution does
+// not depend on the thread count.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "ocp/locomotion_cases.hpp"
+#include "solver/contact/contact_dynamics.hpp"
+#include "solver/ddp/solver.hpp"
+#include "solver/ocp/residual_frame.hpp"
+
+namespace stride {
+namespace {
+
+using loco_cases::Case;
+using loco_cases::Problem;
+
+const std::string kShared = STRIDE_SHARED_DIR;
+
+// ---------------------------------------------------------------------------- plans
+
+ContactSet fourFeet(const Model& model) {
+  ContactSet s;
+  for (const char* foot : {"FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"})
+    s.add(model, foot, 3, ReferenceFrame::LocalWorldAligned);
+  return s;
+}
+
+const Model& solo() {
+  static const Model m =
+      buildModelFromUrdf(kShared + "/robots/solo12/solo12.urdf", RootJoint::FreeFlyer);
+  return m;
+}
+
+TEST(ContactPlan, Queries) {
+  ContactPlan plan = loco_cases::soloTrot(0.1, 0.2);  // [0, 0.1) [0.1, 0.3) [0.3, 0.4) [0.4, 0.6)
+  EXPECT_DOUBLE_EQ(plan.duration(), 0.6);
+  EXPECT_EQ(plan.phaseAt(-1.0), 0);
+  EXPECT_EQ(plan.phaseAt(0.05), 0);
+  EXPECT_EQ(plan.phaseAt(0.1), 1);
+  EXPECT_EQ(plan.phaseAt(10 * 0.01), 1);  // 0.09999999999999999: a knot time, rounding absorbed
+  EXPECT_EQ(plan.phaseAt(0.35), 2);
+  EXPECT_EQ(plan.phaseAt(0.59), 3);
+  EXPECT_EQ(plan.phaseAt(0.65), 0);  // wraps
+  EXPECT_EQ(plan.phaseAt(6.0 + 0.15), 1);
+  EXPECT_DOUBLE_EQ(plan.phaseStart(2), 0.3);
+  EXPECT_THROW(plan.phaseStart(4), std::invalid_argument);
+  EXPECT_TRUE(plan.isClosed("FL_FOOT", 0.05));
+  EXPECT_FALSE(plan.isClosed("FL_FOOT", 0.2));
+  EXPECT_TRUE(plan.isClosed("FR_FOOT", 0.2));
+  EXPECT_FALSE(plan.isClosed("FR_FOOT", 0.5));
+  EXPECT_FALSE(plan.isClosed("FR_FOOT", 0.6 + 0.5));
+  plan.cyclic = false;
+  EXPECT_EQ(plan.phaseAt(0.65), 3);  // the last phase is held
+  EXPECT_TRUE(plan.isClosed("FL_FOOT", 100.0));
+  EXPECT_FALSE(plan.isClosed("FR_FOOT", 100.0));
+
+  // The schedule: the same answers by index, touch-downs and swings.
+  plan.cyclic = true;
+  const ContactSet feet = fourFeet(solo());
+  const ContactSchedule s(plan, feet);
+  const int FL = feet.find("FL_FOOT"), FR = feet.find("FR_FOOT");
+  EXPECT_EQ(s.phaseAt(0.65), 4);  // global: second pass, phase 0
+  EXPECT_EQ(s.localPhase(4), 0);
+  EXPECT_DOUBLE_EQ(s.phaseStart(5), 0.7);
+  EXPECT_FALSE(s.closedAt(FL, 0.2));
+  EXPECT_TRUE(s.closedAt(FL, 0.3));
+  // FL lands at 0.3, 0.9, 1.5, ...; FR at 0.6, 1.2, ...
+  EXPECT_EQ(s.touchdowns(FL, s.phaseAt(0.29)), 0);
+  EXPECT_EQ(s.touchdowns(FL, s.phaseAt(0.3)), 1);
+  EXPECT_EQ(s.touchdowns(FL, s.phaseAt(1.0)), 2);
+  EXPECT_EQ(s.touchdowns(FR, s.phaseAt(0.59)), 0);
+  EXPECT_EQ(s.touchdowns(FR, s.phaseAt(0.6)), 1);
+  EXPECT_EQ(s.touchdowns(FR, s.phaseAt(60.05)), 100);
+  const ContactSchedule::Swing sw = s.swing(FL, s.phaseAt(0.8));
+  EXPECT_NEAR(sw.lift_off, 0.7, 1e-12);
+  EXPECT_NEAR(sw.touch_down, 0.9, 1e-12);
+  EXPECT_EQ(sw.footholds, 1);
+  // A plan that does not repeat: a foot that never lands again has no touch-down.
+  ContactPlan once = plan;
+  once.cyclic = false;
+  once.phases.pop_back();  // ends in double support
+  once.phases.push_back({0.2, {"FL_FOOT", "HR_FOOT"}});
+  const ContactSchedule o(once, feet);
+  EXPECT_EQ(o.phaseAt(5.0), 3);
+  EXPECT_TRUE(std::isinf(o.swing(FR, 3).touch_down));
+  EXPECT_NEAR(o.swing(FR, 3).lift_off, 0.4, 1e-12);
+}
+
+TEST(ContactPlan, ValidationNamesTheProblem) {
+  const ContactSet feet = fourFeet(solo());
+  auto message = [&](const ContactPlan& p) {
+    try {
+      p.validate(feet);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(message(ContactPlan{}).find("no phase"), std::string::npos);
+  for (double d : {0.0, -0.1, std::nan(""), HUGE_VAL}) {
+    ContactPlan p = loco_cases::soloTrot();
+    p.phases[2].duration = d;
+    EXPECT_NE(message(p).find("phase 2"), std::string::npos) << d;
+  }
+  ContactPlan p = loco_cases::soloTrot();
+  p.phases[1].contacts.push_back("LF_FOOT");
+  EXPECT_NE(message(p).find("'LF_FOOT'"), std::string::npos);
+  p = loco_cases::soloTrot();
+  p.phases[3].contacts.push_back("FL_FOOT");
+  EXPECT_NE(message(p).find("twice"), std::string::npos);
+  EXPECT_EQ(message(loco_cases::soloTrot()), "");
+  EXPECT_THROW(ContactSchedule(ContactPlan{}, feet), std::invalid_argument);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(solo().nq + solo().nv);
+  x[6] = 1.0;
+  LocomotionOptions bad;
+  bad.dt = 0.0;
+  EXPECT_THROW(LocomotionProblem(solo(), feet, loco_cases::soloTrot(), x, bad),
+               std::invalid_argument);
+  EXPECT_THROW(LocomotionProblem(solo(), feet, loco_cases::soloTrot(), x.head(5)),
+               std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------- knots
+
+const KnotModel& knotAt(const LocomotionProblem& loco, int k) {
+  return static_cast<const KnotModel&>(loco.problem().knot(k));
+}
+
+// The knots update() configures: contacts and cone terms follow the plan, swing terms are on
+// while a foot is open and at its touch-down knot, which is an impulse knot.
+TEST(LocomotionProblem, UpdateConfiguresKnots) {
+  Case c = loco_cases::make(Problem::SoloTrot, kShared);
+  LocomotionProblem& loco = *c.loco;
+  const ContactSchedule& s = loco.schedule();
+  const int FL = loco.contacts().find("FL_FOOT");
+  const double dt = loco.options().dt;
+  for (double t0 : {0.0, 0.13, 0.47}) {
+    loco.update(t0);
+    int impulses = 0;
+    for (int k = 0; k < loco.problem().horizon(); ++k) {
+      const KnotModel& knot = knotAt(loco, k);
+      const double t = t0 + k * dt;
+      const bool closed = s.closedAt(FL, t), before = s.closedAt(FL, t - dt);
+      EXPECT_EQ(knot.contacts().isActive(FL), closed) << t;
+      EXPECT_EQ(knot.costs()[knot.costs().find("cone_FL_FOOT")].active, closed);
+      const CostTerm& swing = knot.costs()[knot.costs().find("swing_FL_FOOT")];
+      EXPECT_EQ(swing.active, !closed || !before) << t;
+      bool lands = false;
+      for (int f = 0; f < 4; ++f) lands = lands || (s.closedAt(f, t) && !s.closedAt(f, t - dt));
+      EXPECT_EQ(knot.mode() == KnotMode::Impulse, lands) << t;
+      impulses += lands;
+      if (swing.active) {
+        const auto& r = static_cast<const FrameTranslationResidual&>(*swing.residual);
+        EXPECT_EQ(r.reference(), loco.footReference(FL, t));
+      }
+    }
+    EXPECT_GE(impulses, 2) << t0;
+  }
+  // The swing arc: lift-off foothold, apex half way up, the next foothold at touch-down.
+  const Eigen::Vector3d p0 = loco.foothold(FL, 0);
+  EXPECT_NEAR(p0.z(), 0.0, 1e-12);
+  EXPECT_TRUE(loco.footReference(FL, 0.1).isApprox(p0));
+  const Eigen::Vector3d apex = loco.footReference(FL, 0.2);
+  EXPECT_NEAR(apex.z(), loco.options().swing_height, 1e-12);
+  EXPECT_NEAR(apex.x(), p0.x() + 0.5 * loco.options().step.x(), 1e-12);
+  EXPECT_TRUE(loco.footReference(FL, 0.3).isApprox(loco.foothold(FL, 1)));
+  EXPECT_TRUE(loco.footReference(FL, 0.35).isApprox(loco.foothold(FL, 1)));
+  EXPECT_TRUE(loco.footReference(FL, 0.65).isApprox(loco.foothold(FL, 1)));
+
+  // After a shift the knots are rebuilt for the new start time, as a fresh problem's.
+  Case fresh = loco_cases::make(Problem::SoloTrot, kShared);
+  loco.update(0.0);
+  loco.problem().shift(7);
+  loco.update(7 * dt);
+  fresh.loco->update(7 * dt);
+  for (int k = 0; k < loco.problem().horizon(); ++k) {
+    const KnotModel &a = knotAt(loco, k), &b = knotAt(*fresh.loco, k);
+    EXPECT_EQ(a.mode(), b.mode()) << k;
+    for (int f = 0; f < 4; ++f) EXPECT_EQ(a.contacts().isActive(f), b.contacts().isActive(f));
+    for (int i = 0; i < a.costs().size(); ++i) EXPECT_EQ(a.costs()[i].active, b.costs()[i].active);
+  }
+
+  // Impulses off: contact knots only.
+  Case no_impulse = loco_cases::make(Problem::SoloTrot, kShared,
+                                     [](LocomotionOptions& o) { o.impulses = false; });
+  for (int k = 0; k < no_impulse.loco->problem().horizon(); ++k)
+    EXPECT_EQ(knotAt(*no_impulse.loco, k).mode(), KnotMode::Contact);
+}
+
+// ---------------------------------------------------------------------------- solves
+
+// What a solution looks like, measured.
+struct Measures {
+  // Contact knots: the least μ f_z - |f_t| over closed contacts [N], and the least f_z [N].
+  double min_cone_margin = HUGE_VAL;
+  double min_normal = HUGE_VAL;
+  double min_impulse_margin = HUGE_VAL;  // impulse knots: μ Λ_z - |Λ_t| [N s]
+  double lowest_apex = 0.0;              // the lowest, over swings, of the foot's highest point [m]
+  double max_landing = 0.0;  // the largest distance between a landed foot and its foothold [m]
+  int swings = 0;
+};
+
+Measures measure(LocomotionProblem& loco, const Solver& solver) {
+  ShootingProblem& problem = loco.problem();
+  problem.calc(solver.xs(), solver.us());
+  const Model& model = *problem.state().model();
+  const ContactSchedule& s = loco.schedule();
+  const double mu = loco_cases::kGroundFriction, dt = loco.options().dt, t0 = loco.startTime();
+  Measures m;
+  Data data(model);
+  const int T = problem.horizon(), nc = loco.contacts().size();
+  std::vector<double> highest(nc, 0.0);
+  double apex = HUGE_VAL;
+  for (int k = 0; k <= T; ++k) {
+    const double t = t0 + k * dt;
+    framesForwardKinematics(model, data, solver.xs()[k].head(model.nq));
+    for (int c = 0; c < nc; ++c) {
+      const Eigen::Vector3d p = data.oMf[loco.contacts()[c].frame].p;
+      const bool closed = s.closedAt(c, t);
+      if (!closed) highest[c] = std::max(highest[c], p.z());
+      if (closed && k > 0 && !s.closedAt(c, t - dt)) {  // landed at this knot
+        m.max_landing = std::max(m.max_landing, (p - loco.footReference(c, t)).norm());
+        apex = std::min(apex, highest[c]);
+        highest[c] = 0.0;
+        ++m.swings;
+      }
+    }
+    if (k == T) break;
+    const auto& knot = static_cast<const KnotModel&>(problem.knot(k));
+    const auto& d = static_cast<const KnotActionData&>(problem.data(k));
+    const Eigen::VectorXd& f =
+        knot.mode() == KnotMode::Impulse ? d.knot.contact.impulses : d.knot.contact.lambda;
+    int offset = 0;
+    for (int c = 0; c < nc; ++c) {
+      if (!knot.contacts().isActive(c)) continue;
+      const Eigen::Vector3d fc = f.segment<3>(offset);  // world axes (LOCAL_WORLD_ALIGNED)
+      const double margin = mu * fc.z() - fc.head<2>().norm();
+      if (knot.mode() == KnotMode::Impulse) {
+        m.min_impulse_margin = std::min(m.min_impulse_margin, margin);
+      } else {
+        m.min_cone_margin = std::min(m.min_cone_margin, margin);
+        m.min_normal = std::min(m.min_normal, fc.z());
+      }
+      offset += knot.contacts()[c].dim;
+    }
+  }
+  m.lowest_apex = m.swings > 0 ? apex : 0.0;
+  return m;
+}
+
+// xs = x_nominal everywhere, us = the holding torques.
+SolveStatus solveFromStanding(LocomotionProblem& loco, Solver& solver, int max_iterations) {
+  std::vector<Eigen::VectorXd> xs, us;
+  loco.standingWarmStart(xs, us);
+  EXPECT_TRUE(solver.setWarmStart(xs, us));
+  return solver.solve(max_iterations);
+}
+
+void expectMonotonicOnceFeasible(const Solver& solver) {
+  for (int i = 1; i < solver.statsCount(); ++i) {
+    const IterationStats &a = solver.stats()[i - 1], &b = solver.stats()[i];
+    if (a.gap < 1e-9) {
+      EXPECT_LE(b.cost, a.cost * (1.0 + 1e-12)) << "iteration " << i;
+    }
+  }
+}
+
+// A push: x0 = x_nominal with the base velocity v_base (world axes) and the joint velocities that
+// keep every foot still (the contacts hold velocities, they do not correct them).
+void push(LocomotionProblem& loco, const Eigen::Vector3d& v_base) {
+  const Model& model = *loco.problem().state().model();
+  Data data(model);
+  ContactSet all = loco.contacts();
+  ContactData cd(model, all);
+  const Eigen::VectorXd q = loco.nominal().head(model.nq), zero = Eigen::VectorXd::Zero(model.nv);
+  ASSERT_EQ(contactDynamics(model, data, all, cd, q, zero, zero), ContactStatus::Ok);
+  const Eigen::MatrixXd Jc = cd.Jc.topRows(all.nc());
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(model.nv);
+  v.head<3>() = v_base;  // base at the identity orientation: local = world axes
+  v.tail(model.nv - 6) = -Jc.rightCols(model.nv - 6)
+                              .completeOrthogonalDecomposition()
+                              .solve(Jc.leftCols(6) * v.head(6));
+  ASSERT_LT((Jc * v).norm(), 1e-9);
+  Eigen::VectorXd x0 = loco.nominal();
+  x0.tail(model.nv) = v;
+  ASSERT_TRUE(loco.problem().setX0(x0));
+}
+
+struct SolveCase {
+  Problem problem;
+  int max_iterations;
+  // Standing still from the holding torques is already optimal (x_nominal is an equilibrium and
+  // every cost is zero there): the standing cases start with a push instead.
+  double push;  // base speed [m/s] of the push (0: none)
+};
+
+class LocomotionSolve : public ::testing::TestWithParam<SolveCase> {};
+
+TEST_P(LocomotionSolve, FddpConvergesToAFeasibleGait) {
+  const SolveCase sc = GetParam();
+  Case c = loco_cases::make(sc.problem, kShared);
+  LocomotionProblem& loco = *c.loco;
+  Solver solver(loco.problem(), SolverKind::Fddp);
+  if (std::getenv("STRIDE_DEBUG")) solver.callback = Solver::printIterationTable;
+  const bool pushed = sc.push > 0.0;
+  if (pushed) push(loco, sc.push * Eigen::Vector3d(1.0, 1.0, 0.0).normalized());
+  const double cost0 = [&] {
+    std::vector<Eigen::VectorXd> xs, us;
+    loco.standingWarmStart(xs, us);
+    return loco.problem().calc(xs, us);
+  }();
+  const SolveStatus status = solveFromStanding(loco, solver, sc.max_iterations);
+  EXPECT_EQ(status, SolveStatus::Converged) << toString(status);
+  EXPECT_LT(solver.gap(), 1e-9);
+  if (!pushed) {  // (a pushed robot starts elsewhere)
+    EXPECT_LE(solver.cost(), cost0);
+  }
+  expectMonotonicOnceFeasible(solver);
+  const Measures m = measure(loco, solver);
+  const Model& model = c.robot->model;
+  const double weight_impulse = model.totalMass() * 9.81 * loco.options().dt;
+  std::printf(
+      "[ %s ] %d iterations, cost %.9g (standing start %.6g), gap %.2e, min cone margin "
+      "%.4g N, min normal %.4g N, min impulse cone margin %.3g N s (weight x dt %.3g N s), "
+      "swings %d, lowest apex %.4f m, worst landing %.2e m\n",
+      loco_cases::name(sc.problem), solver.iterations(), solver.cost(), cost0, solver.gap(),
+      m.min_cone_margin, m.min_normal, m.min_impulse_margin, weight_impulse, m.swings,
+      m.lowest_apex, m.max_landing);
+  EXPECT_GE(m.min_cone_margin, 0.0);
+  EXPECT_GT(m.min_normal, 0.0);
+  // A soft landing has near-zero impulses, so the cone on them is met up to rounding-sized
+  // violations of the penalty: at most 1 % of the impulse of the robot's weight over one knot.
+  if (m.min_impulse_margin < HUGE_VAL) {
+    EXPECT_GE(m.min_impulse_margin, -1e-2 * weight_impulse);
+  }
+  if (sc.problem == Problem::SoloTrot || sc.problem == Problem::TalosStep) {
+    EXPECT_GE(m.swings, sc.problem == Problem::SoloTrot ? 4 : 1);
+    EXPECT_GE(m.lowest_apex, 0.5 * loco.options().swing_height);
+    EXPECT_LT(m.max_landing, 5e-3);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Problems, LocomotionSolve,
+                         ::testing::Values(SolveCase{Problem::SoloStand, 50, 0.05},
+                                           SolveCase{Problem::SoloTrot, 100, 0.0},
+                                           SolveCase{Problem::TalosStand, 50, 0.2},
+                                           SolveCase{Problem::TalosStep, 100, 0.0}),
+                         [](const auto& info) {
+                           return std::string(loco_cases::name(info.param.problem));
+                         });
+
+// Torque limits at 80 % of the unconstrained solution's peak torque: the box solver keeps every
+// control inside while the bounds are active, and the gait stays feasible.
+TEST(LocomotionBox, TrotWithinTightTorqueLimits) {
+  Case free = loco_cases::make(Problem::SoloTrot, kShared);
+  Solver unconstrained(free.loco->problem(), SolverKind::Fddp);
+  solveFromStanding(*free.loco, unconstrained, 100);
+  double peak = 0.0;
+  for (const auto& u : unconstrained.us()) peak = std::max(peak, u.cwiseAbs().maxCoeff());
+  const double limit = 0.8 * peak;
+
+  Case c = loco_cases::make(Problem::SoloTrot, kShared);
+  Solver solver(c.loco->problem(), SolverKind::BoxFddp);
+  if (std::getenv("STRIDE_DEBUG")) solver.callback = Solver::printIterationTable;
+  const int nu = c.loco->problem().maxNu();
+  solver.setControlBounds(Eigen::VectorXd::Constant(nu, -limit),
+                          Eigen::VectorXd::Constant(nu, limit));
+  // From standing the box solver creeps (steps of a few percent while the clamped set settles);
+  // it starts from the unconstrained gait clamped to the limits instead, as a receding horizon
+  // would from its previous solution.
+  std::vector<Eigen::VectorXd> us = unconstrained.us();
+  for (auto& u : us) u = u.cwiseMax(-limit).cwiseMin(limit);
+  ASSERT_TRUE(solver.setWarmStart(unconstrained.xs(), us));
+  // With clamped torques the Gauss-Newton model switches its free set between iterations and the
+  // tail converges slowly: stop when a full step is predicted to gain less than 1e-3 on a cost of
+  // ~89 (1e-5 relative), far below anything that changes the gait.
+  solver.options.stop_tolerance = 1e-3;
+  const SolveStatus status = solver.solve(100);
+  EXPECT_EQ(status, SolveStatus::Converged) << toString(status);
+  EXPECT_LT(solver.gap(), 1e-9);
+  double max_u = 0.0;
+  int at_bound = 0;
+  for (const auto& u : solver.us()) {
+    max_u = std::max(max_u, u.cwiseAbs().maxCoeff());
+    at_bound += (u.cwiseAbs().array() >= limit - 1e-9).count();
+  }
+  const Measures m = measure(*c.loco, solver);
+  std::printf(
+      "[ box ] unconstrained peak %.4f N m, limit %.4f, box solution max %.4f, %d controls "
+      "at the bound, %d iterations, cost %.9g (unconstrained %.9g), min cone margin %.4g N, "
+      "lowest apex %.4f m\n",
+      peak, limit, max_u, at_bound, solver.iterations(), solver.cost(), unconstrained.cost(),
+      m.min_cone_margin, m.lowest_apex);
+  EXPECT_LE(max_u, limit + 1e-12);
+  EXPECT_GT(at_bound, 0);
+  EXPECT_GE(solver.cost(), unconstrained.cost());
+  EXPECT_GE(m.min_cone_margin, 0.0);
+  EXPECT_GE(m.lowest_apex, 0.5 * c.loco->options().swing_height);
+
+  // The model's own effort limits (solo12's URDF: 1000 N m, never active) through the options.
+  Case lim = loco_cases::make(Problem::SoloTrot, kShared,
+                              [](LocomotionOptions& o) { o.torque_limits = true; });
+  EXPECT_EQ(lim.loco->controlUpper(), lim.robot->model.effortLimit.tail(nu));
+  EXPECT_EQ(lim.loco->controlLower(), -lim.robot->model.effortLimit.tail(nu));
+}
+
+// On a feasible warm start DDP and FDDP run the same iterations: solo12 standing after a push,
+// the holding torques rolled out from x0 for both (over 0.5 s: open loop, the push carries the
+// robot into a singular posture within a second).
+TEST(LocomotionSolvers, DdpAndFddpAgreeOnStanding) {
+  double costs[2];
+  int iterations[2];
+  for (int i = 0; i < 2; ++i) {
+    Case c =
+        loco_cases::make(Problem::SoloStand, kShared, [](LocomotionOptions& o) { o.knots = 50; });
+    push(*c.loco, Eigen::Vector3d(0.05, 0.0, 0.0));
+    std::vector<Eigen::VectorXd> xs, us;
+    c.loco->standingWarmStart(xs, us);
+    Solver rollout(c.loco->problem(), SolverKind::Ddp);
+    ASSERT_TRUE(rollout.setWarmStart(xs, us));
+    rollout.solve(0);  // Ddp rolls the controls out from x0
+    Solver solver(c.loco->problem(), i == 0 ? SolverKind::Ddp : SolverKind::Fddp);
+    ASSERT_TRUE(solver.setWarmStart(rollout.xs(), us));
+    EXPECT_EQ(solver.solve(50), SolveStatus::Converged);
+    expectMonotonicOnceFeasible(solver);
+    costs[i] = solver.cost();
+    iterations[i] = solver.iterations();
+    EXPECT_GT(rollout.cost(), 2.0 * costs[i]);  // a push worth correcting
+  }
+  std::printf("[ ddp/fddp ] DDP %.12g (%d iterations), FDDP %.12g (%d iterations)\n", costs[0],
+              iterations[0], costs[1], iterations[1]);
+  EXPECT_NEAR(costs[0], costs[1], 1e-6 * std::abs(costs[1]));
+}
+
+// calc / calcDiff in parallel give the same bits: each knot writes only its own data and the
+// total is summed in knot order.
+TEST(LocomotionSolvers, ThreadCountDoesNotChangeTheSolution) {
+  std::vector<Eigen::VectorXd> xs[2], us[2];
+  for (int threads : {1, 2}) {
+    Case c = loco_cases::make(Problem::SoloTrot, kShared);
+    c.loco->problem().setThreads(threads);
+    Solver solver(c.loco->problem(), SolverKind::Fddp);
+    solveFromStanding(*c.loco, solver, 20);
+    xs[threads - 1] = solver.xs();
+    us[threads - 1] = solver.us();
+  }
+  for (size_t k = 0; k < xs[0].size(); ++k) EXPECT_TRUE(xs[0][k] == xs[1][k]) << k;
+  for (size_t k = 0; k < us[0].size(); ++k) EXPECT_TRUE(us[0][k] == us[1][k]) << k;
+}
+
+}  // namespace
+}  // namespace stride
