@@ -60,7 +60,7 @@ Solver::Solver(ShootingProblem& problem, SolverKind kind)
   Vx_next_ = Vx_ = Vx_gap_ = Qx_ = Eigen::VectorXd::Zero(n);
   Vxx_next_ = Vxx_ = Qxx_ = VFx_ = Eigen::MatrixXd::Zero(n, n);
   Qxu_ = VFu_ = Eigen::MatrixXd::Zero(n, m);
-  Quu_ = Eigen::MatrixXd::Zero(m, m);
+  Quu_ = Quu_inv_ = Eigen::MatrixXd::Zero(m, m);
   VB_ = Eigen::MatrixXd::Zero(n, n / 2);
   BtY_ = EtY_ = Eigen::MatrixXd::Zero(n / 2, std::max(n, m));
   colwork_ = Eigen::Matrix<double, Eigen::Dynamic, 6>::Zero(n, 6);
@@ -312,14 +312,16 @@ bool Solver::backwardPass() {
         Eigen::Ref<Eigen::MatrixXd> Quu_ref(Quu);
         Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(Quu_ref);  // in place
         if (llt.info() != Eigen::Success) return false;
+        // Quu^-1 explicitly (nu columns through the factor), then k and K by products: the
+        // triangular solves on the ndx + 1 right-hand sides cost more than the products at these
+        // sizes.
         const auto L = Quu.triangularView<Eigen::Lower>();
-        kk = -Qu;
-        L.solveInPlace(kk);
-        L.adjoint().solveInPlace(kk);
-        W = -Qxu.transpose();
-        L.solveInPlace(W);
-        L.adjoint().solveInPlace(W);
-        KK = W;
+        auto Quu_inv = Quu_inv_.topLeftCorner(nu, nu);
+        Quu_inv.setIdentity();
+        L.solveInPlace(Quu_inv);
+        L.adjoint().solveInPlace(Quu_inv);
+        kk.noalias() = -Quu_inv * Qu;
+        KK.noalias() = -Quu_inv * Qxu.transpose();
       }
       // At the (box-)QP solution Kᵀ(Qu + Quu k) = 0 and Kᵀ(Qux + Quu K) = 0 on the free set, so
       // V'x = Qx + Qxu k and V'xx = Qxx + Qxu K for both branches.

@@ -137,7 +137,7 @@ class Solver {
   Eigen::MatrixXd Vxx_next_, Vxx_;
   // Per-knot Riccati workspaces.
   Eigen::VectorXd Qx_;
-  Eigen::MatrixXd Qxx_, Qxu_, Quu_, VFx_, VFu_, W_;
+  Eigen::MatrixXd Qxx_, Qxu_, Quu_, Quu_inv_, VFx_, VFu_, W_;
   Eigen::VectorXd w_;
   Eigen::MatrixXd VB_, BtY_, EtY_;  // Euler-structure products
   Eigen::Matrix<double, Eigen::Dynamic, 6> colwork_;

@@ -57,8 +57,10 @@ bool KnotModel::dynamics(KnotActionData& d, const Eigen::Ref<const Eigen::Vector
       d.x_next.head(nq) = kd.q_next;
       d.x_next.tail(nv) = kd.v_next;
       if (derivatives) {
-        d.Fx = kd.Fx;
-        d.Fu = kd.Fu;
+        // Swapped, not copied: knotDynamicsDerivatives rewrites every entry of kd.Fx, kd.Fu on each
+        // call, so the two buffers can trade places (O(1), no allocation).
+        d.Fx.swap(kd.Fx);
+        d.Fu.swap(kd.Fu);
         EulerStructure& e = d.euler;
         e.valid = true;
         e.dt = dt_;
