@@ -53,28 +53,27 @@ void forEachKnot(int n, int threads, F&& f) {
 
 double ShootingProblem::calc(const std::vector<Eigen::VectorXd>& xs,
                              const std::vector<Eigen::VectorXd>& us) {
-  const int T = horizon();
-  forEachKnot(T + 1, threads_, [&](int k) {
-    if (k < T)
-      running_[k]->calc(*running_data_[k], xs[k], us[k]);
-    else
-      terminal_->calc(*terminal_data_, xs[T], Eigen::VectorXd());
-  });
-  // Summed in knot order, after the parallel part: the same total for any thread count.
-  double cost = terminal_data_->cost;
-  for (int k = 0; k < T; ++k) cost += running_data_[k]->cost;
-  return cost;
+  return evaluate(xs, us, false);
 }
 
 double ShootingProblem::calcDiff(const std::vector<Eigen::VectorXd>& xs,
                                  const std::vector<Eigen::VectorXd>& us) {
+  return evaluate(xs, us, true);
+}
+
+double ShootingProblem::evaluate(const std::vector<Eigen::VectorXd>& xs,
+                                 const std::vector<Eigen::VectorXd>& us, bool derivatives) {
   const int T = horizon();
   forEachKnot(T + 1, threads_, [&](int k) {
-    if (k < T)
-      running_[k]->calcDiff(*running_data_[k], xs[k], us[k]);
+    ActionModel& m = k < T ? *running_[k] : *terminal_;
+    ActionData& d = k < T ? *running_data_[k] : *terminal_data_;
+    const Eigen::VectorXd& u = k < T ? us[k] : empty_;
+    if (derivatives)
+      m.calcDiff(d, xs[k], u);
     else
-      terminal_->calcDiff(*terminal_data_, xs[T], Eigen::VectorXd());
+      m.calc(d, xs[k], u);
   });
+  // Summed in knot order, after the parallel part: the same total for any thread count.
   double cost = terminal_data_->cost;
   for (int k = 0; k < T; ++k) cost += running_data_[k]->cost;
   return cost;

@@ -59,7 +59,11 @@ class ShootingProblem {
   int threads() const { return threads_; }
 
  private:
+  double evaluate(const std::vector<Eigen::VectorXd>& xs, const std::vector<Eigen::VectorXd>& us,
+                  bool derivatives);
+
   Eigen::VectorXd x0_;
+  Eigen::VectorXd empty_;  // the terminal knot's control
   std::vector<std::unique_ptr<ActionModel>> running_;
   std::vector<std::unique_ptr<ActionData>> running_data_;
   std::unique_ptr<ActionModel> terminal_;

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "allocation_counter.hpp"
+
 #include <atomic>
 #include <cstdlib>
 #include <random>
@@ -23,61 +25,11 @@
 #include "solver/multibody/rnea_derivatives.hpp"
 #include "solver/multibody/urdf.hpp"
 
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-extern "C" {
-void* __libc_malloc(size_t);
-void* __libc_calloc(size_t, size_t);
-void* __libc_realloc(void*, size_t);
-void* __libc_memalign(size_t, size_t);
-
-void* malloc(size_t n) {
-  if (g_counting) ++g_allocations;
-  return __libc_malloc(n);
-}
-void* calloc(size_t n, size_t s) {
-  if (g_counting) ++g_allocations;
-  return __libc_calloc(n, s);
-}
-void* realloc(void* p, size_t n) {
-  if (g_counting) ++g_allocations;
-  return __libc_realloc(p, n);
-}
-void* memalign(size_t a, size_t n) {
-  if (g_counting) ++g_allocations;
-  return __libc_memalign(a, n);
-}
-void* aligned_alloc(size_t a, size_t n) {
-  if (g_counting) ++g_allocations;
-  return __libc_memalign(a, n);
-}
-int posix_memalign(void** p, size_t a, size_t n) {
-  if (g_counting) ++g_allocations;
-  *p = __libc_memalign(a, n);
-  return *p ? 0 : 12;
-}
-}
-
 namespace stride {
 namespace {
 
-class AllocationCounter {
- public:
-  AllocationCounter() {
-    g_allocations = 0;
-    Eigen::internal::set_is_malloc_allowed(false);
-    g_counting = true;
-  }
-  ~AllocationCounter() { stop(); }
-  long stop() {
-    g_counting = false;
-    Eigen::internal::set_is_malloc_allowed(true);
-    return g_allocations;
-  }
-};
+using testing::AllocationCounter;
+using testing::allocations;
 
 void runAllAlgorithms(const Model& model, Data& data, const Eigen::VectorXd& q,
                       const Eigen::VectorXd& v, const Eigen::VectorXd& a, Matrix6Xd& J,
