@@ -110,7 +110,7 @@ void rneaDerivatives(const Model& model, Data& data, const double* q,
       data.dE.col(d).head<3>() = vs_a.cross(S_l) + vs_l.cross(S_a);
       data.dE.col(d).tail<3>() = vs_a.cross(S_a);
     }
-    const Inertia oY = model.inertias[i].transformedBy(oMi);
+    const Inertia oY = kReuse ? data.oYbody[i] : model.inertias[i].transformedBy(oMi);
     data.oYcrb[i] = oY;
     // h = Y v, F = Y a + v x* h - f_ext.
     const Eigen::Vector3d v_l = data.ov[i].head<3>(), v_a = data.ov[i].tail<3>();
