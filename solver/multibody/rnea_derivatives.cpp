@@ -234,4 +234,10 @@ void computeRNEADerivativesFromKinematics(const Model& model, Data& data,
   rneaDerivatives<true>(model, data, nullptr, v, a, &fext, with_gravity);
 }
 
+void computeRNEADerivativesFromKinematics(const Model& model, Data& data,
+                                          const Eigen::Ref<const Eigen::VectorXd>& v,
+                                          const Eigen::Ref<const Eigen::VectorXd>& a) {
+  rneaDerivatives<true>(model, data, nullptr, v, a, nullptr, true);
+}
+
 }  // namespace stride

@@ -35,5 +35,9 @@ void computeRNEADerivativesFromKinematics(const Model& model, Data& data,
                                           const Eigen::Ref<const Eigen::VectorXd>& v,
                                           const Eigen::Ref<const Eigen::VectorXd>& a,
                                           const std::vector<Vector6d>& fext, bool with_gravity);
+// Without external forces, with gravity (as computeRNEADerivatives(q, v, a)); same precondition.
+void computeRNEADerivativesFromKinematics(const Model& model, Data& data,
+                                          const Eigen::Ref<const Eigen::VectorXd>& v,
+                                          const Eigen::Ref<const Eigen::VectorXd>& a);
 
 }  // namespace stride
