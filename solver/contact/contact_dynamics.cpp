@@ -83,16 +83,23 @@ void constraintRows(const Model& model, Data& data, const ContactSet& contacts, 
       if (cm.dim == 6) rows.col(k).tail<3>().noalias() = Rt * S_ang;
     }
     if (with_drift) {
-      const Vector6d vf = getFrameVelocity(model, data, cm.frame, ReferenceFrame::Local);
-      const Vector6d af = getFrameAcceleration(model, data, cm.frame, ReferenceFrame::Local);
+      // The frame's LOCAL velocity and acceleration from its joint's (joint frame), in 3-vector
+      // halves: X^-1 m = [R^T (m_l - p x m_a); R^T m_a] with the frame's placement in its joint.
+      const SE3& X = model.frames[cm.frame].placement;
+      const Vector6d& vi = data.v[model.frames[cm.frame].parentJoint];
+      const Vector6d& ai = data.a[model.frames[cm.frame].parentJoint];
+      const Eigen::Vector3d v_a = X.R.transpose() * vi.tail<3>();
+      const Eigen::Vector3d v_l = X.R.transpose() * (vi.head<3>() - X.p.cross(vi.tail<3>()));
+      const Eigen::Vector3d a_l = X.R.transpose() * (ai.head<3>() - X.p.cross(ai.tail<3>()));
       if (cm.dim == 3) {
-        Eigen::Vector3d g = af.head<3>() + vf.tail<3>().cross(vf.head<3>()) + cm.kd * vf.head<3>();
-        if (cm.kp > 0) g += cm.kp * (oMf.R.transpose() * (oMf.p - cm.reference.p));
+        Eigen::Vector3d g = a_l + v_a.cross(v_l) + cm.kd * v_l;
+        if (cm.kp > 0) g += cm.kp * (Rt * (oMf.p - cm.reference.p));
         cd.gamma.segment<3>(r) = g;
       } else {
-        Vector6d g = af + cm.kd * vf;
-        if (cm.kp > 0) g += cm.kp * log6(cm.reference.actInv(oMf));
-        cd.gamma.segment<6>(r) = g;
+        const Eigen::Vector3d a_a = X.R.transpose() * ai.tail<3>();
+        cd.gamma.segment<3>(r) = a_l + cm.kd * v_l;
+        cd.gamma.segment<3>(r + 3) = a_a + cm.kd * v_a;
+        if (cm.kp > 0) cd.gamma.segment<6>(r) += cm.kp * log6(cm.reference.actInv(oMf));
       }
     }
     r += cm.dim;
@@ -333,9 +340,11 @@ ContactStatus factorKkt(const Model& model, Data& data, const ContactSet& contac
   if (v) {
     // crba(q) has just left q's placements in data.liMi and data.oMi.
     nonLinearEffectsFromKinematics(model, data, *v);
-    Vector6d a0 = Vector6d::Zero();
-    a0.head<3>() = -model.gravity;
-    for (int i = 1; i < model.njoints(); ++i) data.a[i] = data.a_gf[i] - data.oMi[i].actInv(a0);
+    // a = a_gf - X_i^-1 [-g; 0] = a_gf + [R_i^T g; 0], in 3-vector halves (no 6-vector temporary).
+    for (int i = 1; i < model.njoints(); ++i) {
+      data.a[i].head<3>() = data.a_gf[i].head<3>() + data.oMi[i].R.transpose() * model.gravity;
+      data.a[i].tail<3>() = data.a_gf[i].tail<3>();
+    }
   }
   constraintRows(model, data, contacts, cd, v != nullptr);
   if (!factorSchur(model, data, cd, damping)) {
