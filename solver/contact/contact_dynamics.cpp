@@ -176,7 +176,7 @@ void localForcesToJointWrenches(const Model& model, const Data& data, const Cont
 // λ_w = R λ_l, so ∂λ_w = R ∂λ_l + (∂R) λ_l, and ∂R/∂q_j λ_l = ω_j x λ_w (ω_j: world angular
 // Jacobian column of the frame).
 // Only the columns [tau_first, nv) of dtau are touched.
-void rotateForces(const Model& model, const Data& data, const ContactSet& contacts, ContactData& cd,
+void rotateForces(const Model& model, const Data& data, const ContactSet& contacts,
                   Eigen::VectorXd& forces, Eigen::MatrixXd* dq, Eigen::MatrixXd* dv,
                   Eigen::MatrixXd* dtau, int tau_first = 0) {
   int r = 0;
@@ -185,19 +185,27 @@ void rotateForces(const Model& model, const Data& data, const ContactSet& contac
     const ContactModel& cm = contacts[c];
     if (cm.forces == ReferenceFrame::LocalWorldAligned) {
       const SE3 oMf = framePlacement(model, data, cm.frame);
-      if (dq) getFrameJacobian(model, data, cm.frame, ReferenceFrame::LocalWorldAligned, cd.Jframe);
+      const Joint& jt = model.joints[model.frames[cm.frame].parentJoint];
       for (int b = 0; b < cm.dim; b += 3) {
         auto f = forces.segment<3>(r + b);
         f = oMf.R * Eigen::Vector3d(f);
+        // Column by column with fixed sizes: Eigen sends a 3 x 3 times 3 x nv product to its
+        // blocked GEMM, whose packing costs more than the arithmetic.
         for (Eigen::MatrixXd* m : {dq, dv, dtau}) {
           if (!m) continue;
-          const Eigen::Index first = m == dtau ? tau_first : 0, cols = m->cols() - first;
-          auto rows = m->middleRows<3>(r + b).rightCols(cols);
-          auto tmp = cd.rows3.leftCols(cols);
-          tmp.noalias() = oMf.R * rows;  // no aliased product temporary
-          rows = tmp;
+          for (Eigen::Index j = m == dtau ? tau_first : 0; j < m->cols(); ++j) {
+            auto x = m->col(j).segment<3>(r + b);
+            const Eigen::Vector3d y = x;
+            x.noalias() = oMf.R * y;
+          }
         }
-        if (dq) dq->middleRows<3>(r + b).noalias() -= skew(f) * cd.Jframe.bottomRows<3>();
+        // (∂R) λ_l: minus f x ω_k on the supporting columns (ω_k: world angular Jacobian column,
+        // the frame's LOCAL_WORLD_ALIGNED one).
+        if (dq)
+          for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
+            const Eigen::Vector3d w = data.J.col(k).tail<3>();
+            dq->col(k).segment<3>(r + b) -= Eigen::Vector3d(f).cross(w);
+          }
       }
     }
     r += cm.dim;
@@ -444,7 +452,7 @@ ContactStatus finishSolve(const Model& model, const Data& data, const ContactSet
     clearOutputs(cd);
     return ContactStatus::Singular;
   }
-  rotateForces(model, data, contacts, cd, forces, nullptr, nullptr, nullptr);
+  rotateForces(model, data, contacts, forces, nullptr, nullptr, nullptr);
   return ContactStatus::Ok;
 }
 
@@ -506,7 +514,7 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
   kktDerivatives(model, data, contacts, cd, cd.ddq_dq, cd.lambda_dq, &cd.ddq_dv, &cd.lambda_dv,
                  &cd.ddq_dtau, &cd.lambda_dtau, tau_first);
   // Back to the contacts' force frames (λ itself is already rotated by contactDynamics).
-  rotateForces(model, data, contacts, cd, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, &cd.lambda_dtau,
+  rotateForces(model, data, contacts, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, &cd.lambda_dtau,
                tau_first);
   return ContactStatus::Ok;
 }
@@ -570,7 +578,7 @@ ContactStatus impulseDynamicsDerivatives(const Model& model, Data& data, const C
   cd.ddq_dv.setIdentity();
   cd.ddq_dv.noalias() += cd.Yt.topRows(nc).transpose() * dL;
   cd.ddq.setZero();
-  rotateForces(model, data, contacts, cd, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, nullptr);
+  rotateForces(model, data, contacts, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, nullptr);
   return ContactStatus::Ok;
 }
 
