@@ -219,12 +219,14 @@ void invertSchur(ContactData& cd) {
   const int nc = cd.nc;
   const Eigen::MatrixXd& L = cd.K;
   Eigen::MatrixXd& X = cd.Kinv;  // L^-1 in the lower triangle first, then K^-1
+  // The reciprocal pivots first (X's diagonal): a division inside the loop below would sit on its
+  // dependency chain.
+  for (int j = 0; j < nc; ++j) X(j, j) = 1.0 / L(j, j);
   for (int j = 0; j < nc; ++j) {
-    X(j, j) = 1.0 / L(j, j);
     for (int i = j + 1; i < nc; ++i) {
       double s = 0.0;
       for (int k = j; k < i; ++k) s -= L(i, k) * X(k, j);
-      X(i, j) = s / L(i, i);
+      X(i, j) = s * X(i, i);
     }
   }
   // (L^-T L^-1)(i, j) = Σ_{k >= max(i, j)} X(k, i) X(k, j); upper triangle first, so that the
