@@ -83,16 +83,23 @@ void constraintRows(const Model& model, Data& data, const ContactSet& contacts, 
       if (cm.dim == 6) rows.col(k).tail<3>().noalias() = Rt * S_ang;
     }
     if (with_drift) {
-      const Vector6d vf = getFrameVelocity(model, data, cm.frame, ReferenceFrame::Local);
-      const Vector6d af = getFrameAcceleration(model, data, cm.frame, ReferenceFrame::Local);
+      // The frame's LOCAL velocity and acceleration from its joint's (joint frame), in 3-vector
+      // halves: X^-1 m = [R^T (m_l - p x m_a); R^T m_a] with the frame's placement in its joint.
+      const SE3& X = model.frames[cm.frame].placement;
+      const Vector6d& vi = data.v[model.frames[cm.frame].parentJoint];
+      const Vector6d& ai = data.a[model.frames[cm.frame].parentJoint];
+      const Eigen::Vector3d v_a = X.R.transpose() * vi.tail<3>();
+      const Eigen::Vector3d v_l = X.R.transpose() * (vi.head<3>() - X.p.cross(vi.tail<3>()));
+      const Eigen::Vector3d a_l = X.R.transpose() * (ai.head<3>() - X.p.cross(ai.tail<3>()));
       if (cm.dim == 3) {
-        Eigen::Vector3d g = af.head<3>() + vf.tail<3>().cross(vf.head<3>()) + cm.kd * vf.head<3>();
-        if (cm.kp > 0) g += cm.kp * (oMf.R.transpose() * (oMf.p - cm.reference.p));
+        Eigen::Vector3d g = a_l + v_a.cross(v_l) + cm.kd * v_l;
+        if (cm.kp > 0) g += cm.kp * (Rt * (oMf.p - cm.reference.p));
         cd.gamma.segment<3>(r) = g;
       } else {
-        Vector6d g = af + cm.kd * vf;
-        if (cm.kp > 0) g += cm.kp * log6(cm.reference.actInv(oMf));
-        cd.gamma.segment<6>(r) = g;
+        const Eigen::Vector3d a_a = X.R.transpose() * ai.tail<3>();
+        cd.gamma.segment<3>(r) = a_l + cm.kd * v_l;
+        cd.gamma.segment<3>(r + 3) = a_a + cm.kd * v_a;
+        if (cm.kp > 0) cd.gamma.segment<6>(r) += cm.kp * log6(cm.reference.actInv(oMf));
       }
     }
     r += cm.dim;
@@ -169,7 +176,7 @@ void localForcesToJointWrenches(const Model& model, const Data& data, const Cont
 // λ_w = R λ_l, so ∂λ_w = R ∂λ_l + (∂R) λ_l, and ∂R/∂q_j λ_l = ω_j x λ_w (ω_j: world angular
 // Jacobian column of the frame).
 // Only the columns [tau_first, nv) of dtau are touched.
-void rotateForces(const Model& model, const Data& data, const ContactSet& contacts, ContactData& cd,
+void rotateForces(const Model& model, const Data& data, const ContactSet& contacts,
                   Eigen::VectorXd& forces, Eigen::MatrixXd* dq, Eigen::MatrixXd* dv,
                   Eigen::MatrixXd* dtau, int tau_first = 0) {
   int r = 0;
@@ -178,19 +185,27 @@ void rotateForces(const Model& model, const Data& data, const ContactSet& contac
     const ContactModel& cm = contacts[c];
     if (cm.forces == ReferenceFrame::LocalWorldAligned) {
       const SE3 oMf = framePlacement(model, data, cm.frame);
-      if (dq) getFrameJacobian(model, data, cm.frame, ReferenceFrame::LocalWorldAligned, cd.Jframe);
+      const Joint& jt = model.joints[model.frames[cm.frame].parentJoint];
       for (int b = 0; b < cm.dim; b += 3) {
         auto f = forces.segment<3>(r + b);
         f = oMf.R * Eigen::Vector3d(f);
+        // Column by column with fixed sizes: Eigen sends a 3 x 3 times 3 x nv product to its
+        // blocked GEMM, whose packing costs more than the arithmetic.
         for (Eigen::MatrixXd* m : {dq, dv, dtau}) {
           if (!m) continue;
-          const Eigen::Index first = m == dtau ? tau_first : 0, cols = m->cols() - first;
-          auto rows = m->middleRows<3>(r + b).rightCols(cols);
-          auto tmp = cd.rows3.leftCols(cols);
-          tmp.noalias() = oMf.R * rows;  // no aliased product temporary
-          rows = tmp;
+          for (Eigen::Index j = m == dtau ? tau_first : 0; j < m->cols(); ++j) {
+            auto x = m->col(j).segment<3>(r + b);
+            const Eigen::Vector3d y = x;
+            x.noalias() = oMf.R * y;
+          }
         }
-        if (dq) dq->middleRows<3>(r + b).noalias() -= skew(f) * cd.Jframe.bottomRows<3>();
+        // (∂R) λ_l: minus f x ω_k on the supporting columns (ω_k: world angular Jacobian column,
+        // the frame's LOCAL_WORLD_ALIGNED one).
+        if (dq)
+          for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
+            const Eigen::Vector3d w = data.J.col(k).tail<3>();
+            dq->col(k).segment<3>(r + b) -= Eigen::Vector3d(f).cross(w);
+          }
       }
     }
     r += cm.dim;
@@ -204,12 +219,14 @@ void invertSchur(ContactData& cd) {
   const int nc = cd.nc;
   const Eigen::MatrixXd& L = cd.K;
   Eigen::MatrixXd& X = cd.Kinv;  // L^-1 in the lower triangle first, then K^-1
+  // The reciprocal pivots first (X's diagonal): a division inside the loop below would sit on its
+  // dependency chain.
+  for (int j = 0; j < nc; ++j) X(j, j) = 1.0 / L(j, j);
   for (int j = 0; j < nc; ++j) {
-    X(j, j) = 1.0 / L(j, j);
     for (int i = j + 1; i < nc; ++i) {
       double s = 0.0;
       for (int k = j; k < i; ++k) s -= L(i, k) * X(k, j);
-      X(i, j) = s / L(i, i);
+      X(i, j) = s * X(i, i);
     }
   }
   // (L^-T L^-1)(i, j) = Σ_{k >= max(i, j)} X(k, i) X(k, j); upper triangle first, so that the
@@ -333,9 +350,11 @@ ContactStatus factorKkt(const Model& model, Data& data, const ContactSet& contac
   if (v) {
     // crba(q) has just left q's placements in data.liMi and data.oMi.
     nonLinearEffectsFromKinematics(model, data, *v);
-    Vector6d a0 = Vector6d::Zero();
-    a0.head<3>() = -model.gravity;
-    for (int i = 1; i < model.njoints(); ++i) data.a[i] = data.a_gf[i] - data.oMi[i].actInv(a0);
+    // a = a_gf - X_i^-1 [-g; 0] = a_gf + [R_i^T g; 0], in 3-vector halves (no 6-vector temporary).
+    for (int i = 1; i < model.njoints(); ++i) {
+      data.a[i].head<3>() = data.a_gf[i].head<3>() + data.oMi[i].R.transpose() * model.gravity;
+      data.a[i].tail<3>() = data.a_gf[i].tail<3>();
+    }
   }
   constraintRows(model, data, contacts, cd, v != nullptr);
   if (!factorSchur(model, data, cd, damping)) {
@@ -435,7 +454,7 @@ ContactStatus finishSolve(const Model& model, const Data& data, const ContactSet
     clearOutputs(cd);
     return ContactStatus::Singular;
   }
-  rotateForces(model, data, contacts, cd, forces, nullptr, nullptr, nullptr);
+  rotateForces(model, data, contacts, forces, nullptr, nullptr, nullptr);
   return ContactStatus::Ok;
 }
 
@@ -497,7 +516,7 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
   kktDerivatives(model, data, contacts, cd, cd.ddq_dq, cd.lambda_dq, &cd.ddq_dv, &cd.lambda_dv,
                  &cd.ddq_dtau, &cd.lambda_dtau, tau_first);
   // Back to the contacts' force frames (λ itself is already rotated by contactDynamics).
-  rotateForces(model, data, contacts, cd, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, &cd.lambda_dtau,
+  rotateForces(model, data, contacts, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, &cd.lambda_dtau,
                tau_first);
   return ContactStatus::Ok;
 }
@@ -561,7 +580,7 @@ ContactStatus impulseDynamicsDerivatives(const Model& model, Data& data, const C
   cd.ddq_dv.setIdentity();
   cd.ddq_dv.noalias() += cd.Yt.topRows(nc).transpose() * dL;
   cd.ddq.setZero();
-  rotateForces(model, data, contacts, cd, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, nullptr);
+  rotateForces(model, data, contacts, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, nullptr);
   return ContactStatus::Ok;
 }
 

@@ -12,8 +12,9 @@ void computeABADerivatives(const Model& model, Data& data,
                            const Eigen::Ref<const Eigen::VectorXd>& v,
                            const Eigen::Ref<const Eigen::VectorXd>& tau) {
   aba(model, data, q, v, tau);
-  computeRNEADerivatives(model, data, q, v, data.ddq);
+  // crba first: the derivative sweep then reads its placements, subspaces and body inertias.
   crba(model, data, q);
+  computeRNEADerivativesFromKinematics(model, data, v, data.ddq);
   factorizeMassMatrix(model, data);
   // One solve on the stacked right-hand sides [-∂τ/∂q, -∂τ/∂v, I].
   const int nv = model.nv;

@@ -29,7 +29,10 @@ const Eigen::MatrixXd& crba(const Model& model, Data& data,
       data.J.middleCols<6>(j.idx_v) = oMi.toActionMatrix();
     else
       data.J.col(j.idx_v) = oMi.act(jointSubspaceColumn(j, 0));
-    data.oYcrb[i] = model.inertias[i].transformedBy(oMi);
+    // Kept per body as well: the RNEA derivatives from these kinematics reuse it.
+    const Inertia Y = model.inertias[i].transformedBy(oMi);
+    data.oYbody[i] = Y;
+    data.oYcrb[i] = Y;
   }
   // Backward: M(r, k) = S_r . (Y_i S_k) for the dofs r supporting dof k; both triangles written
   // here, which is cheaper than a separate transpose pass over the whole matrix.

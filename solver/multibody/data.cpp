@@ -17,6 +17,7 @@ Data::Data(const Model& model) {
   g = Eigen::VectorXd::Zero(nv);
   J = Matrix6Xd::Zero(6, nv);
   oYcrb.assign(n, Inertia::Zero());
+  oYbody.assign(n, Inertia::Zero());
   ov.assign(n, Vector6d::Zero());
   M = Eigen::MatrixXd::Zero(nv, nv);
   oYaba.assign(n, Matrix6d::Zero());

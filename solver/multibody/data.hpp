@@ -28,10 +28,11 @@ struct Data {
   Eigen::VectorXd g;    // computeGeneralizedGravity output
 
   // World-frame quantities shared by CRBA, ABA, Jacobians, CoM and centroidal algorithms.
-  Matrix6Xd J;                 // joint Jacobian columns in the world frame (motion subspaces)
-  std::vector<Inertia> oYcrb;  // composite (subtree) inertia, world frame
-  std::vector<Vector6d> ov;    // spatial velocity in the world frame
-  Eigen::MatrixXd M;           // joint-space inertia matrix (crba), full symmetric
+  Matrix6Xd J;                  // joint Jacobian columns in the world frame (motion subspaces)
+  std::vector<Inertia> oYcrb;   // composite (subtree) inertia, world frame
+  std::vector<Inertia> oYbody;  // each body's own inertia, world frame (crba)
+  std::vector<Vector6d> ov;     // spatial velocity in the world frame
+  Eigen::MatrixXd M;            // joint-space inertia matrix (crba), full symmetric
 
   // ABA (aba.hpp), world-frame articulated-body sweeps.
   std::vector<Matrix6d> oYaba;   // articulated inertia

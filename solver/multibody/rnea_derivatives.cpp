@@ -35,8 +35,7 @@ namespace {
 //   ḣ = m ν + ω x h,   İ = X + X^T,   X = [ω]x I - h ν^T + (ν . h) Id
 // (from [ν]x[h]x + [h]x[ν]x = h ν^T + ν h^T - 2 (ν . h) Id). Stored as an Inertia with m = 0: it
 // sums over a subtree like an inertia, and applying it costs a third of a 6x6 product.
-Inertia inertiaRate(const Vector6d& v, const Inertia& Y) {
-  const Eigen::Vector3d nu = v.head<3>(), w = v.tail<3>();
+Inertia inertiaRate(const Eigen::Vector3d& nu, const Eigen::Vector3d& w, const Inertia& Y) {
   Inertia r;
   r.m = 0.0;
   r.h = Y.m * nu + w.cross(Y.h);
@@ -87,16 +86,34 @@ void rneaDerivatives(const Model& model, Data& data, const double* q,
         S.col(0) = jointSubspaceWorld(j, data.oMi[i]);
     }
     const SE3& oMi = data.oMi[i];
-    const Vector6d vJ = S * v.segment(j.idx_v, j.nv);
+    // In 3-vector halves, as the backward sweep (motion cross: a x b = [a_a x b_l + a_l x b_a;
+    // a_a x b_a]); v_i and a_i stay in registers for the rest of the step.
+    Eigen::Vector3d vJ_l, vJ_a, aJ_l, aJ_a;
+    if (j.nv == 1) {
+      const double vk = v[j.idx_v], ak = a[j.idx_v];
+      vJ_l = S.col(0).head<3>() * vk;
+      vJ_a = S.col(0).tail<3>() * vk;
+      aJ_l = S.col(0).head<3>() * ak;
+      aJ_a = S.col(0).tail<3>() * ak;
+    } else {
+      const Vector6d vJ = S * v.segment(j.idx_v, j.nv), aJ = S * a.segment(j.idx_v, j.nv);
+      vJ_l = vJ.head<3>();
+      vJ_a = vJ.tail<3>();
+      aJ_l = aJ.head<3>();
+      aJ_a = aJ.tail<3>();
+    }
     const Vector6d& vp = data.ov[j.parent];
     const Vector6d& ap = data.oa[j.parent];
-    data.ov[i] = vp + vJ;
-    data.oa[i] = ap + S * a.segment(j.idx_v, j.nv) + motionCross(data.ov[i], vJ);
-    // In 3-vector halves, as the backward sweep (motion cross: a x b = [a_a x b_l + a_l x b_a;
-    // a_a x b_a]).
     const Eigen::Vector3d vp_l = vp.head<3>(), vp_a = vp.tail<3>(), ap_l = ap.head<3>(),
                           ap_a = ap.tail<3>();
-    const Eigen::Vector3d vs_l = vp_l + data.ov[i].head<3>(), vs_a = vp_a + data.ov[i].tail<3>();
+    const Eigen::Vector3d v_l = vp_l + vJ_l, v_a = vp_a + vJ_a;
+    const Eigen::Vector3d a_l = ap_l + aJ_l + v_a.cross(vJ_l) + v_l.cross(vJ_a);
+    const Eigen::Vector3d a_a = ap_a + aJ_a + v_a.cross(vJ_a);
+    data.ov[i].head<3>() = v_l;
+    data.ov[i].tail<3>() = v_a;
+    data.oa[i].head<3>() = a_l;
+    data.oa[i].tail<3>() = a_a;
+    const Eigen::Vector3d vs_l = vp_l + v_l, vs_a = vp_a + v_a;
     for (int k = 0; k < j.nv; ++k) {
       const Eigen::Vector3d S_l = S.col(k).head<3>(), S_a = S.col(k).tail<3>();
       const int d = j.idx_v + k;
@@ -110,18 +127,16 @@ void rneaDerivatives(const Model& model, Data& data, const double* q,
       data.dE.col(d).head<3>() = vs_a.cross(S_l) + vs_l.cross(S_a);
       data.dE.col(d).tail<3>() = vs_a.cross(S_a);
     }
-    const Inertia oY = model.inertias[i].transformedBy(oMi);
+    const Inertia oY = kReuse ? data.oYbody[i] : model.inertias[i].transformedBy(oMi);
     data.oYcrb[i] = oY;
     // h = Y v, F = Y a + v x* h - f_ext.
-    const Eigen::Vector3d v_l = data.ov[i].head<3>(), v_a = data.ov[i].tail<3>();
-    const Eigen::Vector3d a_l = data.oa[i].head<3>(), a_a = data.oa[i].tail<3>();
     const Eigen::Vector3d h_l = oY.m * v_l - oY.h.cross(v_a), h_a = oY.I * v_a + oY.h.cross(v_l);
     data.oh[i].head<3>() = h_l;
     data.oh[i].tail<3>() = h_a;
     data.oF[i].head<3>() = oY.m * a_l - oY.h.cross(a_a) + v_a.cross(h_l);
     data.oF[i].tail<3>() = oY.I * a_a + oY.h.cross(a_l) + v_a.cross(h_a) + v_l.cross(h_l);
     if (fext) data.oF[i] -= oMi.actForce((*fext)[i]);
-    data.oBcrb[i] = inertiaRate(data.ov[i], oY);
+    data.oBcrb[i] = inertiaRate(v_l, v_a, oY);
   }
 
   // Backward sweep: with the subtree of joint i complete, the per-dof vectors A, B, G, H of its
@@ -232,6 +247,12 @@ void computeRNEADerivativesFromKinematics(const Model& model, Data& data,
                                           const Eigen::Ref<const Eigen::VectorXd>& a,
                                           const std::vector<Vector6d>& fext, bool with_gravity) {
   rneaDerivatives<true>(model, data, nullptr, v, a, &fext, with_gravity);
+}
+
+void computeRNEADerivativesFromKinematics(const Model& model, Data& data,
+                                          const Eigen::Ref<const Eigen::VectorXd>& v,
+                                          const Eigen::Ref<const Eigen::VectorXd>& a) {
+  rneaDerivatives<true>(model, data, nullptr, v, a, nullptr, true);
 }
 
 }  // namespace stride

@@ -24,15 +24,20 @@ void computeRNEADerivatives(const Model& model, Data& data,
                             const Eigen::Ref<const Eigen::VectorXd>& a,
                             const std::vector<Vector6d>& fext, bool with_gravity);
 
-// The same, without recomputing the kinematics of q: PRECONDITION data.oMi and data.J hold the
-// joint placements and world motion subspaces of the configuration to differentiate at, as
-// crba(model, data, q) or computeJointJacobians(model, data, q) leave them (nothing checks it; a
-// stale Data gives silently wrong derivatives). Saves the placement sweep (trigonometry and SE3
-// products) when the caller has just run one of those for the same q, as contact dynamics does.
-// Writes data.tau and the derivative workspaces, but neither oMi, liMi nor J.
+// The same, without recomputing the kinematics of q: PRECONDITION data.oMi, data.J and
+// data.oYbody hold the joint placements, world motion subspaces and world body inertias of the
+// configuration to differentiate at, as crba(model, data, q) leaves them (nothing checks it; a
+// stale Data gives silently wrong derivatives). Saves the placement sweep (trigonometry, SE3
+// products, inertia transforms) when the caller has just run crba for the same q, as contact
+// dynamics does. Writes data.tau and the derivative workspaces, but neither oMi, liMi, J nor
+// oYbody.
 void computeRNEADerivativesFromKinematics(const Model& model, Data& data,
                                           const Eigen::Ref<const Eigen::VectorXd>& v,
                                           const Eigen::Ref<const Eigen::VectorXd>& a,
                                           const std::vector<Vector6d>& fext, bool with_gravity);
+// Without external forces, with gravity (as computeRNEADerivatives(q, v, a)); same precondition.
+void computeRNEADerivativesFromKinematics(const Model& model, Data& data,
+                                          const Eigen::Ref<const Eigen::VectorXd>& v,
+                                          const Eigen::Ref<const Eigen::VectorXd>& a);
 
 }  // namespace stride

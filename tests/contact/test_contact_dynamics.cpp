@@ -12,6 +12,7 @@
 #include "solver/multibody/aba.hpp"
 #include "solver/multibody/aba_derivatives.hpp"
 #include "solver/multibody/center_of_mass.hpp"
+#include "solver/multibody/crba.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/lie_group.hpp"
 #include "solver/multibody/rnea.hpp"
@@ -229,6 +230,49 @@ TEST(ContactDynamics, DerivativesMatchFiniteDifferences) {
       EXPECT_LT(relErr(l_dv, Fv.bottomRows(nc)), c.tol()) << c.name << " lambda/dv";
       EXPECT_LT(relErr(l_dtau, Ft.bottomRows(nc)), c.tol()) << c.name << " lambda/dtau";
     }
+  }
+}
+
+// The knot's path (τ columns from tau_first on) gives exactly the full computation's columns and
+// leaves the others alone; the *FromKinematics variants equal their full counterparts after crba.
+TEST(ContactDynamics, PartialTauColumnsAndKinematicsReuse) {
+  std::mt19937 rng(11);
+  for (Case& c : cases()) {
+    const Model& m = c.model;
+    const State s = randomState(m, rng);
+    Data d1(m), d2(m);
+    ContactData full(m, c.contacts), part(m, c.contacts);
+    ASSERT_EQ(contactDynamicsDerivatives(m, d1, c.contacts, full, s.q, s.v, s.tau, c.damping),
+              ContactStatus::Ok)
+        << c.name;
+    const int first = m.hasFreeFlyer() ? 6 : 0, cols = m.nv - first;
+    part.ddq_dtau.setConstant(7.0);
+    part.lambda_dtau.setConstant(7.0);
+    ASSERT_EQ(
+        contactDynamicsDerivatives(m, d2, c.contacts, part, s.q, s.v, s.tau, c.damping, first),
+        ContactStatus::Ok);
+    const int nc = full.nc;
+    EXPECT_LT(relErr(part.ddq_dtau.rightCols(cols), full.ddq_dtau.rightCols(cols)), 1e-12);
+    EXPECT_LT(relErr(part.lambda_dtau.topRows(nc).rightCols(cols),
+                     full.lambda_dtau.topRows(nc).rightCols(cols)),
+              1e-12);
+    EXPECT_TRUE((part.ddq_dtau.leftCols(first).array() == 7.0).all());
+    EXPECT_TRUE((part.lambda_dtau.leftCols(first).array() == 7.0).all());
+    EXPECT_LT(relErr(part.ddq_dq, full.ddq_dq), 1e-12);
+    EXPECT_LT(relErr(part.lambda_dv.topRows(nc), full.lambda_dv.topRows(nc)), 1e-12);
+
+    Data a(m), b(m);
+    const Eigen::VectorXd nle = nonLinearEffects(m, a, s.q, s.v);
+    crba(m, b, s.q);
+    EXPECT_LT(relErr(nonLinearEffectsFromKinematics(m, b, s.v), nle), 1e-12) << c.name;
+    std::vector<Vector6d> fext(static_cast<size_t>(m.njoints()));
+    for (auto& f : fext) f = Vector6d::Random();
+    computeRNEADerivatives(m, a, s.q, s.v, s.tau, fext, true);
+    crba(m, b, s.q);
+    computeRNEADerivativesFromKinematics(m, b, s.v, s.tau, fext, true);
+    EXPECT_LT(relErr(b.dtau_dq, a.dtau_dq), 1e-12) << c.name;
+    EXPECT_LT(relErr(b.dtau_dv, a.dtau_dv), 1e-12) << c.name;
+    EXPECT_LT(relErr(b.tau, a.tau), 1e-12) << c.name;
   }
 }
 
