@@ -16,9 +16,11 @@ BoxQP::BoxQP(int n)
       xcur_(Eigen::VectorXd::Zero(n)) {}
 
 double BoxQP::objective(const Eigen::Ref<const Eigen::MatrixXd>& H,
-                        const Eigen::Ref<const Eigen::VectorXd>& g, const Eigen::VectorXd& x) {
-  Hx_.noalias() = H * x;
-  return 0.5 * x.dot(Hx_) + g.dot(x);
+                        const Eigen::Ref<const Eigen::VectorXd>& g,
+                        const Eigen::Ref<const Eigen::VectorXd>& x) {
+  const int n = static_cast<int>(H.rows());
+  Hx_.head(n).noalias() = H * x;
+  return 0.5 * x.dot(Hx_.head(n)) + g.dot(x);
 }
 
 bool BoxQP::factorFree(const Eigen::Ref<const Eigen::MatrixXd>& H) {
@@ -36,57 +38,59 @@ bool BoxQP::solve(const Eigen::Ref<const Eigen::MatrixXd>& H,
                   const Eigen::Ref<const Eigen::VectorXd>& ub, Eigen::Ref<Eigen::VectorXd> x) {
   constexpr int kMaxIterations = 50;
   constexpr double kGradientTolerance = 1e-10, kArmijo = 0.1, kMinStep = 1e-12;
-  xcur_ = x.cwiseMax(lb).cwiseMin(ub);
+  // The problem's size may be below the workspace's (knots with fewer controls): views of n.
+  const int n = static_cast<int>(H.rows());
+  auto xcur = xcur_.head(n), xtry = xtry_.head(n), grad = grad_.head(n), dx = dx_.head(n);
+  const auto Hx = Hx_.head(n);
+  xcur = x.cwiseMax(lb).cwiseMin(ub);
   iterations_ = 0;
-  double value = objective(H, g, xcur_);
-  for (; iterations_ < kMaxIterations; ++iterations_) {
-    grad_ = g + Hx_;  // Hx_ holds H xcur_ from the last objective()
+  double value = objective(H, g, xcur);
+  auto freeSet = [&] {
     // A variable is clamped when it sits on a bound and the gradient pushes it outwards.
     nfree_ = 0;
-    for (int i = 0; i < n_; ++i) {
+    for (int i = 0; i < n; ++i) {
       const bool clamped =
-          (xcur_[i] <= lb[i] && grad_[i] > 0.0) || (xcur_[i] >= ub[i] && grad_[i] < 0.0);
+          (xcur[i] <= lb[i] && grad[i] > 0.0) || (xcur[i] >= ub[i] && grad[i] < 0.0);
       if (!clamped) free_[nfree_++] = i;
     }
+  };
+  for (; iterations_ < kMaxIterations; ++iterations_) {
+    grad = g + Hx;  // Hx holds H xcur from the last objective()
+    freeSet();
     if (nfree_ == 0) break;
     double gnorm = 0.0;
-    for (int a = 0; a < nfree_; ++a) gnorm = std::max(gnorm, std::abs(grad_[free_[a]]));
+    for (int a = 0; a < nfree_; ++a) gnorm = std::max(gnorm, std::abs(grad[free_[a]]));
     if (gnorm < kGradientTolerance) break;
     if (!factorFree(H)) return false;
     // Newton step on the free set, zero on the clamped one.
     auto step_f = rhs_.head(nfree_);
-    for (int a = 0; a < nfree_; ++a) step_f[a] = -grad_[free_[a]];
+    for (int a = 0; a < nfree_; ++a) step_f[a] = -grad[free_[a]];
     solveFree(step_f);
-    dx_.setZero();
-    for (int a = 0; a < nfree_; ++a) dx_[free_[a]] = step_f[a];
+    dx.setZero();
+    for (int a = 0; a < nfree_; ++a) dx[free_[a]] = step_f[a];
     // Projected backtracking: the projection may bend the step, so test the actual decrease.
     double alpha = 1.0;
     bool accepted = false;
     while (alpha > kMinStep) {
-      xtry_ = (xcur_ + alpha * dx_).cwiseMax(lb).cwiseMin(ub);
-      const double v = objective(H, g, xtry_);
-      if (v - value <= kArmijo * grad_.dot(xtry_ - xcur_)) {
+      xtry = (xcur + alpha * dx).cwiseMax(lb).cwiseMin(ub);
+      const double v = objective(H, g, xtry);
+      if (v - value <= kArmijo * grad.dot(xtry - xcur)) {
         accepted = true;
-        xcur_.swap(xtry_);
+        xcur = xtry;
         value = v;
         break;
       }
       alpha *= 0.5;
     }
     if (!accepted) {
-      objective(H, g, xcur_);  // restore Hx_ for the final gradient
+      objective(H, g, xcur);  // restore Hx for the final gradient
       break;
     }
   }
   // The free set at the solution, and its factor for the gains.
-  grad_ = g + Hx_;
-  nfree_ = 0;
-  for (int i = 0; i < n_; ++i) {
-    const bool clamped =
-        (xcur_[i] <= lb[i] && grad_[i] > 0.0) || (xcur_[i] >= ub[i] && grad_[i] < 0.0);
-    if (!clamped) free_[nfree_++] = i;
-  }
-  x = xcur_;
+  grad = g + Hx;
+  freeSet();
+  x = xcur;
   return factorFree(H);
 }
 

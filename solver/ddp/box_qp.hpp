@@ -13,8 +13,8 @@ class BoxQP {
  public:
   explicit BoxQP(int n);
 
-  // x is the warm start on entry (clamped first) and the solution on exit. False when H restricted
-  // to the free set is not positive definite.
+  // x is the warm start on entry (clamped first) and the solution on exit; the size is H's, at
+  // most the constructor's n. False when H restricted to the free set is not positive definite.
   bool solve(const Eigen::Ref<const Eigen::MatrixXd>& H, const Eigen::Ref<const Eigen::VectorXd>& g,
              const Eigen::Ref<const Eigen::VectorXd>& lb,
              const Eigen::Ref<const Eigen::VectorXd>& ub, Eigen::Ref<Eigen::VectorXd> x);
@@ -33,7 +33,8 @@ class BoxQP {
  private:
   bool factorFree(const Eigen::Ref<const Eigen::MatrixXd>& H);
   double objective(const Eigen::Ref<const Eigen::MatrixXd>& H,
-                   const Eigen::Ref<const Eigen::VectorXd>& g, const Eigen::VectorXd& x);
+                   const Eigen::Ref<const Eigen::VectorXd>& g,
+                   const Eigen::Ref<const Eigen::VectorXd>& x);
 
   int n_, nfree_ = 0, iterations_ = 0;
   Eigen::VectorXi free_;

@@ -9,7 +9,8 @@
 namespace stride {
 
 namespace {
-constexpr int kMaxRecordedIterations = 1000;
+// μ never restarts from 0 when raised, so the retries of a failed backward pass are bounded.
+constexpr double kRegFloor = 1e-9;
 // The Euler-structured products have half the flops of the dense ones but more, smaller
 // operations: measured (thread CPU time, min of 300) 11.2 vs 12.8 ms per backward pass on talos
 // (nv 38, 100 knots) and 0.89 vs 0.76 ms on solo (nv 14). Below this size the dense GEMMs win.
@@ -43,8 +44,8 @@ const char* toString(SolveStatus status) {
   return "?";
 }
 
-Solver::Solver(ShootingProblem& problem, SolverKind kind)
-    : problem_(problem), kind_(kind), T_(problem.horizon()), ndx_(problem.ndx()) {
+Solver::Solver(ShootingProblem& problem, SolverKind kind, const SolverOptions& opts)
+    : options(opts), problem_(problem), kind_(kind), T_(problem.horizon()), ndx_(problem.ndx()) {
   const int nx = problem.nx(), m = problem.maxNu(), n = ndx_;
   xs_.assign(T_ + 1, problem.x0());
   xs_try_ = xs_;
@@ -72,9 +73,11 @@ Solver::Solver(ShootingProblem& problem, SolverKind kind)
   box_.emplace_back(m);
   u_lower_ = Eigen::VectorXd::Constant(m, -kInfinity);
   u_upper_ = Eigen::VectorXd::Constant(m, kInfinity);
-  stats_.resize(kMaxRecordedIterations);
+  stats_.resize(kMaxStats);
   reg_ = options.reg_initial;
-  (void)nx;
+  x_last_ = Eigen::VectorXd::Zero(nx);
+  u_last_ = Eigen::VectorXd::Zero(problem.nu(T_ - 1));
+  K_last_ = Eigen::MatrixXd::Zero(problem.nu(T_ - 1), n);
 }
 
 void Solver::setControlBounds(const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
@@ -105,17 +108,24 @@ bool Solver::setWarmStart(const std::vector<Eigen::VectorXd>& xs,
 void Solver::shiftWarmStart(int n) {
   n = std::clamp(n, 0, T_);
   if (n == 0) return;
+  // The new tail repeats the last state, control and gain of the old trajectory (saved first: a
+  // shift by T rotates nothing).
+  x_last_ = xs_[T_];
+  const bool uniform = us_[T_ - 1].size() == u_last_.size();
+  if (uniform) {
+    u_last_ = us_[T_ - 1];
+    K_last_ = K_[T_ - 1];
+  }
   // Rotations swap the vectors' buffers: no allocation.
-  std::rotate(xs_.begin(), xs_.begin() + n, xs_.end());
-  std::rotate(us_.begin(), us_.begin() + n, us_.end());
-  std::rotate(K_.begin(), K_.begin() + n, K_.end());
-  std::rotate(k_.begin(), k_.begin() + n, k_.end());
-  // The new tail repeats the last state and control of the old trajectory.
-  for (int k = T_ + 1 - n; k <= T_; ++k) xs_[k] = xs_[T_ - n];
+  std::rotate(xs_.begin(), xs_.begin() + n % (T_ + 1), xs_.end());
+  std::rotate(us_.begin(), us_.begin() + n % T_, us_.end());
+  std::rotate(K_.begin(), K_.begin() + n % T_, K_.end());
+  std::rotate(k_.begin(), k_.begin() + n % T_, k_.end());
+  for (int k = T_ + 1 - n; k <= T_; ++k) xs_[k] = x_last_;
   for (int k = T_ - n; k < T_; ++k)
-    if (k > 0 && us_[k].size() == us_[k - 1].size()) {
-      us_[k] = us_[k - 1];
-      K_[k] = K_[k - 1];
+    if (uniform && us_[k].size() == u_last_.size()) {
+      us_[k] = u_last_;
+      K_[k] = K_last_;
     }
   feasible_ = false;
 }
@@ -128,27 +138,33 @@ bool Solver::finiteTrajectory() const {
   return true;
 }
 
-void Solver::rollout() {
-  const StateSpace& state = problem_.state();
-  xs_[0] = problem_.x0();
+bool Solver::rollout() {
+  // Into the trial trajectory, swapped in only when every knot succeeded: a failure keeps the
+  // last good iterate.
+  xs_try_[0] = problem_.x0();
   double cost = 0.0;
   for (int k = 0; k < T_; ++k) {
+    us_try_[k] = us_[k];
     if (has_bounds_ && kind_ == SolverKind::BoxFddp) {
       const int nu = problem_.nu(k);
-      us_[k] = us_[k].cwiseMax(u_lower_.head(nu)).cwiseMin(u_upper_.head(nu));
+      us_try_[k] = us_try_[k].cwiseMax(u_lower_.head(nu)).cwiseMin(u_upper_.head(nu));
     }
     ActionData& d = problem_.data(k);
-    problem_.knot(k).calc(d, xs_[k], us_[k]);
+    problem_.knot(k).calc(d, xs_try_[k], us_try_[k]);
+    if (d.status != KnotStatus::Ok) return false;
     cost += d.cost;
-    xs_[k + 1] = d.x_next;
+    xs_try_[k + 1] = d.x_next;
   }
-  (void)state;
   ActionData& dT = problem_.terminalData();
-  problem_.terminal().calc(dT, xs_[T_], Eigen::VectorXd());
+  problem_.terminal().calc(dT, xs_try_[T_], Eigen::VectorXd());
+  if (dT.status != KnotStatus::Ok || !std::isfinite(cost + dT.cost)) return false;
+  xs_.swap(xs_try_);
+  us_.swap(us_try_);
   cost_ = cost + dT.cost;
   for (auto& f : fs_) f.setZero();
   gap_ = 0.0;
-  feasible_ = std::isfinite(cost_);
+  feasible_ = true;
+  return true;
 }
 
 double Solver::computeGaps() {
@@ -162,11 +178,14 @@ double Solver::computeGaps() {
   return gap;
 }
 
-double Solver::computeDerivatives() {
-  cost_ = problem_.calcDiff(xs_, us_);
-  gap_ = computeGaps();
+bool Solver::computeDerivatives() {
+  const double cost = problem_.calcDiff(xs_, us_);
+  const double gap = computeGaps();
+  if (!std::isfinite(cost) || !std::isfinite(gap)) return false;
+  cost_ = cost;
+  gap_ = gap;
   feasible_ = gap_ < options.gap_tolerance;
-  return cost_;
+  return true;
 }
 
 namespace {
@@ -249,6 +268,7 @@ void Solver::eulerProducts(const ActionData& d, int nu) {
 }
 
 bool Solver::backwardPass() {
+  backward_nonfinite_ = false;
   const bool box = kind_ == SolverKind::BoxFddp && has_bounds_;
   const ActionData& dT = problem_.terminalData();
   Vx_next_ = dT.Lx;
@@ -332,7 +352,10 @@ bool Solver::backwardPass() {
     Vx_next_.swap(Vx_);
     Vxx_next_.swap(Vxx_);
   }
-  if (!Vx_next_.allFinite() || !Vxx_next_.allFinite()) return false;
+  if (!Vx_next_.allFinite() || !Vxx_next_.allFinite()) {
+    backward_nonfinite_ = true;
+    return false;
+  }
   expectedChange();
   return true;
 }
@@ -401,41 +424,31 @@ double Solver::forwardPass(double alpha) {
 
 SolveStatus Solver::solve(int max_iterations, Clock::time_point deadline) {
   iterations_ = 0;
-  if (kind_ == SolverKind::Ddp) {
-    rollout();
-    if (!feasible_) return SolveStatus::NonFinite;
-  }
-  if (!finiteTrajectory()) return SolveStatus::NonFinite;
+  if (kind_ == SolverKind::Ddp && !rollout()) return fail(SolveStatus::NonFinite);
+  if (!finiteTrajectory()) return fail(SolveStatus::NonFinite);
   for (int it = 0; it < max_iterations; ++it) {
     const Clock::time_point start = Clock::now();
     if (start >= deadline) return SolveStatus::Deadline;
     IterationStats s;
     s.iteration = it;
-    const double cost = computeDerivatives();
-    if (!std::isfinite(cost) || !std::isfinite(gap_)) return SolveStatus::NonFinite;
-    // A Quu that is not positive definite: more regularization, until the limit.
+    if (!computeDerivatives()) return fail(SolveStatus::NonFinite);
+    // A Quu that is not positive definite: more regularization, until the limit or the deadline.
+    // From μ = 0 the first raise goes to kRegFloor, so the retries are bounded.
     while (!backwardPass()) {
-      reg_ *= options.reg_factor;
-      if (reg_ > options.reg_max) {
-        reg_ = options.reg_max;
-        return SolveStatus::NoDescent;
-      }
+      if (backward_nonfinite_) return fail(SolveStatus::NonFinite);
+      reg_ = std::max(reg_ * options.reg_factor, kRegFloor);
+      if (reg_ > options.reg_max) return fail(SolveStatus::NoDescent);
+      if (Clock::now() >= deadline) return SolveStatus::Deadline;
     }
     s.stop = std::abs(d1_);
-    if (s.stop < options.stop_tolerance && feasible_) {
-      s.cost = cost_;
-      s.gap = gap_;
-      s.regularization = reg_;
-      s.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-      if (iterations_ < kMaxRecordedIterations) stats_[iterations_] = s;
-      ++iterations_;
-      if (callback) callback(s);
-      return SolveStatus::Converged;
-    }
+    const bool converged = s.stop < options.stop_tolerance && feasible_;
     double alpha = 1.0;
-    bool accepted = false;
-    for (int i = 0; i < options.line_search_steps; ++i, alpha *= 0.5) {
-      if (Clock::now() >= deadline) break;
+    bool accepted = false, out_of_time = false;
+    for (int i = 0; !converged && i < options.line_search_steps; ++i, alpha *= 0.5) {
+      if (Clock::now() >= deadline) {
+        out_of_time = true;
+        break;
+      }
       const double cost_try = forwardPass(alpha);
       const double expected = expectedCostChange(alpha);
       const double actual = cost_try - cost_;
@@ -460,29 +473,35 @@ SolveStatus Solver::solve(int max_iterations, Clock::time_point deadline) {
         break;
       }
     }
+    // μ adapts to the step taken; a line search cut short by the deadline says nothing about μ.
     if (accepted) {
       if (alpha >= options.step_decrease_reg)
         reg_ = std::max(reg_ / options.reg_factor, options.reg_min);
       else if (alpha <= options.step_increase_reg)
         reg_ = std::min(reg_ * options.reg_factor, options.reg_max);
-    } else {
-      reg_ *= options.reg_factor;
+    } else if (!converged && !out_of_time) {
+      reg_ = std::max(reg_ * options.reg_factor, kRegFloor);
     }
     s.step = accepted ? alpha : 0.0;
     s.cost = cost_;
     s.gap = gap_;
     s.regularization = reg_;
     s.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-    if (iterations_ < kMaxRecordedIterations) stats_[iterations_] = s;
+    if (iterations_ < kMaxStats) stats_[iterations_] = s;
     ++iterations_;
     if (callback) callback(s);
-    if (Clock::now() >= deadline) return SolveStatus::Deadline;
-    if (!accepted && reg_ > options.reg_max) {
-      reg_ = options.reg_max;
-      return SolveStatus::NoDescent;
-    }
+    if (converged) return SolveStatus::Converged;
+    if (out_of_time || Clock::now() >= deadline) return SolveStatus::Deadline;
+    if (!accepted && reg_ > options.reg_max) return fail(SolveStatus::NoDescent);
   }
   return SolveStatus::MaxIterations;
+}
+
+// After a failure μ starts again from its initial value: it carries over between solves, and a
+// stuck 1e9 would cripple the next ones.
+SolveStatus Solver::fail(SolveStatus status) {
+  reg_ = options.reg_initial;
+  return status;
 }
 
 void Solver::printIterationTable(const IterationStats& s) {

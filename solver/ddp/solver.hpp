@@ -20,6 +20,7 @@
 // workspaces and never throws; a non-finite value stops it with a status, keeping the last good
 // iterate.
 
+#include <algorithm>
 #include <chrono>
 #include <functional>
 #include <vector>
@@ -69,7 +70,10 @@ class Solver {
  public:
   using Clock = std::chrono::steady_clock;
 
-  Solver(ShootingProblem& problem, SolverKind kind = SolverKind::Fddp);
+  // options.reg_initial is the first μ; μ then carries over between solves and restarts from it
+  // after a failed solve.
+  Solver(ShootingProblem& problem, SolverKind kind = SolverKind::Fddp,
+         const SolverOptions& options = SolverOptions());
 
   SolverKind kind() const { return kind_; }
   SolverOptions options;
@@ -101,8 +105,9 @@ class Solver {
   void setRegularization(double mu) { reg_ = mu; }
   int iterations() const { return iterations_; }
   // Statistics of the iterations of the last solve (capacity fixed at construction).
+  static constexpr int kMaxStats = 1000;
   const IterationStats* stats() const { return stats_.data(); }
-  int statsCount() const { return iterations_; }
+  int statsCount() const { return std::min(iterations_, kMaxStats); }
 
   // Called after every iteration (set at setup; the call itself does not allocate, the callback
   // might). printIterationTable is a ready-made one.
@@ -110,16 +115,18 @@ class Solver {
   static void printIterationTable(const IterationStats& s);
 
   // The pieces of an iteration, public for the benchmarks (knots/<robot>/{backward,forward}):
-  // calcDiff of all knots and the gaps; the backward pass at regularization μ (false when a Quu is
-  // not positive definite); the nonlinear rollout at step α into the trial trajectory (returns its
+  // calcDiff of all knots and the gaps (false, and the iterate's cost kept, when a value is not
+  // finite); the backward pass at regularization μ (false when a Quu is not positive definite or
+  // a value is not finite); the nonlinear rollout at step α into the trial trajectory (returns its
   // cost); the cost change the quadratic model of the last backward pass predicts for step α.
-  double computeDerivatives();
+  bool computeDerivatives();
   bool backwardPass();
   double forwardPass(double alpha);
   double expectedCostChange(double alpha) const { return alpha * (d1_ + 0.5 * alpha * d2_); }
 
  private:
-  void rollout();         // xs from x0 and us (Ddp's feasible start)
+  bool rollout();  // xs from x0 and us (Ddp's feasible start); false (iterate kept) on failure
+  SolveStatus fail(SolveStatus status);
   double computeGaps();   // f_k of the current trajectory from the knots' x_next; Σ |f|₁
   void expectedChange();  // d1, d2 from the linearized rollout of the step
   bool finiteTrajectory() const;
@@ -146,7 +153,10 @@ class Solver {
   Eigen::VectorXd dx_, dx_next_, du_, tmp_x_;
   std::vector<BoxQP> box_;
   Eigen::VectorXd u_lower_, u_upper_;
+  Eigen::VectorXd x_last_, u_last_;  // shiftWarmStart's saved tail
+  Eigen::MatrixXd K_last_;
   bool has_bounds_ = false;
+  bool backward_nonfinite_ = false;
   bool feasible_ = false;
   double cost_ = 0.0, gap_ = 0.0, d1_ = 0.0, d2_ = 0.0, reg_ = 0.0;
   int iterations_ = 0;

@@ -43,6 +43,7 @@ Activation Activation::smoothAbs(int dim, double eps, double weight) {
 namespace {
 // The violation of a bound: r - ub above, r - lb below, 0 inside.
 inline double violation(double r, double lb, double ub) {
+  if (std::isnan(r)) return r;  // a NaN residual must not read as "inside the bounds"
   if (r > ub) return r - ub;
   if (r < lb) return r - lb;
   return 0.0;

@@ -129,6 +129,7 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
     u_lower_ = -u_upper_;
   }
   x_ref_ = x_nominal_;
+  knot_time_.assign(options.knots + 1, 0.0);
   update(0.0);
 }
 
@@ -167,12 +168,18 @@ void LocomotionProblem::setStateReference(Eigen::VectorXd& x_ref, double t) cons
   x_ref.head<3>() += (steps / nc) * options_.step;
 }
 
-void LocomotionProblem::update(double t0) {
+bool LocomotionProblem::update(double t0) {
+  // A clock that is not finite (or absurdly far) would index the plan out of range: refuse it.
+  if (!std::isfinite(t0) || std::abs(t0) > 1e9) return false;
   t0_ = t0;
   const int T = problem_->horizon(), nc = contacts_.size();
   const double dt = options_.dt;
+  // An impulse knot takes no time: it is inserted at its touch-down time and the contact knot
+  // after it starts at that same time, so every knot's time is t0 + dt · (contact knots before).
+  double t = t0;
+  bool after_impulse = false;
   for (int k = 0; k < T; ++k) {
-    const double t = t0 + k * dt;
+    knot_time_[k] = t;
     // Every running knot was built as a KnotModel (shift only reorders them).
     auto& knot = static_cast<KnotModel&>(problem_->knot(k));
     CostModel& costs = knot.costs();
@@ -189,7 +196,7 @@ void LocomotionProblem::update(double t0) {
       if (swing.active)
         static_cast<FrameTranslationResidual&>(*swing.residual).setReference(footReference(c, t));
     }
-    const bool impulse = touchdown && options_.impulses;
+    const bool impulse = touchdown && options_.impulses && !after_impulse;
     knot.setMode(impulse ? KnotMode::Impulse : KnotMode::Contact);
     // An impulse knot's cones bound impulses Λ ≈ f dt [N s], weighted as the same mean force. No
     // minimum there: a soft landing (no impact speed) has zero impulses, and rightly so.
@@ -204,10 +211,14 @@ void LocomotionProblem::update(double t0) {
         .setReference(u_hold_[schedule_.localPhase(g)]);
     setStateReference(x_ref_, t);
     static_cast<StateResidual&>(*costs[state_term_].residual).setReference(x_ref_);
+    after_impulse = impulse;
+    if (!impulse) t += dt;
   }
+  knot_time_[T] = t;
   auto& terminal = static_cast<TerminalModel&>(problem_->terminal());
-  setStateReference(x_ref_, t0 + T * dt);
+  setStateReference(x_ref_, t);
   static_cast<StateResidual&>(*terminal.costs()[0].residual).setReference(x_ref_);
+  return true;
 }
 
 void LocomotionProblem::standingWarmStart(std::vector<Eigen::VectorXd>& xs,

@@ -10,8 +10,9 @@
 //   "cone_<c>"     friction cone of contact c, on while c is closed;
 //   "swing_<c>"    position of foot c on its swing arc, on while c is open and at its touch-down
 //                  knot (reference: the new foothold, so the foot lands where planned).
-// The terminal knot has "state" only. Knot k stands for time t0 + k dt; a knot where a contact
-// closes becomes an impulse knot (options.impulses) with the contacts closed after touch-down.
+// The terminal knot has "state" only. A touch-down inserts an impulse knot (options.impulses) with
+// the contacts closed after it; it takes no time, so knot k stands for time t0 + dt · (contact
+// knots before k), knotTime(k).
 //
 // Footholds: foot c starts at its position in x_nominal and moves by options.step at each of its
 // touch-downs, counted from the plan's start; a swing from foothold n to n + 1 follows
@@ -73,8 +74,10 @@ class LocomotionProblem {
 
   // Re-configures every knot in place for the plan from time t0: contacts, knot modes, which cost
   // terms are on, swing and state references. No allocation (the controller's tick calls it after
-  // ShootingProblem::shift).
-  void update(double t0);
+  // ShootingProblem::shift). False (nothing changed) for a non-finite or absurd t0.
+  bool update(double t0);
+  // The time knot k stands for after the last update (k = horizon(): the terminal knot).
+  double knotTime(int k) const { return knot_time_[k]; }
 
   // Foot c's target at time t: its foothold while closed, its swing arc while open.
   Eigen::Vector3d footReference(int contact, double t) const;
@@ -107,6 +110,7 @@ class LocomotionProblem {
   std::vector<int> cone_term_, swing_term_;
   Eigen::VectorXd x_ref_;  // scratch for the state references
   double t0_ = 0.0;
+  std::vector<double> knot_time_;  // T + 1
 };
 
 }  // namespace stride

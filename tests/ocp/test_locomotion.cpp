@@ -7,6 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+
+#include <cmath>
 #include <cstdio>
 
 #include "ocp/locomotion_cases.hpp"
@@ -143,9 +146,13 @@ TEST(LocomotionProblem, UpdateConfiguresKnots) {
   for (double t0 : {0.0, 0.13, 0.47}) {
     loco.update(t0);
     int impulses = 0;
+    // Impulse knots take no time: the contact knot after one stands for the same time.
+    double expected_t = t0;
+    bool after_impulse = false;
     for (int k = 0; k < loco.problem().horizon(); ++k) {
       const KnotModel& knot = knotAt(loco, k);
-      const double t = t0 + k * dt;
+      const double t = loco.knotTime(k);
+      EXPECT_NEAR(t, expected_t, 1e-12) << k;
       const bool closed = s.closedAt(FL, t), before = s.closedAt(FL, t - dt);
       EXPECT_EQ(knot.contacts().isActive(FL), closed) << t;
       EXPECT_EQ(knot.costs()[knot.costs().find("cone_FL_FOOT")].active, closed);
@@ -153,15 +160,21 @@ TEST(LocomotionProblem, UpdateConfiguresKnots) {
       EXPECT_EQ(swing.active, !closed || !before) << t;
       bool lands = false;
       for (int f = 0; f < 4; ++f) lands = lands || (s.closedAt(f, t) && !s.closedAt(f, t - dt));
-      EXPECT_EQ(knot.mode() == KnotMode::Impulse, lands) << t;
-      impulses += lands;
+      const bool impulse = lands && !after_impulse;
+      EXPECT_EQ(knot.mode() == KnotMode::Impulse, impulse) << t;
+      impulses += impulse;
+      after_impulse = impulse;
+      if (!impulse) expected_t += dt;
       if (swing.active) {
         const auto& r = static_cast<const FrameTranslationResidual&>(*swing.residual);
         EXPECT_EQ(r.reference(), loco.footReference(FL, t));
       }
     }
     EXPECT_GE(impulses, 2) << t0;
+    EXPECT_NEAR(loco.knotTime(loco.problem().horizon()), expected_t, 1e-12);
   }
+  EXPECT_FALSE(loco.update(std::nan("")));
+  EXPECT_FALSE(loco.update(std::numeric_limits<double>::infinity()));
   // The swing arc: lift-off foothold, apex half way up, the next foothold at touch-down.
   const Eigen::Vector3d p0 = loco.foothold(FL, 0);
   EXPECT_NEAR(p0.z(), 0.0, 1e-12);
@@ -211,20 +224,24 @@ Measures measure(LocomotionProblem& loco, const Solver& solver) {
   problem.calc(solver.xs(), solver.us());
   const Model& model = *problem.state().model();
   const ContactSchedule& s = loco.schedule();
-  const double mu = loco_cases::kGroundFriction, dt = loco.options().dt, t0 = loco.startTime();
+  const double mu = loco_cases::kGroundFriction;
   Measures m;
   Data data(model);
   const int T = problem.horizon(), nc = loco.contacts().size();
   std::vector<double> highest(nc, 0.0);
+  std::vector<char> was_closed(nc, 1);
   double apex = HUGE_VAL;
   for (int k = 0; k <= T; ++k) {
-    const double t = t0 + k * dt;
+    // Knot times from the problem: an impulse knot and the contact knot after it share one.
+    const double t = loco.knotTime(k);
     framesForwardKinematics(model, data, solver.xs()[k].head(model.nq));
     for (int c = 0; c < nc; ++c) {
       const Eigen::Vector3d p = data.oMf[loco.contacts()[c].frame].p;
       const bool closed = s.closedAt(c, t);
+      const bool landed = closed && k > 0 && !was_closed[c];
+      was_closed[c] = closed;
       if (!closed) highest[c] = std::max(highest[c], p.z());
-      if (closed && k > 0 && !s.closedAt(c, t - dt)) {  // landed at this knot
+      if (landed) {  // landed at this knot
         m.max_landing = std::max(m.max_landing, (p - loco.footReference(c, t)).norm());
         apex = std::min(apex, highest[c]);
         highest[c] = 0.0;

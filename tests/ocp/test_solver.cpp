@@ -135,7 +135,8 @@ TEST(Fddp, ExpectedChangeMatchesActualForEveryStep) {
   std::vector<Eigen::VectorXd> xs(p.T + 1, Eigen::VectorXd::Ones(p.nx)),
       us(p.T, Eigen::VectorXd::Ones(p.nu));
   ASSERT_TRUE(solver.setWarmStart(xs, us));
-  const double cost = solver.computeDerivatives();
+  ASSERT_TRUE(solver.computeDerivatives());
+  const double cost = solver.cost();
   ASSERT_GT(solver.gap(), 1.0);
   ASSERT_TRUE(solver.backwardPass());
   for (double alpha : {1.0, 0.5, 0.25, 0.125, 0.01}) {
@@ -220,7 +221,7 @@ TEST(Solver, EulerStructureMatchesDenseProducts) {
     for (Solver* s : {&structured, &dense}) {
       ASSERT_TRUE(s->setWarmStart(xs, us));
       s->setRegularization(1e-6);
-      s->computeDerivatives();
+      ASSERT_TRUE(s->computeDerivatives());
       ASSERT_TRUE(s->backwardPass());
     }
     for (int k = 0; k < T; ++k) {
@@ -247,6 +248,88 @@ TEST(Solver, NonFiniteKnotStopsWithStatus) {
     EXPECT_EQ(maxDifference(solver.xs(), xs), 0.0);
     const_cast<LqKnot*>(p.knots[3])->q[0] = 0.5;
   }
+}
+
+// A Quu that is not positive definite from μ = 0: the regularization rises (bounded retries) and
+// the solve returns, converged once μ makes the step a descent.
+TEST(Solver, IndefiniteQuuFromZeroRegularizationTerminates) {
+  LqProblem p = makeLq(4, 2, 6, 13);
+  const_cast<LqKnot*>(p.knots[2])->R = -50.0 * Eigen::MatrixXd::Identity(2, 2);
+  Solver solver(*p.problem, SolverKind::Fddp);
+  solver.setRegularization(0.0);
+  const SolveStatus status =
+      solver.solve(50, Solver::Clock::now() + std::chrono::milliseconds(200));
+  EXPECT_NE(status, SolveStatus::Deadline) << toString(status);
+  EXPECT_GT(solver.iterations() + (status == SolveStatus::NoDescent), 0);
+}
+
+// Non-finite derivatives (a finite value, a NaN in Fx) are NonFinite, not a regularization
+// problem; μ restarts from its initial value.
+TEST(Solver, NonFiniteDerivativesAreReportedAsSuch) {
+  struct PoisonedKnot : LqKnot {
+    using LqKnot::LqKnot;
+    void calcDiff(ActionData& d, const Eigen::Ref<const Eigen::VectorXd>& x,
+                  const Eigen::Ref<const Eigen::VectorXd>& u) const override {
+      LqKnot::calcDiff(d, x, u);
+      d.Fx(0, 0) = std::nan("");
+    }
+  };
+  std::mt19937 rng(3);
+  std::vector<std::unique_ptr<ActionModel>> running;
+  for (int k = 0; k < 4; ++k) {
+    auto m = LqKnot::random(3, 2, false, rng);
+    if (k == 1) {
+      auto poisoned = std::make_unique<PoisonedKnot>(3, 2, false);
+      poisoned->A = m->A, poisoned->B = m->B, poisoned->c = m->c, poisoned->Q = m->Q;
+      poisoned->R = m->R, poisoned->N = m->N, poisoned->q = m->q, poisoned->r = m->r;
+      running.push_back(std::move(poisoned));
+    } else {
+      running.push_back(std::move(m));
+    }
+  }
+  ShootingProblem problem(Eigen::VectorXd::Ones(3), std::move(running),
+                          LqKnot::random(3, 2, true, rng));
+  Solver solver(problem, SolverKind::Fddp);
+  solver.setRegularization(1e-3);
+  EXPECT_EQ(solver.solve(5), SolveStatus::NonFinite);
+  EXPECT_EQ(solver.regularization(), solver.options.reg_initial);
+  for (const auto& x : solver.xs()) EXPECT_TRUE(x.allFinite());
+}
+
+// Knots with different control sizes: BoxFddp with bounds that never bind equals Fddp.
+TEST(BoxFddp, KnotsWithDifferentControlSizes) {
+  auto build = [&](unsigned seed) {
+    std::mt19937 r(seed);
+    std::vector<std::unique_ptr<ActionModel>> running;
+    for (int k = 0; k < 8; ++k) running.push_back(LqKnot::random(4, k % 2 ? 2 : 3, false, r));
+    return std::make_unique<ShootingProblem>(Eigen::VectorXd::Ones(4), std::move(running),
+                                             LqKnot::random(4, 3, true, r));
+  };
+  auto p1 = build(4), p2 = build(4);
+  Solver fddp(*p1, SolverKind::Fddp), box(*p2, SolverKind::BoxFddp);
+  box.setControlBounds(Eigen::VectorXd::Constant(3, -1e6), Eigen::VectorXd::Constant(3, 1e6));
+  EXPECT_EQ(fddp.solve(10), SolveStatus::Converged);
+  EXPECT_EQ(box.solve(10), SolveStatus::Converged);
+  EXPECT_LT(maxDifference(fddp.us(), box.us()), 1e-9);
+}
+
+// shiftWarmStart by n moves the trajectory n knots forward and repeats the last state and control
+// in the tail, also for n = T.
+TEST(Solver, ShiftWarmStartRepeatsTheTail) {
+  LqProblem p = makeLq(3, 2, 5, 17);
+  Solver solver(*p.problem, SolverKind::Ddp);
+  solver.solve(3);
+  const auto xs = solver.xs();
+  const auto us = solver.us();
+  solver.shiftWarmStart(2);
+  EXPECT_EQ(solver.xs()[0], xs[2]);
+  EXPECT_EQ(solver.xs()[3], xs[5]);
+  EXPECT_EQ(solver.xs()[5], xs[5]);
+  EXPECT_EQ(solver.us()[2], us[4]);
+  EXPECT_EQ(solver.us()[4], us[4]);
+  solver.shiftWarmStart(5);
+  for (const auto& x : solver.xs()) EXPECT_EQ(x, xs[5]);
+  for (const auto& u : solver.us()) EXPECT_EQ(u, us[4]);
 }
 
 TEST(Solver, DeadlineInThePastReturnsAtOnce) {
