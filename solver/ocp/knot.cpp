@@ -2,6 +2,8 @@
 
 #include <limits>
 
+#include <omp.h>
+
 #include "solver/multibody/jacobian.hpp"
 #include "solver/multibody/kinematics.hpp"
 
@@ -23,27 +25,38 @@ KnotActionData::KnotActionData(const Model& model, const ContactSet& contacts,
       costs(costs.createData()),
       v(Eigen::VectorXd::Zero(model.nv)) {}
 
-KnotModel::KnotModel(const Model& model, const ContactSet& contacts, double dt)
+SharedWorkspace::SharedWorkspace(const Model& model, int threads) {
+  for (int t = 0; t < std::max(threads, 1); ++t) data_.push_back(std::make_unique<Data>(model));
+}
+
+KnotModel::KnotModel(const Model& model, const ContactSet& contacts, double dt,
+                     std::shared_ptr<SharedWorkspace> workspace)
     : ActionModel(StateSpace(model), actuatedDimension(model)),
       model_(model),
       contacts_(contacts),
       costs_(model.nv, actuatedDimension(model)),
-      dt_(dt) {}
+      dt_(dt),
+      workspace_(std::move(workspace)) {}
+
+Data& KnotModel::workspace(KnotActionData& d) const {
+  const int thread = omp_get_thread_num();
+  return workspace_ && thread < workspace_->threads() ? workspace_->forThread(thread) : d.data;
+}
 
 std::unique_ptr<ActionData> KnotModel::createData() const {
   return std::make_unique<KnotActionData>(model_, contacts_, costs_);
 }
 
-KnotContext KnotModel::context(KnotActionData& d) const {
+KnotContext KnotModel::context(KnotActionData& d, Data& data) const {
   const bool impulse = mode_ == KnotMode::Impulse;
-  return KnotContext{model_,     d.data,
+  return KnotContext{model_,     data,
                      &contacts_, impulse ? &d.knot.contact.impulses : &d.knot.contact.lambda,
                      &d.knot.Gx, &d.knot.Gu};
 }
 
 // The dynamics of the knot's mode; false (with the status set, the state held and the cost
 // infinite) when they cannot be solved.
-bool KnotModel::dynamics(KnotActionData& d, const Eigen::Ref<const Eigen::VectorXd>& x,
+bool KnotModel::dynamics(KnotActionData& d, Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
                          const Eigen::Ref<const Eigen::VectorXd>& u, bool derivatives) const {
   const int nq = model_.nq, nv = model_.nv;
   const auto q = x.head(nq);
@@ -51,8 +64,8 @@ bool KnotModel::dynamics(KnotActionData& d, const Eigen::Ref<const Eigen::Vector
   KnotData& kd = d.knot;
   ContactStatus s;
   if (mode_ == KnotMode::Contact) {
-    s = derivatives ? knotDynamicsDerivatives(model_, d.data, contacts_, kd, q, v, u, dt_, damping)
-                    : knotDynamics(model_, d.data, contacts_, kd, q, v, u, dt_, damping);
+    s = derivatives ? knotDynamicsDerivatives(model_, data, contacts_, kd, q, v, u, dt_, damping)
+                    : knotDynamics(model_, data, contacts_, kd, q, v, u, dt_, damping);
     if (s == ContactStatus::Ok) {
       d.x_next.head(nq) = kd.q_next;
       d.x_next.tail(nv) = kd.v_next;
@@ -77,13 +90,13 @@ bool KnotModel::dynamics(KnotActionData& d, const Eigen::Ref<const Eigen::Vector
   } else {
     ContactData& cd = kd.contact;
     s = derivatives
-            ? impulseDynamicsDerivatives(model_, d.data, contacts_, cd, q, v, restitution, damping)
-            : impulseDynamics(model_, d.data, contacts_, cd, q, v, restitution, damping);
+            ? impulseDynamicsDerivatives(model_, data, contacts_, cd, q, v, restitution, damping)
+            : impulseDynamics(model_, data, contacts_, cd, q, v, restitution, damping);
     if (s == ContactStatus::Ok) {
       d.x_next.head(nq) = q;
       d.x_next.tail(nv) = cd.v_after;
       // Velocities for the cost's kinematics (the impulse solve only needs placements).
-      forwardKinematics(model_, d.data, q, v);
+      forwardKinematics(model_, data, q, v);
       if (derivatives) {
         // x⁺ = (q, v⁺(q, v⁻)): the configuration passes through.
         d.euler.valid = false;
@@ -113,8 +126,9 @@ bool KnotModel::dynamics(KnotActionData& d, const Eigen::Ref<const Eigen::Vector
 void KnotModel::calc(ActionData& data, const Eigen::Ref<const Eigen::VectorXd>& x,
                      const Eigen::Ref<const Eigen::VectorXd>& u) const {
   auto& d = static_cast<KnotActionData&>(data);
-  if (!dynamics(d, x, u, false)) return;
-  d.cost = costs_.calc(d.costs, context(d), x, u);
+  Data& work = workspace(d);
+  if (!dynamics(d, work, x, u, false)) return;
+  d.cost = costs_.calc(d.costs, context(d, work), x, u);
   if (!std::isfinite(d.cost)) {
     d.status = KnotStatus::NonFinite;
     d.cost = kInfinity;
@@ -124,8 +138,9 @@ void KnotModel::calc(ActionData& data, const Eigen::Ref<const Eigen::VectorXd>& 
 void KnotModel::calcDiff(ActionData& data, const Eigen::Ref<const Eigen::VectorXd>& x,
                          const Eigen::Ref<const Eigen::VectorXd>& u) const {
   auto& d = static_cast<KnotActionData&>(data);
-  if (!dynamics(d, x, u, true)) return;
-  d.cost = costs_.calcDiff(d.costs, context(d), x, u, d.Lx, d.Lu, d.Lxx, d.Lxu, d.Luu);
+  Data& work = workspace(d);
+  if (!dynamics(d, work, x, u, true)) return;
+  d.cost = costs_.calcDiff(d.costs, context(d, work), x, u, d.Lx, d.Lu, d.Lxx, d.Lxu, d.Luu);
   if (!std::isfinite(d.cost) || !d.Lx.allFinite() || !d.Lu.allFinite()) {
     d.status = KnotStatus::NonFinite;
     d.cost = kInfinity;

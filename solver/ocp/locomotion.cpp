@@ -1,5 +1,7 @@
 #include "solver/ocp/locomotion.hpp"
 
+#include <omp.h>
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -95,8 +97,10 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   cone_term_.resize(nc);
   swing_term_.resize(nc);
   std::vector<std::unique_ptr<ActionModel>> running;
+  // One multibody workspace per thread the problem may use (knots.hpp, SharedWorkspace).
+  auto workspace = std::make_shared<SharedWorkspace>(model, std::max(omp_get_max_threads(), 2));
   for (int k = 0; k < options.knots; ++k) {
-    auto knot = std::make_unique<KnotModel>(model, contacts_, options.dt);
+    auto knot = std::make_unique<KnotModel>(model, contacts_, options.dt, workspace);
     CostModel& costs = knot->costs();
     state_term_ = costs.add("state", std::make_unique<StateResidual>(model, nu, x_nominal),
                             Activation::weightedQuadratic(w_state));

@@ -96,8 +96,9 @@ std::unique_ptr<KnotsProblem> buildKnots(const KnotsSpec& spec) {
     contacts.add(model, c, spec.dim, ReferenceFrame::LocalWorldAligned, 0.0, 50.0);
   const SE3 target(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.0, 0.0, 0.4));
   std::vector<std::unique_ptr<ActionModel>> running;
+  auto workspace = std::make_shared<SharedWorkspace>(model, 2);
   for (int k = 0; k < 100; ++k) {
-    auto knot = std::make_unique<KnotModel>(model, contacts, 5e-3);
+    auto knot = std::make_unique<KnotModel>(model, contacts, 5e-3, workspace);
     CostModel& costs = knot->costs();
     costs.add("placement",
               std::make_unique<FramePlacementResidual>(model, nu, spec.end_effector, target),
