@@ -45,7 +45,12 @@ const char* toString(SolveStatus status) {
 }
 
 Solver::Solver(ShootingProblem& problem, SolverKind kind, const SolverOptions& opts)
-    : options(opts), problem_(problem), kind_(kind), T_(problem.horizon()), ndx_(problem.ndx()) {
+    : options(opts),
+      problem_(problem),
+      kind_(kind),
+      T_(problem.horizon()),
+      ndx_(problem.ndx()),
+      box_(problem.maxNu()) {
   const int nx = problem.nx(), m = problem.maxNu(), n = ndx_;
   xs_.assign(T_ + 1, problem.x0());
   xs_try_ = xs_;
@@ -70,7 +75,6 @@ Solver::Solver(ShootingProblem& problem, SolverKind kind, const SolverOptions& o
   w_ = Eigen::VectorXd::Zero(m);
   dx_ = dx_next_ = tmp_x_ = Eigen::VectorXd::Zero(n);
   du_ = Eigen::VectorXd::Zero(m);
-  box_.emplace_back(m);
   u_lower_ = Eigen::VectorXd::Constant(m, -kInfinity);
   u_upper_ = Eigen::VectorXd::Constant(m, kInfinity);
   stats_.resize(kMaxStats);
@@ -316,7 +320,7 @@ bool Solver::backwardPass() {
       if (box) {
         // k: the box QP on the control step (bounds shifted by the current control), warm
         // started from the last k; K on the free controls only, zero on the clamped ones.
-        BoxQP& qp = box_[0];
+        BoxQP& qp = box_;
         auto lb = w_.head(nu);
         lb = u_lower_.head(nu) - us_[k];
         du_.head(nu) = u_upper_.head(nu) - us_[k];

@@ -151,7 +151,7 @@ class Solver {
   Eigen::Matrix<double, 6, Eigen::Dynamic> rowwork_;
   // Linearized rollout.
   Eigen::VectorXd dx_, dx_next_, du_, tmp_x_;
-  std::vector<BoxQP> box_;
+  BoxQP box_;  // one workspace: the backward pass is serial
   Eigen::VectorXd u_lower_, u_upper_;
   Eigen::VectorXd x_last_, u_last_;  // shiftWarmStart's saved tail
   Eigen::MatrixXd K_last_;
