@@ -13,6 +13,10 @@ packages=(
   libgtest-dev libgmock-dev  # tests
   libbenchmark-dev         # tools/bench
   libomp-dev               # OpenMP (per-knot parallelism)
+  liblcm-dev liblcm-bin    # LCM 1.3: messages, lcm-gen, lcm-logger, lcm-logplayer
+  liblcm-java libjchart2d-java  # lcm-spy, and lcm.jar to compile our types for it
+  openjdk-17-jdk-headless  # javac: the jar of our message types that lcm-spy decodes with
+  iproute2 util-linux      # ip, unshare, taskset: the demo's private network namespace, pinning
 )
 
 missing=()

@@ -50,8 +50,9 @@ void checkOptions(const Model& model, const Eigen::VectorXd& x_nominal,
     throw std::invalid_argument("LocomotionProblem: dt must be positive and finite");
   if (o.knots < 1) throw std::invalid_argument("LocomotionProblem: knots must be at least 1");
   if (!(o.mu > 0.0)) throw std::invalid_argument("LocomotionProblem: mu must be positive");
-  if (!o.step.allFinite() || !std::isfinite(o.swing_height))
-    throw std::invalid_argument("LocomotionProblem: step and swing height must be finite");
+  if (!o.step.allFinite() || !std::isfinite(o.swing_height) || !std::isfinite(o.step_after))
+    throw std::invalid_argument(
+        "LocomotionProblem: step, step_after and swing height must be finite");
 }
 }  // namespace
 
@@ -73,6 +74,9 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   Data data(model);
   framesForwardKinematics(model, data, q);
   for (int c = 0; c < nc; ++c) initial_feet_.push_back(data.oMf[contacts_[c].frame].p);
+  const long g_fixed = schedule_.phaseAt(options.step_after);
+  for (int c = 0; c < nc; ++c)
+    fixed_steps_.push_back(options.step_after > 0.0 ? schedule_.touchdowns(c, g_fixed) : 0L);
 
   // Holding torques per phase: g(q) = Sᵀ u + Jcᵀ λ at rest; the base rows fix λ (minimum norm
   // among the forces that carry the weight), the joint rows then give u.
@@ -146,7 +150,7 @@ Eigen::Vector3d LocomotionProblem::footReference(int contact, double t) const {
   const double r = std::clamp((t - s.lift_off) / (s.touch_down - s.lift_off), 0.0, 1.0);
   // Forward on a cosine ramp (no horizontal speed at lift-off and touch-down, so landing needs no
   // tangential impulse), up and down on a sine arch.
-  p += 0.5 * (1.0 - std::cos(kPi * r)) * options_.step;
+  if (s.footholds >= fixed_steps_[contact]) p += 0.5 * (1.0 - std::cos(kPi * r)) * options_.step;
   p.z() += options_.swing_height * std::sin(kPi * r);
   return p;
 }
@@ -161,12 +165,12 @@ void LocomotionProblem::setStateReference(Eigen::VectorXd& x_ref, double t) cons
   double steps = 0.0;
   for (int c = 0; c < nc; ++c) {
     if (schedule_.closed(c, g)) {
-      steps += static_cast<double>(schedule_.touchdowns(c, g));
+      steps += static_cast<double>(movingSteps(c, schedule_.touchdowns(c, g)));
       continue;
     }
     const ContactSchedule::Swing s = schedule_.swing(c, g);
-    steps += static_cast<double>(s.footholds);
-    if (std::isfinite(s.touch_down))
+    steps += static_cast<double>(movingSteps(c, s.footholds));
+    if (std::isfinite(s.touch_down) && s.footholds >= fixed_steps_[c])
       steps += std::clamp((t - s.lift_off) / (s.touch_down - s.lift_off), 0.0, 1.0);
   }
   x_ref.head<3>() += (steps / nc) * options_.step;

@@ -20,6 +20,7 @@
 //   s = (t - lift-off) / (touch-down - lift-off)
 // (no horizontal speed at either end, so a landing needs no tangential impulse).
 
+#include <algorithm>
 #include <vector>
 
 #include "solver/ocp/contact_plan.hpp"
@@ -50,6 +51,9 @@ struct LocomotionOptions {
   double min_normal_force = 0.0;
   double swing_height = 0.05;
   Eigen::Vector3d step = Eigen::Vector3d::Zero();  // displacement of a foot per step (world)
+  // Touch-downs up to this plan time land where the foot lifted off (stepping in place); later
+  // ones move the foot by `step`. So one plan can stand, trot in place, then walk.
+  double step_after = 0.0;
   LocomotionWeights weights;
   bool impulses = true;        // impulse knots at touch-downs (else contact knots throughout)
   bool torque_limits = false;  // controlLower/Upper from the model's effort limits (else ±inf)
@@ -81,10 +85,12 @@ class LocomotionProblem {
 
   // Foot c's target at time t: its foothold while closed, its swing arc while open.
   Eigen::Vector3d footReference(int contact, double t) const;
-  // Foot c's foothold after n touch-downs.
+  // Foot c's foothold after n touch-downs (those up to options.step_after do not move it).
   Eigen::Vector3d foothold(int contact, long n) const {
-    return initial_feet_[contact] + static_cast<double>(n) * options_.step;
+    return initial_feet_[contact] + static_cast<double>(movingSteps(contact, n)) * options_.step;
   }
+  // How many of foot c's first n touch-downs moved it.
+  long movingSteps(int contact, long n) const { return std::max(0L, n - fixed_steps_[contact]); }
   // The gravity-compensating control of x_nominal in (local) phase i of the plan.
   const Eigen::VectorXd& holdingControl(int phase) const { return u_hold_[phase]; }
   // A standing warm start: x_nominal everywhere, each knot's holding control (after update).
@@ -103,6 +109,7 @@ class LocomotionProblem {
   LocomotionOptions options_;
   std::unique_ptr<ShootingProblem> problem_;
   std::vector<Eigen::Vector3d> initial_feet_;
+  std::vector<long> fixed_steps_;  // per contact: touch-downs up to options.step_after
   std::vector<Eigen::VectorXd> u_hold_;  // per local phase
   Eigen::VectorXd u_lower_, u_upper_;
   // Term indices, the same in every running knot (all are built alike).

@@ -1,0 +1,247 @@
+#include "controller/controller_config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+namespace stride {
+
+const char* toString(SolverKind kind) {
+  switch (kind) {
+    case SolverKind::Ddp:
+      return "ddp";
+    case SolverKind::Fddp:
+      return "fddp";
+    case SolverKind::BoxFddp:
+      return "box-fddp";
+  }
+  return "?";
+}
+
+namespace {
+
+// Reads one YAML file, with the file's name and the key path in every error.
+class Reader {
+ public:
+  explicit Reader(const std::string& path) : path_(path) {}
+
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
+    throw ConfigError("controller config '" + path_ + "': " + (key.empty() ? "" : key + ": ") +
+                      what);
+  }
+
+  // A typo in a key must not silently fall back to a default.
+  void onlyKeys(const YAML::Node& map, const std::string& where,
+                std::initializer_list<const char*> keys) const {
+    if (!map) return;
+    if (!map.IsMap()) fail(where, "must be a mapping");
+    const std::set<std::string> allowed(keys.begin(), keys.end());
+    for (const auto& kv : map) {
+      const std::string k = kv.first.as<std::string>();
+      if (!allowed.count(k)) fail(where.empty() ? k : where + "." + k, "unknown key");
+    }
+  }
+
+  template <typename T>
+  void get(const YAML::Node& map, const char* key, const std::string& where, T& out) const {
+    const YAML::Node n = map[key];
+    if (!n) return;
+    try {
+      out = n.as<T>();
+    } catch (const YAML::Exception&) {
+      fail(where + "." + key, "wrong type");
+    }
+  }
+
+  void positive(double v, const std::string& key) const {
+    if (!(v > 0.0) || !std::isfinite(v)) fail(key, "must be positive and finite");
+  }
+  void nonNegative(double v, const std::string& key) const {
+    if (!(v >= 0.0) || !std::isfinite(v)) fail(key, "must be non-negative and finite");
+  }
+
+ private:
+  std::string path_;
+};
+
+}  // namespace
+
+ControllerConfig loadControllerConfig(const std::string& yaml_path) {
+  Reader r(yaml_path);
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(yaml_path);
+  } catch (const YAML::BadFile&) {
+    r.fail("", "file does not exist or cannot be read");
+  } catch (const YAML::Exception& e) {
+    r.fail("", std::string("malformed YAML: ") + e.what());
+  }
+  if (!root.IsMap()) r.fail("", "the top level must be a mapping");
+  r.onlyKeys(root, "",
+             {"robot", "rate_hz", "horizon", "policy_knots", "solver", "contacts", "weights", "gait",
+              "lcm", "safety", "realtime"});
+
+  ControllerConfig c;
+  c.path = yaml_path;
+  if (!root["robot"]) r.fail("robot", "missing (path of the robot YAML)");
+  c.robot_yaml = (std::filesystem::path(yaml_path).parent_path() / root["robot"].as<std::string>())
+                     .lexically_normal()
+                     .string();
+  r.get(root, "rate_hz", "", c.rate_hz);
+  r.positive(c.rate_hz, "rate_hz");
+  r.get(root, "policy_knots", "", c.policy_knots);
+  if (c.policy_knots < 2 || c.policy_knots > 64) r.fail("policy_knots", "must be in [2, 64]");
+
+  LocomotionOptions& lo = c.locomotion;
+  const YAML::Node horizon = root["horizon"];
+  r.onlyKeys(horizon, "horizon", {"knots", "dt"});
+  if (horizon) {
+    r.get(horizon, "knots", "horizon", lo.knots);
+    r.get(horizon, "dt", "horizon", lo.dt);
+  }
+  if (lo.knots < 2 || lo.knots > 1000) r.fail("horizon.knots", "must be in [2, 1000]");
+  r.positive(lo.dt, "horizon.dt");
+  if (c.policy_knots > lo.knots) r.fail("policy_knots", "exceeds horizon.knots");
+  if ((c.policy_knots - 1) * lo.dt < 1.0 / c.rate_hz)
+    r.fail("policy_knots", "the policy must cover at least one tick period");
+
+  const YAML::Node solver = root["solver"];
+  r.onlyKeys(solver, "solver",
+             {"kind", "max_iterations", "initial_iterations", "deadline_fraction", "threads"});
+  if (solver) {
+    std::string kind = toString(c.solver);
+    r.get(solver, "kind", "solver", kind);
+    if (kind == "ddp")
+      c.solver = SolverKind::Ddp;
+    else if (kind == "fddp")
+      c.solver = SolverKind::Fddp;
+    else if (kind == "box-fddp")
+      c.solver = SolverKind::BoxFddp;
+    else
+      r.fail("solver.kind", "'" + kind + "' is not one of ddp, fddp, box-fddp");
+    r.get(solver, "max_iterations", "solver", c.max_iterations);
+    r.get(solver, "initial_iterations", "solver", c.initial_iterations);
+    r.get(solver, "deadline_fraction", "solver", c.deadline_fraction);
+    r.get(solver, "threads", "solver", c.threads);
+  }
+  if (c.max_iterations < 1) r.fail("solver.max_iterations", "must be at least 1");
+  if (c.initial_iterations < 1) r.fail("solver.initial_iterations", "must be at least 1");
+  if (!(c.deadline_fraction > 0.0 && c.deadline_fraction <= 1.0))
+    r.fail("solver.deadline_fraction", "must be in (0, 1]");
+  if (c.threads < 1 || c.threads > 64) r.fail("solver.threads", "must be in [1, 64]");
+
+  const YAML::Node contacts = root["contacts"];
+  r.onlyKeys(contacts, "contacts",
+             {"mu", "min_normal_force", "swing_height", "impulses", "torque_limits"});
+  if (contacts) {
+    r.get(contacts, "mu", "contacts", lo.mu);
+    r.get(contacts, "min_normal_force", "contacts", lo.min_normal_force);
+    r.get(contacts, "swing_height", "contacts", lo.swing_height);
+    r.get(contacts, "impulses", "contacts", lo.impulses);
+    r.get(contacts, "torque_limits", "contacts", lo.torque_limits);
+  }
+  r.positive(lo.mu, "contacts.mu");
+  r.nonNegative(lo.min_normal_force, "contacts.min_normal_force");
+  r.nonNegative(lo.swing_height, "contacts.swing_height");
+  if (c.solver == SolverKind::BoxFddp) lo.torque_limits = true;
+
+  const YAML::Node weights = root["weights"];
+  r.onlyKeys(weights, "weights",
+             {"base_position", "base_orientation", "joint_position", "base_velocity",
+              "joint_velocity", "control", "swing", "friction", "terminal_state"});
+  LocomotionWeights& w = lo.weights;
+  if (weights) {
+    r.get(weights, "base_position", "weights", w.base_position);
+    r.get(weights, "base_orientation", "weights", w.base_orientation);
+    r.get(weights, "joint_position", "weights", w.joint_position);
+    r.get(weights, "base_velocity", "weights", w.base_velocity);
+    r.get(weights, "joint_velocity", "weights", w.joint_velocity);
+    r.get(weights, "control", "weights", w.control);
+    r.get(weights, "swing", "weights", w.swing);
+    r.get(weights, "friction", "weights", w.friction);
+    r.get(weights, "terminal_state", "weights", w.terminal_state);
+  }
+  for (double v : {w.base_position, w.base_orientation, w.joint_position, w.base_velocity,
+                   w.joint_velocity, w.control, w.swing, w.friction, w.terminal_state})
+    r.nonNegative(v, "weights");
+
+  const YAML::Node gait = root["gait"];
+  r.onlyKeys(gait, "gait",
+             {"type", "stand", "support", "swing", "duration", "step", "step_after"});
+  GaitConfig& g = c.gait;
+  if (gait) {
+    r.get(gait, "type", "gait", g.type);
+    r.get(gait, "stand", "gait", g.stand);
+    r.get(gait, "support", "gait", g.support);
+    r.get(gait, "swing", "gait", g.swing);
+    r.get(gait, "duration", "gait", g.duration);
+    r.get(gait, "step_after", "gait", g.step_after);
+    if (gait["step"]) {
+      std::vector<double> s;
+      r.get(gait, "step", "gait", s);
+      if (s.size() != 3) r.fail("gait.step", "must be [x, y, z]");
+      g.step = Eigen::Vector3d(s[0], s[1], s[2]);
+    }
+  }
+  if (g.type != "stand" && g.type != "trot" && g.type != "walk")
+    r.fail("gait.type", "'" + g.type + "' is not one of stand, trot, walk");
+  r.nonNegative(g.stand, "gait.stand");
+  r.positive(g.support, "gait.support");
+  r.positive(g.swing, "gait.swing");
+  r.positive(g.duration, "gait.duration");
+  r.nonNegative(g.step_after, "gait.step_after");
+  if (!g.step.allFinite()) r.fail("gait.step", "must be finite");
+  lo.step = g.step;
+  lo.step_after = g.step_after;
+
+  const YAML::Node lcm = root["lcm"];
+  r.onlyKeys(lcm, "lcm", {"input", "output", "state", "policy", "status", "plan"});
+  if (lcm) {
+    r.get(lcm, "input", "lcm", c.input_url);
+    r.get(lcm, "output", "lcm", c.output_url);
+    r.get(lcm, "state", "lcm", c.state_channel);
+    r.get(lcm, "policy", "lcm", c.policy_channel);
+    r.get(lcm, "status", "lcm", c.status_channel);
+    r.get(lcm, "plan", "lcm", c.plan_channel);
+  }
+  for (const std::string* ch : {&c.state_channel, &c.policy_channel, &c.status_channel,
+                                &c.plan_channel})
+    if (ch->empty() || ch->size() > 63) r.fail("lcm", "channel names must have 1 to 63 characters");
+
+  const YAML::Node safety = root["safety"];
+  r.onlyKeys(safety, "safety",
+             {"max_state_age_ms", "fallback", "hold_kp", "hold_kd", "max_previous_ticks"});
+  if (safety) {
+    double age_ms = c.max_state_age * 1e3;
+    r.get(safety, "max_state_age_ms", "safety", age_ms);
+    r.positive(age_ms, "safety.max_state_age_ms");
+    c.max_state_age = age_ms * 1e-3;
+    std::string fb = "previous";
+    r.get(safety, "fallback", "safety", fb);
+    if (fb == "previous")
+      c.fallback = Fallback::Previous;
+    else if (fb == "hold")
+      c.fallback = Fallback::Hold;
+    else
+      r.fail("safety.fallback", "'" + fb + "' is not one of previous, hold");
+    r.get(safety, "hold_kp", "safety", c.hold_kp);
+    r.get(safety, "hold_kd", "safety", c.hold_kd);
+    r.get(safety, "max_previous_ticks", "safety", c.max_previous_ticks);
+  }
+  r.nonNegative(c.hold_kp, "safety.hold_kp");
+  r.nonNegative(c.hold_kd, "safety.hold_kd");
+  if (c.max_previous_ticks < 0) r.fail("safety.max_previous_ticks", "must be non-negative");
+
+  const YAML::Node rt = root["realtime"];
+  r.onlyKeys(rt, "realtime", {"cpu", "fifo_priority"});
+  if (rt) {
+    r.get(rt, "cpu", "realtime", c.cpu);
+    r.get(rt, "fifo_priority", "realtime", c.fifo_priority);
+  }
+  if (c.fifo_priority < 0 || c.fifo_priority > 99) r.fail("realtime.fifo_priority", "0 to 99");
+  return c;
+}
+
+}  // namespace stride

@@ -1,0 +1,60 @@
+#pragma once
+// The controller's configuration (config/controller/<name>.yaml): which robot, how fast, the
+// horizon, the cost weights, the solver budget, the gait, LCM channels and URLs, safety limits and
+// real-time settings. Loaded once at start-up; every error names the file and the key.
+
+#include <string>
+#include <vector>
+
+#include "config/robot_config.hpp"
+#include "solver/ddp/solver.hpp"
+#include "solver/ocp/locomotion.hpp"
+
+namespace stride {
+
+// The gait the controller plans with, unless a plan arrives on the plan channel. Times in s.
+struct GaitConfig {
+  std::string type = "trot";  // stand | trot | walk (quadruped); stand | walk (biped)
+  double stand = 1.0;         // standing first
+  double support = 0.1;       // all-feet (quadruped) / double-support (biped) phase
+  double swing = 0.2;         // one swing phase
+  double duration = 60.0;     // of the whole plan; then the robot stands
+  Eigen::Vector3d step = Eigen::Vector3d::Zero();  // foot displacement per touch-down
+  double step_after = 0.0;                         // steps in place until this plan time
+};
+
+enum class Fallback { Previous, Hold };
+
+struct ControllerConfig {
+  std::string path;        // the YAML it came from
+  std::string robot_yaml;  // resolved against the YAML's folder
+  double rate_hz = 100.0;
+  int policy_knots = 8;  // knots sent in each policy message
+  LocomotionOptions locomotion;
+  GaitConfig gait;
+
+  SolverKind solver = SolverKind::BoxFddp;
+  int max_iterations = 1;        // per tick
+  int initial_iterations = 100;  // the first solve, before the first policy
+  double deadline_fraction = 0.8;  // of the tick period, for the solve
+  int threads = 1;
+
+  std::string state_channel = "STRIDE_STATE", policy_channel = "STRIDE_POLICY",
+              status_channel = "STRIDE_STATUS", plan_channel = "STRIDE_PLAN";
+  std::string input_url, output_url;  // empty: LCM_DEFAULT_URL
+
+  double max_state_age = 0.05;  // s; an older state is stale
+  Fallback fallback = Fallback::Previous;
+  double hold_kp = 5.0, hold_kd = 0.2;  // hold policy joint gains [Nm/rad, Nm s/rad]
+  int max_previous_ticks = 20;          // fallback Previous degrades to Hold after this many
+
+  int cpu = -1;           // pin the loop to this CPU (-1: no)
+  int fifo_priority = 0;  // SCHED_FIFO priority (0: normal scheduling)
+};
+
+// Throws ConfigError naming the file and the key.
+ControllerConfig loadControllerConfig(const std::string& yaml_path);
+
+const char* toString(SolverKind kind);
+
+}  // namespace stride

@@ -1,0 +1,110 @@
+// stride-mpc: the receding-horizon KKT-DDP controller daemon (README, controller/README.md).
+//   stride-mpc --config config/controller/stride_quad.yaml              real time, LCM in and out
+//   stride-mpc --config ... --lockstep                                  ticks on state stamps
+//   stride-mpc --config ... --replay session.lcmlog --output out.lcmlog  a logged session, offline
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+
+#include "controller/run_loop.hpp"
+
+namespace {
+std::atomic<bool> g_stop{false};
+void onSignal(int) { g_stop = true; }
+
+std::string defaultUrl() {
+  const char* env = std::getenv("LCM_DEFAULT_URL");
+  return env != nullptr ? env : "";
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"stride-mpc: real-time whole-body MPC (KKT-DDP) over LCM"};
+  std::string config_path, replay, output, input_url, output_url, summary;
+  bool lockstep = false;
+  double duration = 0.0;
+  app.add_option("--config", config_path, "controller YAML (config/controller/)")->required();
+  app.add_option("--replay", replay, "run on the states of this LCM log, as fast as possible");
+  app.add_option("--output", output, "with --replay: the log to write policies and status to");
+  app.add_flag("--lockstep", lockstep, "tick on state stamps (with stride-sim --lockstep)");
+  app.add_option("--input-url", input_url, "LCM URL to receive on (overrides the YAML)");
+  app.add_option("--output-url", output_url, "LCM URL to publish on (overrides the YAML)");
+  app.add_option("--duration", duration, "stop after this many seconds (0: on SIGINT/SIGTERM)");
+  app.add_option("--summary", summary, "write the run's counters and latencies as JSON here");
+  CLI11_PARSE(app, argc, argv);
+
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+  try {
+    stride::ControllerConfig config = stride::loadControllerConfig(config_path);
+    if (!input_url.empty()) config.input_url = input_url;
+    if (!output_url.empty()) config.output_url = output_url;
+    const bool replaying = !replay.empty();
+    if (replaying) {
+      config.input_url = "file://" + replay + "?speed=0";
+      if (output.empty()) output = replay + ".mpc";
+      config.output_url = "file://" + output + "?mode=w";
+    }
+    // LCM must never fall back to multicast on the host network by accident: a URL is explicit
+    // (YAML, flag or LCM_DEFAULT_URL).
+    if (config.input_url.empty()) config.input_url = defaultUrl();
+    if (config.output_url.empty()) config.output_url = config.input_url;
+    if (config.input_url.empty()) {
+      std::fprintf(stderr,
+                   "stride-mpc: no LCM URL: set lcm.input in the YAML, --input-url, or "
+                   "LCM_DEFAULT_URL (e.g. udpm://239.255.76.67:7667?ttl=0)\n");
+      return 2;
+    }
+    lcm::LCM in(config.input_url);
+    if (!in.good()) {
+      std::fprintf(stderr, "stride-mpc: cannot open LCM input '%s'\n", config.input_url.c_str());
+      return 2;
+    }
+    std::unique_ptr<lcm::LCM> separate_out;
+    lcm::LCM* out = &in;
+    if (config.output_url != config.input_url) {
+      separate_out = std::make_unique<lcm::LCM>(config.output_url);
+      if (!separate_out->good()) {
+        std::fprintf(stderr, "stride-mpc: cannot open LCM output '%s'\n",
+                     config.output_url.c_str());
+        return 2;
+      }
+      out = separate_out.get();
+    }
+    stride::LcmPublisher publisher(*out);
+    const bool on_stamps = replaying || lockstep;
+    stride::MpcNode node(config, publisher,
+                         on_stamps ? stride::TimeSource::Stamps : stride::TimeSource::RealTime);
+    node.subscribe(in);
+    std::printf("stride-mpc: %s, %d knots of %.0f ms, %s, %d iteration(s) per tick at %.0f Hz, "
+                "%s mode, in '%s', out '%s'\n",
+                node.mpc().robot().name.c_str(), config.locomotion.knots,
+                config.locomotion.dt * 1e3, stride::toString(config.solver),
+                config.max_iterations, config.rate_hz,
+                replaying ? "replay" : (lockstep ? "lock-step" : "real-time"),
+                config.input_url.c_str(), config.output_url.c_str());
+    std::fflush(stdout);
+
+    stride::RunOptions options;
+    options.duration = duration;
+    options.stop = &g_stop;
+    if (on_stamps) {
+      stride::runOnStamps(node, in, options);
+    } else {
+      stride::applyRealTimeSettings(config.cpu, config.fifo_priority);
+      stride::runRealTime(node, in, options);
+    }
+    stride::writeSummary(node, summary);
+    if (publisher.failures() > 0)
+      std::fprintf(stderr, "stride-mpc: %ld publishes failed\n", publisher.failures());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "stride-mpc: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,276 @@
+#include "controller/mpc.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "controller/gait.hpp"
+#include "solver/contact/knot_dynamics.hpp"
+#include "solver/multibody/frames.hpp"
+
+namespace stride {
+
+namespace {
+// Velocity-level Baumgarte term of the controller's contact model (a + kd v = 0 at the foot): a
+// foot's drift velocity decays in 1/kd = 20 ms instead of growing over the 1 s horizon.
+constexpr double kContactDamping = 50.0;
+
+double millisSince(Solver::Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Solver::Clock::now() - t0).count();
+}
+}  // namespace
+
+Mpc::Mpc(const ControllerConfig& config) : config_(config), robot_(loadRobot(config.robot_yaml)) {
+  const Model& model = robot_.model;
+  nq_ = model.nq;
+  nv_ = model.nv;
+  nu_ = actuatedDimension(model);
+  for (const ContactSpec& c : robot_.contacts)
+    contacts_.add(model, c.frame, c.dim, ReferenceFrame::LocalWorldAligned, 0.0, kContactDamping);
+  plan_ = makeGaitPlan(config_.gait, robot_.contacts);
+  plan_.validate(contacts_);
+  x_ = Eigen::VectorXd::Zero(nq_ + nv_);
+  msg::shape(policy_, config_.policy_knots, nq_, nv_, nu_);
+  msg::shape(previous_, config_.policy_knots, nq_, nv_, nu_);
+  status_.policy_status = kPolicyNone;
+  status_.solver_status = -1;
+  startup_tick_ = false;
+}
+
+Mpc::~Mpc() = default;
+
+void Mpc::setPlan(const ContactPlan& plan, std::int64_t start_utime) {
+  plan.validate(contacts_);
+  plan_ = plan;
+  plan_start_utime_ = start_utime;
+  plan_start_set_ = true;
+  rebuild_ = true;
+}
+
+void Mpc::start(std::int64_t utime) {
+  if (!plan_start_set_) {
+    plan_start_utime_ = utime;
+    plan_start_set_ = true;
+  }
+  // The plan is made around where the robot stands now: the default posture, moved to the
+  // measured base position and heading on the ground (footholds and base references follow).
+  Eigen::VectorXd x_nominal = Eigen::VectorXd::Zero(nq_ + nv_);
+  x_nominal.head(nq_) = robot_.default_q;
+  if (robot_.model.hasFreeFlyer()) {
+    x_nominal[0] = x_[0];
+    x_nominal[1] = x_[1];
+    const Eigen::Quaterniond q(x_[6], x_[3], x_[4], x_[5]);
+    const double yaw = std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()),
+                                  1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
+    const Eigen::Quaterniond heading(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
+    const Eigen::Quaterniond q0(x_nominal[6], x_nominal[3], x_nominal[4], x_nominal[5]);
+    const Eigen::Quaterniond qn = heading * q0;
+    x_nominal.segment<4>(3) << qn.x(), qn.y(), qn.z(), qn.w();
+  }
+  solver_.reset();
+  loco_ = std::make_unique<LocomotionProblem>(robot_.model, contacts_, plan_, x_nominal,
+                                              config_.locomotion);
+  loco_->problem().setThreads(config_.threads);
+  solver_ = std::make_unique<Solver>(loco_->problem(), config_.solver);
+  if (config_.solver == SolverKind::BoxFddp)
+    solver_->setControlBounds(loco_->controlLower(), loco_->controlUpper());
+  xs_warm_.assign(config_.locomotion.knots + 1, x_nominal);
+  us_warm_.assign(config_.locomotion.knots, Eigen::VectorXd::Zero(nu_));
+  rebuild_ = false;
+  need_restart_ = true;
+  have_previous_ = false;
+  have_solved_ = false;
+}
+
+void Mpc::restartWarmStart(double t) {
+  loco_->update(t);
+  loco_->standingWarmStart(xs_warm_, us_warm_);
+  solver_->setWarmStart(xs_warm_, us_warm_);
+  solver_->setRegularization(solver_->options.reg_initial);
+  t_warm_ = t;
+  need_restart_ = false;
+}
+
+bool Mpc::solveTick(double t, Clock::time_point deadline, SolveStatus& result) {
+  ShootingProblem& problem = loco_->problem();
+  const double dt = config_.locomotion.dt;
+  // The first solve, before any policy went out, runs to convergence (no deadline); a restart
+  // after a failure gets the normal budget and converges over the following ticks.
+  const bool first = !have_solved_;
+  if (need_restart_) {
+    restartWarmStart(t);
+  } else {
+    // Whole knots elapsed since the warm start's knot 0; the remainder (under half a knot) is left
+    // to FDDP as a gap at x0.
+    const double shift = std::floor((t - t_warm_) / dt + 0.5);
+    if (shift >= problem.horizon()) {
+      restartWarmStart(t);
+    } else if (shift >= 1.0) {
+      const int n = static_cast<int>(shift);
+      problem.shift(n);
+      solver_->shiftWarmStart(n);
+      t_warm_ += n * dt;
+    }
+  }
+  problem.setX0(x_);
+  if (!loco_->update(t)) return false;
+  startup_tick_ = first;
+  result = first ? solver_->solve(config_.initial_iterations)
+                 : solver_->solve(config_.max_iterations, deadline);
+  if (result == SolveStatus::NonFinite || result == SolveStatus::NoDescent) {
+    ++counters_.failed_solves;
+    need_restart_ = true;
+    return false;
+  }
+  have_solved_ = true;
+  return true;
+}
+
+bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadline) {
+  const Clock::time_point tick_start = Clock::now();
+  ++counters_.ticks;
+  status_.tick = counters_.ticks;
+  status_.solve_ms = 0.0;
+  status_.iterations = 0;
+  status_.solver_status = -1;
+  startup_tick_ = false;
+
+  if (state == nullptr) {  // nothing to control yet: publish no policy
+    ++counters_.ticks_without_state;
+    status_.utime = 0;
+    finishStatus(tick_start, kPolicyNone);
+    return false;
+  }
+  status_.utime = state->utime;
+  for (int i = 0; i < nq_; ++i) x_[i] = state->q[i];
+  for (int i = 0; i < nv_; ++i) x_[nq_ + i] = state->v[i];
+  if (robot_.model.hasFreeFlyer()) x_.segment<4>(3).normalize();  // within 1e-4 of unit already
+
+  if (!started() || rebuild_) start(state->utime);
+  const double t = planTime(state->utime);
+  status_.plan_time = t;
+  status_.phase = static_cast<std::int32_t>(loco_->schedule().phaseAt(t));
+
+  if (age > config_.max_state_age) {
+    ++counters_.stale_states;
+  } else {
+    const Clock::time_point solve_start = Clock::now();
+    SolveStatus result = SolveStatus::NonFinite;
+    const bool ok = solveTick(t, deadline, result);
+    status_.solve_ms = millisSince(solve_start);
+    status_.solver_status = static_cast<std::int32_t>(result);
+    status_.iterations = solver_->iterations();
+    status_.cost = solver_->cost();
+    status_.gap = solver_->gap();
+    status_.regularization = solver_->regularization();
+    const int n_stats = solver_->statsCount();
+    status_.step = n_stats > 0 ? solver_->stats()[n_stats - 1].step : 0.0;
+    if (ok) {
+      const bool cut = result == SolveStatus::Deadline;
+      if (cut) ++counters_.deadline_misses;
+      writePolicy(state->utime, t, cut ? kPolicyDeadline : kPolicySolved);
+      previous_ticks_ = 0;
+      finishStatus(tick_start, policy_.status);
+      return true;
+    }
+  }
+  // Fallback: the previous policy advanced to now, for a while; then hold the posture.
+  ++counters_.fallbacks;
+  if (config_.fallback == Fallback::Previous && previous_ticks_ < config_.max_previous_ticks &&
+      previousPolicy(state->utime)) {
+    ++previous_ticks_;
+  } else {
+    holdPolicy(state->utime, t);
+  }
+  finishStatus(tick_start, policy_.status);
+  return true;
+}
+
+void Mpc::writePolicy(std::int64_t utime, double t, std::int8_t status) {
+  const ShootingProblem& problem = loco_->problem();
+  const auto& xs = solver_->xs();
+  const auto& us = solver_->us();
+  const auto& K = solver_->K();
+  const int ndx = 2 * nv_;
+  policy_.utime = utime;
+  policy_.tick = counters_.ticks;
+  policy_.t0 = t;
+  policy_.dt = config_.locomotion.dt;
+  policy_.phase = status_.phase;
+  policy_.status = status;
+  int j = 0;
+  for (int k = 0; k < problem.horizon() && j < policy_.knots; ++k) {
+    const auto* knot = dynamic_cast<const KnotModel*>(&problem.knot(k));
+    if (knot != nullptr && knot->mode() == KnotMode::Impulse) continue;
+    std::copy(xs[k].data(), xs[k].data() + nq_ + nv_, policy_.x_ref[j].begin());
+    std::copy(us[k].data(), us[k].data() + nu_, policy_.u_ff[j].begin());
+    // The solver's law is u = us + K (x ⊖ xs); the policy's is u_ff + K' (x_ref ⊖ x), and
+    // x_ref ⊖ x = -(x ⊖ x_ref) exactly (log(M⁻¹) = -log(M)), so K' = -K, row-major.
+    double* out = policy_.K[j].data();
+    for (int r = 0; r < nu_; ++r)
+      for (int c = 0; c < ndx; ++c) out[r * ndx + c] = -K[k](r, c);
+    ++j;
+  }
+  for (; j < policy_.knots; ++j) {  // a horizon shorter than the policy: hold its last knot
+    policy_.x_ref[j] = policy_.x_ref[j - 1];
+    policy_.u_ff[j] = policy_.u_ff[j - 1];
+    policy_.K[j] = policy_.K[j - 1];
+  }
+  previous_ = policy_;  // same shapes: element copies, no allocation
+  have_previous_ = true;
+}
+
+bool Mpc::previousPolicy(std::int64_t utime) {
+  if (!have_previous_) return false;
+  const double elapsed = (utime - previous_.utime) * 1e-6;
+  const int skip = static_cast<int>(std::floor(elapsed / previous_.dt));
+  if (skip < 0 || skip >= previous_.knots - 1) return false;  // nothing left to interpolate
+  policy_.utime = previous_.utime + static_cast<std::int64_t>(std::llround(skip * previous_.dt * 1e6));
+  policy_.t0 = previous_.t0 + skip * previous_.dt;
+  policy_.dt = previous_.dt;
+  policy_.tick = counters_.ticks;
+  policy_.phase = previous_.phase;
+  policy_.status = kPolicyPrevious;
+  for (int j = 0; j < policy_.knots; ++j) {
+    const int from = std::min(j + skip, previous_.knots - 1);
+    policy_.x_ref[j] = previous_.x_ref[from];
+    policy_.u_ff[j] = previous_.u_ff[from];
+    policy_.K[j] = previous_.K[from];
+  }
+  return true;
+}
+
+void Mpc::holdPolicy(std::int64_t utime, double t) {
+  // Joint PD to the default posture around the measured base, with the torques that hold the
+  // default posture on the current phase's contacts as feed-forward.
+  const long phase = loco_->schedule().phaseAt(t);
+  const Eigen::VectorXd& u_hold = loco_->holdingControl(loco_->schedule().localPhase(phase));
+  const int ndx = 2 * nv_, base = robot_.model.hasFreeFlyer() ? 6 : 0;
+  policy_.utime = utime;
+  policy_.t0 = t;
+  policy_.dt = config_.locomotion.dt;
+  policy_.tick = counters_.ticks;
+  policy_.phase = static_cast<std::int32_t>(phase);
+  policy_.status = kPolicyHold;
+  for (int j = 0; j < policy_.knots; ++j) {
+    std::vector<double>& xr = policy_.x_ref[j];
+    for (int i = 0; i < nq_; ++i) xr[i] = i < nq_ - nu_ ? x_[i] : robot_.default_q[i];
+    for (int i = 0; i < nv_; ++i) xr[nq_ + i] = 0.0;
+    std::copy(u_hold.data(), u_hold.data() + nu_, policy_.u_ff[j].begin());
+    std::fill(policy_.K[j].begin(), policy_.K[j].end(), 0.0);
+    for (int r = 0; r < nu_; ++r) {
+      policy_.K[j][r * ndx + base + r] = config_.hold_kp;
+      policy_.K[j][r * ndx + nv_ + base + r] = config_.hold_kd;
+    }
+  }
+}
+
+void Mpc::finishStatus(Clock::time_point tick_start, std::int8_t policy_status) {
+  status_.policy_status = policy_status;
+  status_.deadline_misses = counters_.deadline_misses;
+  status_.fallbacks = counters_.fallbacks;
+  status_.stale_states = counters_.stale_states;
+  status_.ticks_without_state = counters_.ticks_without_state;
+  status_.tick_ms = millisSince(tick_start);
+}
+
+}  // namespace stride

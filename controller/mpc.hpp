@@ -1,0 +1,117 @@
+#pragma once
+// The receding-horizon controller, free of I/O: one tick turns the newest state estimate into a
+// policy message and a status message (ARCHITECTURE.md §1, steps 2-6). The LCM side (mpc_node)
+// feeds it validated states and publishes what it fills.
+//
+// A tick, after start-up:
+//   1. plan time t of the state (its stamp minus the plan's start);
+//   2. shift the horizon and the warm start by the whole knots elapsed since the last solve
+//      (the remainder, under half a knot, stays as an FDDP gap), set x0 = the state;
+//   3. rewrite every knot's phase, contacts and references for time t (LocomotionProblem::update);
+//   4. at most max_iterations of (box-)FDDP, stopped at the deadline;
+//   5. the policy: u_ff, K, x_ref of the first contact knots (impulse knots take no time and have
+//      no control, so they are skipped);
+//   6. on a stale state or a failed solve, a fallback (the previous policy advanced in time, or a
+//      joint hold policy), flagged in both messages and counted.
+// After start-up nothing here allocates or throws (tested). Start-up (the first valid state) builds
+// the problem around the robot's measured position and solves it to convergence before the first
+// policy goes out.
+
+#include <chrono>
+#include <memory>
+
+#include "controller/controller_config.hpp"
+#include "messages/validate.hpp"
+#include "solver/ddp/solver.hpp"
+#include "solver/ocp/locomotion.hpp"
+
+namespace stride {
+
+enum PolicyStatus : std::int8_t {
+  kPolicySolved = 0,
+  kPolicyDeadline = 1,
+  kPolicyPrevious = 2,
+  kPolicyHold = 3,
+  kPolicyNone = -1,
+};
+
+struct MpcCounters {
+  std::int64_t ticks = 0;
+  std::int64_t deadline_misses = 0;
+  std::int64_t fallbacks = 0;
+  std::int64_t stale_states = 0;
+  std::int64_t ticks_without_state = 0;
+  std::int64_t failed_solves = 0;
+};
+
+class Mpc {
+ public:
+  using Clock = Solver::Clock;
+
+  // Loads the robot and the gait plan; throws ConfigError / UrdfError / std::invalid_argument.
+  explicit Mpc(const ControllerConfig& config);
+  ~Mpc();
+
+  const ControllerConfig& config() const { return config_; }
+  const Robot& robot() const { return robot_; }
+  int nu() const { return nu_; }
+  bool started() const { return loco_ != nullptr; }
+
+  // Replaces the contact plan, starting at start_utime on the robot's clock. Rebuilds the
+  // problem at the next tick (allocates: between ticks only). Throws std::invalid_argument.
+  void setPlan(const ContactPlan& plan, std::int64_t start_utime);
+
+  // One tick. state: the newest valid estimate (null: none yet); age: seconds since it arrived;
+  // deadline: for the solve (Clock::time_point::max() when replaying a log). Fills policy() and
+  // status(); true when policy() is to be published.
+  bool tick(const robot_state_t* state, double age, Clock::time_point deadline);
+
+  const policy_t& policy() const { return policy_; }
+  const mpc_status_t& status() const { return status_; }
+  mpc_status_t& status() { return status_; }
+  const MpcCounters& counters() const { return counters_; }
+  // A tick that overran its period (counted by the loop that knows the period).
+  void countDeadlineMiss() { ++counters_.deadline_misses; }
+  // The last tick made the first solve of a (re)built problem, which runs without deadline.
+  bool startupTick() const { return startup_tick_; }
+
+  // After a tick: the solver and the problem, for tests and tools.
+  const Solver* solver() const { return solver_.get(); }
+  const LocomotionProblem* problem() const { return loco_.get(); }
+  double planTime(std::int64_t utime) const { return (utime - plan_start_utime_) * 1e-6; }
+
+ private:
+  void start(std::int64_t utime);  // builds the problem around x_ (allocates)
+  bool solveTick(double t, Clock::time_point deadline, SolveStatus& status);
+  void restartWarmStart(double t);
+  void writePolicy(std::int64_t utime, double t, std::int8_t status);
+  bool previousPolicy(std::int64_t utime);
+  void holdPolicy(std::int64_t utime, double t);
+  void finishStatus(Clock::time_point tick_start, std::int8_t policy_status);
+
+  ControllerConfig config_;
+  Robot robot_;
+  ContactSet contacts_;
+  ContactPlan plan_;
+  std::int64_t plan_start_utime_ = 0;
+  bool plan_start_set_ = false;
+  bool rebuild_ = false;
+  int nq_, nv_, nu_;
+
+  std::unique_ptr<LocomotionProblem> loco_;
+  std::unique_ptr<Solver> solver_;
+  std::vector<Eigen::VectorXd> xs_warm_, us_warm_;  // standing warm start (restarts)
+  double t_warm_ = 0.0;       // plan time of the warm start's knot 0
+  bool need_restart_ = false;  // the last solve failed: start again from standing
+  bool have_solved_ = false;   // a solve of this problem succeeded (else the next is the first)
+  bool startup_tick_ = false;
+  int previous_ticks_ = 0;     // consecutive ticks on the previous policy
+
+  Eigen::VectorXd x_;  // the state as a solver vector
+  policy_t policy_, previous_;
+  bool have_previous_ = false;
+  mpc_status_t status_{};
+  MpcCounters counters_;
+};
+
+}  // namespace stride

@@ -1,0 +1,141 @@
+#include "controller/mpc_node.hpp"
+
+#include <time.h>
+
+#include <algorithm>
+
+namespace stride {
+
+namespace {
+constexpr int kMaxContactFlags = 16;
+constexpr int kMaxPlanPhases = 100000;
+constexpr int kQueueCapacity = 1000;  // > 1 s of a 1 kHz estimator between two drains
+constexpr long kLatencyCapacity = 1L << 20;
+}  // namespace
+
+MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time)
+    : config_(config), mpc_(config), out_(out), time_(time) {
+  const Model& model = mpc_.robot().model;
+  floating_ = model.hasFreeFlyer();
+  msg::shape(incoming_, model.nq, model.nv, kMaxContactFlags);
+  msg::shape(newest_, model.nq, model.nv, kMaxContactFlags);
+  mpc_status_t status{};
+  buffer_.resize(std::max(
+      msg::policyWireSize(config.policy_knots, model.nq, model.nv, mpc_.nu()),
+      status.getEncodedSize()));
+  latencies_.reserve(kLatencyCapacity);
+}
+
+std::int64_t MpcNode::monotonicMicros() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
+}
+
+void MpcNode::subscribe(lcm::LCM& in) {
+  in.subscribe(config_.state_channel, &MpcNode::onState, this)->setQueueCapacity(kQueueCapacity);
+  in.subscribe(config_.plan_channel, &MpcNode::onPlan, this)->setQueueCapacity(10);
+}
+
+void MpcNode::reject(msg::Reject reason) {
+  ++rejected_total_;
+  ++rejected_[static_cast<int>(reason)];
+}
+
+void MpcNode::onState(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  const Model& model = mpc_.robot().model;
+  msg::Reject why = msg::checkStateWire(rbuf->data, static_cast<int>(rbuf->data_size), model.nq,
+                                        model.nv, kMaxContactFlags);
+  if (why == msg::Reject::None &&
+      incoming_.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0)
+    why = msg::Reject::Undecodable;
+  if (why == msg::Reject::None) why = msg::checkState(incoming_, floating_);
+  if (why == msg::Reject::None && have_state_ && incoming_.utime <= newest_.utime)
+    why = msg::Reject::OutOfOrder;
+  if (why != msg::Reject::None) {
+    reject(why);
+    return;
+  }
+  newest_ = incoming_;  // same shapes: element copies only
+  newest_arrival_us_ = time_ == TimeSource::RealTime ? monotonicMicros() : newest_.utime;
+  have_state_ = true;
+  new_state_ = true;
+  ++accepted_;
+}
+
+void MpcNode::onPlan(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  msg::Reject why = msg::checkPlanWire(rbuf->data, static_cast<int>(rbuf->data_size),
+                                       kMaxContactFlags, kMaxPlanPhases);
+  if (why == msg::Reject::None &&
+      plan_msg_.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0)
+    why = msg::Reject::Undecodable;
+  if (why == msg::Reject::None) why = msg::checkPlan(plan_msg_);
+  if (why != msg::Reject::None) {
+    reject(why);
+    return;
+  }
+  plan_pending_ = true;
+}
+
+void MpcNode::applyPendingPlan() {
+  if (!plan_pending_) return;
+  plan_pending_ = false;
+  ContactPlan plan;
+  plan.cyclic = plan_msg_.cyclic != 0;
+  for (int i = 0; i < plan_msg_.nphases; ++i) {
+    ContactPhase phase{plan_msg_.duration[i], {}};
+    for (int c = 0; c < plan_msg_.ncontacts; ++c)
+      if (plan_msg_.closed[i][c]) phase.contacts.push_back(plan_msg_.contacts[c]);
+    plan.phases.push_back(phase);
+  }
+  try {
+    mpc_.setPlan(plan, plan_msg_.utime);
+    ++plan_updates_;
+  } catch (const std::exception&) {  // e.g. a contact this robot does not have
+    reject(msg::Reject::BadField);
+  }
+}
+
+bool MpcNode::tickDue() const {
+  return new_state_ && (!tick_grid_set_ || newest_.utime >= next_tick_utime_);
+}
+
+void MpcNode::tick(Clock::time_point deadline) {
+  const Clock::time_point start = Clock::now();
+  const robot_state_t* state = have_state_ ? &newest_ : nullptr;
+  const double age =
+      !have_state_ || time_ == TimeSource::Stamps
+          ? 0.0
+          : static_cast<double>(monotonicMicros() - newest_arrival_us_) * 1e-6;
+  const bool publish = mpc_.tick(state, age, deadline);
+  new_state_ = false;
+  if (have_state_) {
+    // The tick grid of stamps mode: every period from the first state on.
+    const auto period_us = static_cast<std::int64_t>(std::llround(1e6 / config_.rate_hz));
+    if (!tick_grid_set_) {
+      next_tick_utime_ = newest_.utime;
+      tick_grid_set_ = true;
+    }
+    while (next_tick_utime_ <= newest_.utime) next_tick_utime_ += period_us;
+  }
+  if (publish) {
+    const policy_t& policy = mpc_.policy();
+    const int n = policy.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
+    if (n > 0) out_.publish(config_.policy_channel, buffer_.data(), n);
+  }
+  if (publish && !mpc_.startupTick()) {  // the first solve has no deadline: not a latency
+    const float ms = std::chrono::duration<float, std::milli>(Clock::now() - start).count();
+    if (static_cast<long>(latencies_.size()) < kLatencyCapacity)
+      latencies_.push_back(ms);  // within the reserved capacity: no allocation
+    else
+      latencies_[latency_count_ % kLatencyCapacity] = ms;
+    ++latency_count_;
+  }
+  mpc_status_t& status = mpc_.status();
+  status.rejected_messages = rejected_total_;
+  status.tick_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  const int n = status.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
+  if (n > 0) out_.publish(config_.status_channel, buffer_.data(), n);
+}
+
+}  // namespace stride

@@ -1,0 +1,101 @@
+#pragma once
+// stride-mpc's LCM side: receives state estimates and contact plans, validates every message
+// before the controller sees it, runs the controller's tick and publishes its policy and status.
+//
+// Messages arrive as raw bytes (lcm's raw subscribe), are size-checked on the wire, decoded into
+// preallocated objects and content-checked (messages/validate.hpp); a rejected message is counted
+// by reason and dropped, never passed on. Out-of-order stamps (not newer than the last accepted
+// state) are rejected; staleness is measured on the controller's side (the state's arrival time),
+// so it needs no clock shared with the robot. Two ways to run:
+//   real time  a fixed-rate loop on CLOCK_MONOTONIC (controller/main.cpp);
+//   stamps     time is the newest state's stamp: a tick is due whenever a state reaches the next
+//              tick time. Lock-step with the mock robot and log replay use it, so both are
+//              deterministic and need no wall clock.
+
+#include <array>
+#include <lcm/lcm-cpp.hpp>
+#include <string>
+#include <vector>
+
+#include "controller/mpc.hpp"
+
+namespace stride {
+
+// Where the node's output goes: LCM in the daemon, a recorder in tests.
+class Publisher {
+ public:
+  virtual ~Publisher() = default;
+  virtual void publish(const std::string& channel, const void* data, int size) = 0;
+};
+
+class LcmPublisher : public Publisher {
+ public:
+  explicit LcmPublisher(lcm::LCM& lcm) : lcm_(lcm) {}
+  void publish(const std::string& channel, const void* data, int size) override {
+    failures_ += lcm_.publish(channel, data, static_cast<unsigned>(size)) != 0;
+  }
+  long failures() const { return failures_; }
+
+ private:
+  lcm::LCM& lcm_;
+  long failures_ = 0;
+};
+
+enum class TimeSource { RealTime, Stamps };
+
+class MpcNode {
+ public:
+  using Clock = Mpc::Clock;
+  MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time);
+
+  // Subscribes the raw handlers on `in`, with queues deep enough for a 1 kHz estimator.
+  void subscribe(lcm::LCM& in);
+  // The raw handlers (public for tests, which feed them bytes directly).
+  void onState(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void onPlan(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+
+  // Stamps mode: a state has reached the next tick time.
+  bool tickDue() const;
+  // One tick: the newest state (if any) through the controller, then publish. Allocation-free
+  // after start-up. deadline: for the solve (Clock::time_point::max() in stamps mode).
+  void tick(Clock::time_point deadline);
+  // Applies a plan received since the last call (allocates: call between ticks).
+  void applyPendingPlan();
+
+  Mpc& mpc() { return mpc_; }
+  const Mpc& mpc() const { return mpc_; }
+  std::int64_t rejected() const { return rejected_total_; }
+  std::int64_t rejected(msg::Reject reason) const {
+    return rejected_[static_cast<int>(reason)];
+  }
+  std::int64_t acceptedStates() const { return accepted_; }
+  std::int64_t planUpdates() const { return plan_updates_; }
+  // Tick latencies [ms] of every tick that published a policy (capacity fixed at construction;
+  // the oldest are overwritten beyond it).
+  const std::vector<float>& latencies() const { return latencies_; }
+  long latencyCount() const { return latency_count_; }
+
+ private:
+  void reject(msg::Reject reason);
+  static std::int64_t monotonicMicros();
+
+  ControllerConfig config_;
+  Mpc mpc_;
+  Publisher& out_;
+  TimeSource time_;
+  bool floating_;
+  robot_state_t incoming_, newest_;
+  bool have_state_ = false, new_state_ = false;
+  std::int64_t newest_arrival_us_ = 0;  // real time: CLOCK_MONOTONIC at arrival
+  std::int64_t next_tick_utime_ = 0;
+  bool tick_grid_set_ = false;
+  std::int64_t accepted_ = 0, rejected_total_ = 0, plan_updates_ = 0;
+  std::array<std::int64_t, 8> rejected_{};
+  contact_plan_t plan_msg_;
+  bool plan_pending_ = false;
+  std::vector<unsigned char> buffer_;  // encoded policy / status
+  std::vector<float> latencies_;
+  long latency_count_ = 0;
+};
+
+}  // namespace stride

@@ -1,0 +1,168 @@
+#include "messages/validate.hpp"
+
+#include <cmath>
+#include <cstring>
+
+namespace stride::msg {
+
+const char* describe(Reject reason) {
+  switch (reason) {
+    case Reject::None:
+      return "ok";
+    case Reject::Undecodable:
+      return "undecodable (truncated, wrong type or corrupt)";
+    case Reject::WrongSize:
+      return "sizes do not match the model";
+    case Reject::NonFinite:
+      return "non-finite value";
+    case Reject::NotUnitQuaternion:
+      return "base quaternion not unit";
+    case Reject::BadField:
+      return "inconsistent field";
+    case Reject::OutOfOrder:
+      return "stamp not newer than the last accepted";
+    case Reject::Stale:
+      return "stamp older than the allowed age";
+  }
+  return "unknown";
+}
+
+namespace {
+
+constexpr int kHash = 8;  // every LCM message starts with its 64-bit type fingerprint
+
+// Big-endian int32 at byte offset `at`, or false when the buffer is too short.
+bool readInt32(const void* buf, int size, long at, std::int32_t& out) {
+  if (at < 0 || at + 4 > size) return false;
+  const auto* b = static_cast<const unsigned char*>(buf) + at;
+  const std::uint32_t u = (std::uint32_t(b[0]) << 24) | (std::uint32_t(b[1]) << 16) |
+                          (std::uint32_t(b[2]) << 8) | std::uint32_t(b[3]);
+  std::memcpy(&out, &u, 4);
+  return true;
+}
+
+template <typename Vec>
+bool allFinite(const Vec& v) {
+  for (double x : v)
+    if (!std::isfinite(x)) return false;
+  return true;
+}
+
+Reject checkQuaternion(const std::vector<double>& q) {
+  const double n = std::sqrt(q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6]);
+  return std::abs(n - 1.0) <= kQuaternionTolerance ? Reject::None : Reject::NotUnitQuaternion;
+}
+
+}  // namespace
+
+int stateWireSize(int nq, int nv, int ncontacts) {
+  return kHash + 8 + 4 + 4 + 8 * (nq + nv) + 4 + ncontacts;
+}
+
+int policyWireSize(int knots, int nq, int nv, int nu) {
+  const long per_knot = 8L * ((nq + nv) + nu + static_cast<long>(nu) * 2 * nv);
+  return static_cast<int>(kHash + 8 + 8 + 8 + 8 + 7 * 4 + knots * per_knot + 4 + 1);
+}
+
+Reject checkStateWire(const void* buf, int size, int nq, int nv, int max_contacts) {
+  std::int32_t mq, mv, nc;
+  if (!readInt32(buf, size, kHash + 8, mq) || !readInt32(buf, size, kHash + 12, mv))
+    return Reject::Undecodable;
+  if (mq != nq || mv != nv) return Reject::WrongSize;
+  if (!readInt32(buf, size, kHash + 16 + 8L * (nq + nv), nc)) return Reject::Undecodable;
+  if (nc < 0 || nc > max_contacts) return Reject::WrongSize;
+  return size == stateWireSize(nq, nv, nc) ? Reject::None : Reject::WrongSize;
+}
+
+Reject checkPolicyWire(const void* buf, int size, int nq, int nv, int nu, int max_knots) {
+  std::int32_t f[7];  // knots nq nv nu nx ndx nk
+  for (int i = 0; i < 7; ++i)
+    if (!readInt32(buf, size, kHash + 32 + 4 * i, f[i])) return Reject::Undecodable;
+  if (f[0] < 1 || f[0] > max_knots || f[1] != nq || f[2] != nv || f[3] != nu ||
+      f[4] != nq + nv || f[5] != 2 * nv || f[6] != nu * 2 * nv)
+    return Reject::WrongSize;
+  return size == policyWireSize(f[0], nq, nv, nu) ? Reject::None : Reject::WrongSize;
+}
+
+Reject checkPlanWire(const void* buf, int size, int max_contacts, int max_phases) {
+  long at = kHash + 8 + 1;
+  std::int32_t nc, np, len;
+  if (!readInt32(buf, size, at, nc)) return Reject::Undecodable;
+  if (nc < 1 || nc > max_contacts) return Reject::WrongSize;
+  at += 4;
+  for (int c = 0; c < nc; ++c) {
+    if (!readInt32(buf, size, at, len)) return Reject::Undecodable;
+    if (len < 1 || len > 256 || at + 4 + len > size) return Reject::WrongSize;
+    at += 4 + len;
+  }
+  if (!readInt32(buf, size, at, np)) return Reject::Undecodable;
+  if (np < 1 || np > max_phases) return Reject::WrongSize;
+  at += 4 + 8L * np + static_cast<long>(np) * nc;
+  return at == size ? Reject::None : Reject::WrongSize;
+}
+
+Reject checkState(const robot_state_t& m, bool floating_base) {
+  if (m.nq != static_cast<int>(m.q.size()) || m.nv != static_cast<int>(m.v.size()) ||
+      m.ncontacts != static_cast<int>(m.contact.size()))
+    return Reject::WrongSize;
+  if (!allFinite(m.q) || !allFinite(m.v)) return Reject::NonFinite;
+  for (std::int8_t c : m.contact)
+    if (c != 0 && c != 1) return Reject::BadField;
+  if (m.utime < 0) return Reject::BadField;
+  return floating_base ? checkQuaternion(m.q) : Reject::None;
+}
+
+Reject checkPolicy(const policy_t& m, bool floating_base) {
+  if (m.knots < 1 || static_cast<int>(m.x_ref.size()) != m.knots ||
+      static_cast<int>(m.u_ff.size()) != m.knots || static_cast<int>(m.K.size()) != m.knots)
+    return Reject::WrongSize;
+  if (!std::isfinite(m.dt) || m.dt <= 0.0 || !std::isfinite(m.t0)) return Reject::BadField;
+  for (int k = 0; k < m.knots; ++k) {
+    if (static_cast<int>(m.x_ref[k].size()) != m.nx || static_cast<int>(m.u_ff[k].size()) != m.nu ||
+        static_cast<int>(m.K[k].size()) != m.nk)
+      return Reject::WrongSize;
+    if (!allFinite(m.x_ref[k]) || !allFinite(m.u_ff[k]) || !allFinite(m.K[k]))
+      return Reject::NonFinite;
+    if (floating_base && checkQuaternion(m.x_ref[k]) != Reject::None)
+      return Reject::NotUnitQuaternion;
+  }
+  return m.status >= 0 && m.status <= 3 ? Reject::None : Reject::BadField;
+}
+
+Reject checkPlan(const contact_plan_t& m) {
+  if (m.ncontacts != static_cast<int>(m.contacts.size()) ||
+      m.nphases != static_cast<int>(m.duration.size()) ||
+      m.nphases != static_cast<int>(m.closed.size()))
+    return Reject::WrongSize;
+  for (int i = 0; i < m.nphases; ++i) {
+    if (!std::isfinite(m.duration[i]) || m.duration[i] <= 0.0) return Reject::BadField;
+    if (static_cast<int>(m.closed[i].size()) != m.ncontacts) return Reject::WrongSize;
+    for (std::int8_t c : m.closed[i])
+      if (c != 0 && c != 1) return Reject::BadField;
+  }
+  return m.cyclic == 0 || m.cyclic == 1 ? Reject::None : Reject::BadField;
+}
+
+void shape(robot_state_t& m, int nq, int nv, int ncontacts) {
+  m.nq = nq;
+  m.nv = nv;
+  m.ncontacts = ncontacts;
+  m.q.assign(nq, 0.0);
+  m.v.assign(nv, 0.0);
+  m.contact.assign(ncontacts, 0);
+}
+
+void shape(policy_t& m, int knots, int nq, int nv, int nu) {
+  m.knots = knots;
+  m.nq = nq;
+  m.nv = nv;
+  m.nu = nu;
+  m.nx = nq + nv;
+  m.ndx = 2 * nv;
+  m.nk = nu * 2 * nv;
+  m.x_ref.assign(knots, std::vector<double>(m.nx, 0.0));
+  m.u_ff.assign(knots, std::vector<double>(nu, 0.0));
+  m.K.assign(knots, std::vector<double>(m.nk, 0.0));
+}
+
+}  // namespace stride::msg

@@ -1,0 +1,57 @@
+#pragma once
+// Checks on every message a Stride program receives, before and after decoding.
+//
+// lcm-gen's decoders trust the count fields of a message: a count of 2^31 makes them resize a
+// vector to it (or throw), and a reused message object keeps stale data for a count of 0
+// (LCM-NOTES.md). So the wire checks read the counts straight from the encoded bytes (big-endian,
+// after the 8-byte type hash) and accept a buffer only when every count is the one the model
+// expects and the buffer has exactly the size those counts imply; decoding such a buffer into an
+// object that already has those sizes allocates nothing. The content checks then reject what a
+// decoder cannot see: non-finite numbers, a quaternion that is not unit, inconsistent fields.
+
+#include <cstdint>
+
+#include "stride/contact_plan_t.hpp"
+#include "stride/mpc_status_t.hpp"
+#include "stride/policy_t.hpp"
+#include "stride/robot_state_t.hpp"
+
+namespace stride::msg {
+
+enum class Reject : std::uint8_t {
+  None,
+  Undecodable,        // too short, wrong type hash, or the decoder failed
+  WrongSize,          // counts that do not match the model, or a size that does not match them
+  NonFinite,          // NaN or infinity anywhere
+  NotUnitQuaternion,  // base orientation with |q| far from 1
+  BadField,           // e.g. dt <= 0, inconsistent derived sizes, flags outside {0, 1}
+  OutOfOrder,         // stamp not newer than the last accepted one
+  Stale,              // stamp older than the allowed age
+};
+const char* describe(Reject reason);
+
+// Quaternions within this distance of unit norm are accepted (and renormalized by the reader);
+// an estimator's float rounding stays orders of magnitude below it.
+constexpr double kQuaternionTolerance = 1e-4;
+
+// Size checks on encoded bytes, before decode(). max_contacts bounds the optional flags.
+Reject checkStateWire(const void* buf, int size, int nq, int nv, int max_contacts);
+Reject checkPolicyWire(const void* buf, int size, int nq, int nv, int nu, int max_knots);
+Reject checkPlanWire(const void* buf, int size, int max_contacts, int max_phases);
+
+// Content checks on decoded messages. floating_base: q[3..7) is a quaternion (x y z w).
+Reject checkState(const robot_state_t& m, bool floating_base);
+Reject checkPolicy(const policy_t& m, bool floating_base);
+Reject checkPlan(const contact_plan_t& m);
+
+// The encoded size of a state / policy with these dimensions (hash included): what a publisher
+// preallocates its buffer for.
+int stateWireSize(int nq, int nv, int ncontacts);
+int policyWireSize(int knots, int nq, int nv, int nu);
+
+// Resizes a message's arrays to these dimensions (sets the count fields too). Done once at setup,
+// so that later decodes and encodes of the same dimensions allocate nothing.
+void shape(robot_state_t& m, int nq, int nv, int ncontacts);
+void shape(policy_t& m, int knots, int nq, int nv, int nu);
+
+}  // namespace stride::msg

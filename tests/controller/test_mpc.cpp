@@ -1,0 +1,183 @@
+// The controller core: configuration, gait plans, ticks, fallbacks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "controller/gait.hpp"
+#include "controller/mpc.hpp"
+#include "controller_cases.hpp"
+
+namespace stride {
+namespace {
+
+using controller_cases::configPath;
+using controller_cases::standingState;
+
+TEST(ControllerConfig, ShippedConfigsLoad) {
+  for (const char* robot : {"stride_quad", "stride_humanoid"}) {
+    const ControllerConfig c = loadControllerConfig(configPath(robot));
+    EXPECT_TRUE(std::filesystem::exists(c.robot_yaml)) << c.robot_yaml;
+    EXPECT_GT(c.rate_hz, 0.0);
+    EXPECT_EQ(c.solver, SolverKind::BoxFddp);
+    EXPECT_TRUE(c.locomotion.torque_limits);
+  }
+}
+
+std::string configError(const std::string& yaml) {
+  const std::string path = testing::TempDir() + "/stride_bad_config.yaml";
+  std::ofstream(path) << yaml;
+  try {
+    loadControllerConfig(path);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ControllerConfig, ErrorsNameTheFileAndTheKey) {
+  const std::string robot = "robot: " + std::string(STRIDE_CONFIG_DIR) +
+                            "/robots/stride_quad/stride_quad.yaml\n";
+  EXPECT_NE(configError("rate_hz: 100\n").find("robot"), std::string::npos);
+  EXPECT_NE(configError(robot + "rate_hz: -5\n").find("rate_hz"), std::string::npos);
+  EXPECT_NE(configError(robot + "rate_hz: fast\n").find("rate_hz"), std::string::npos);
+  EXPECT_NE(configError(robot + "horizon: {knots: 100, dtt: 0.01}\n").find("horizon.dtt"),
+            std::string::npos);
+  EXPECT_NE(configError(robot + "solver: {kind: newton}\n").find("solver.kind"), std::string::npos);
+  EXPECT_NE(configError(robot + "gait: {type: gallop}\n").find("gait.type"), std::string::npos);
+  EXPECT_NE(configError(robot + "safety: {fallback: pray}\n").find("safety.fallback"),
+            std::string::npos);
+  EXPECT_NE(configError(robot + "horizon: [1, 2\n").find("malformed"), std::string::npos);
+  EXPECT_EQ(configError(robot), "") << "a file with only the robot is valid (defaults)";
+  EXPECT_NE(configError(robot + "rate_hz: -5\n").find("stride_bad_config.yaml"),
+            std::string::npos);
+  try {
+    loadControllerConfig("/nonexistent/stride.yaml");
+    FAIL() << "a missing file must throw";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/stride.yaml"), std::string::npos);
+  }
+}
+
+TEST(Gait, TrotAndWalkPlans) {
+  const Robot quad = loadRobot(std::string(STRIDE_CONFIG_DIR) +
+                               "/robots/stride_quad/stride_quad.yaml");
+  GaitConfig g;
+  g.type = "trot";
+  g.stand = 1.0;
+  g.support = 0.1;
+  g.swing = 0.2;
+  g.duration = 3.0;
+  const ContactPlan trot = makeGaitPlan(g, quad.contacts);
+  EXPECT_FALSE(trot.cyclic);
+  EXPECT_TRUE(trot.isClosed("FL_foot", 0.5));
+  EXPECT_FALSE(trot.isClosed("FL_foot", 1.15));
+  EXPECT_FALSE(trot.isClosed("HR_foot", 1.15));
+  EXPECT_TRUE(trot.isClosed("FR_foot", 1.15));
+  EXPECT_FALSE(trot.isClosed("FR_foot", 1.45));
+  EXPECT_TRUE(trot.isClosed("FR_foot", 100.0));  // stands after the plan
+  g.type = "walk";
+  const ContactPlan walk = makeGaitPlan(g, quad.contacts);
+  int open_at_once = 0;
+  for (double t = 0.0; t < 3.0; t += 0.01) {
+    int open = 0;
+    for (const auto& c : quad.contacts) open += !walk.isClosed(c.frame, t);
+    open_at_once = std::max(open_at_once, open);
+  }
+  EXPECT_EQ(open_at_once, 1);
+
+  const Robot biped = loadRobot(std::string(STRIDE_CONFIG_DIR) +
+                                "/robots/stride_humanoid/stride_humanoid.yaml");
+  EXPECT_NO_THROW(makeGaitPlan(g, biped.contacts));
+  g.type = "trot";
+  EXPECT_THROW(makeGaitPlan(g, biped.contacts), ConfigError);
+}
+
+TEST(Gait, StepsInPlaceUntilStepAfter) {
+  const Robot quad = loadRobot(std::string(STRIDE_CONFIG_DIR) +
+                               "/robots/stride_quad/stride_quad.yaml");
+  ContactSet contacts;
+  for (const auto& c : quad.contacts)
+    contacts.add(quad.model, c.frame, 3, ReferenceFrame::LocalWorldAligned);
+  GaitConfig g;
+  g.stand = 0.5;
+  g.duration = 5.0;
+  LocomotionOptions o;
+  o.knots = 10;
+  o.step = Eigen::Vector3d(0.05, 0.0, 0.0);
+  o.step_after = 1.7;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(quad.model.nq + quad.model.nv);
+  x.head(quad.model.nq) = quad.default_q;
+  LocomotionProblem loco(quad.model, contacts, makeGaitPlan(g, quad.contacts), x, o);
+  const Eigen::Vector3d start = loco.footReference(0, 0.0);
+  // Touch-downs of FL up to 1.7 s (at 0.8 and 1.4 s) leave it in place; later ones move it.
+  EXPECT_NEAR((loco.footReference(0, 1.65) - start).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(loco.footReference(0, 2.05).x() - start.x(), 0.05, 1e-12);  // landed at 2.0 s
+  EXPECT_NEAR(loco.footReference(0, 2.65).x() - start.x(), 0.10, 1e-12);
+  // Mid-swing before step_after: up, not forward.
+  EXPECT_NEAR(loco.footReference(0, 1.3).x(), start.x(), 1e-12);
+  EXPECT_GT(loco.footReference(0, 1.3).z(), start.z() + 0.01);
+}
+
+// The controller around a robot that stands still: the first tick solves to convergence and
+// publishes; the next ones shift and re-solve within their budget.
+TEST(Mpc, StandingTicks) {
+  ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  Mpc mpc(config);
+  robot_state_t s = standingState(mpc.robot(), 1000000);
+  EXPECT_FALSE(mpc.tick(nullptr, 0.0, Mpc::Clock::time_point::max()));
+  EXPECT_EQ(mpc.status().policy_status, kPolicyNone);
+  ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+  EXPECT_TRUE(mpc.startupTick());
+  const policy_t& p = mpc.policy();
+  EXPECT_EQ(p.status, kPolicySolved);
+  EXPECT_EQ(p.utime, s.utime);
+  EXPECT_EQ(msg::checkPolicy(p, true), msg::Reject::None);
+  // Standing: the feed-forward carries the weight (hind and front knees both loaded).
+  for (int k = 0; k < p.knots; ++k) EXPECT_GT(std::abs(p.u_ff[k][2]), 0.05);
+  for (int i = 1; i <= 20; ++i) {
+    s.utime += 5000;
+    ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+    EXPECT_FALSE(mpc.startupTick());
+    EXPECT_EQ(mpc.policy().status, kPolicySolved);
+    EXPECT_EQ(mpc.status().iterations, 1);
+  }
+  EXPECT_NEAR(mpc.status().plan_time, 0.1, 1e-12);
+  EXPECT_EQ(mpc.counters().fallbacks, 0);
+}
+
+TEST(Mpc, FallbacksOnStaleStates) {
+  ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  config.max_previous_ticks = 3;
+  Mpc mpc(config);
+  robot_state_t s = standingState(mpc.robot(), 0);
+  ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+  const std::vector<double> u1 = mpc.policy().u_ff[1];
+  // Stale (older than max_state_age): the previous policy, advanced to the state's time.
+  s.utime += 10000;
+  ASSERT_TRUE(mpc.tick(&s, 1.0, Mpc::Clock::time_point::max()));
+  EXPECT_EQ(mpc.policy().status, kPolicyPrevious);
+  EXPECT_EQ(mpc.policy().utime, 10000);
+  EXPECT_EQ(mpc.policy().u_ff[0], u1);
+  for (int i = 0; i < 2; ++i) ASSERT_TRUE(mpc.tick(&s, 1.0, Mpc::Clock::time_point::max()));
+  EXPECT_EQ(mpc.policy().status, kPolicyPrevious);
+  // Then the hold policy: PD on the joints to the default posture.
+  ASSERT_TRUE(mpc.tick(&s, 1.0, Mpc::Clock::time_point::max()));
+  const policy_t& hold = mpc.policy();
+  EXPECT_EQ(hold.status, kPolicyHold);
+  EXPECT_EQ(msg::checkPolicy(hold, true), msg::Reject::None);
+  const int ndx = hold.ndx;
+  EXPECT_DOUBLE_EQ(hold.K[0][0 * ndx + 6], config.hold_kp);
+  EXPECT_DOUBLE_EQ(hold.K[0][0 * ndx + hold.nv + 6], config.hold_kd);
+  EXPECT_EQ(mpc.counters().stale_states, 4);
+  EXPECT_EQ(mpc.counters().fallbacks, 4);
+  EXPECT_EQ(mpc.status().fallbacks, 4);
+  // A fresh state again: solved.
+  s.utime += 5000;
+  ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+  EXPECT_EQ(mpc.policy().status, kPolicySolved);
+}
+
+}  // namespace
+}  // namespace stride
