@@ -47,7 +47,7 @@ void MpcNode::onState(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   msg::Reject why = msg::checkStateWire(rbuf->data, static_cast<int>(rbuf->data_size), model.nq,
                                         model.nv, kMaxContactFlags);
   if (why == msg::Reject::None &&
-      incoming_.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0)
+      !msg::decode(rbuf->data, static_cast<int>(rbuf->data_size), incoming_))
     why = msg::Reject::Undecodable;
   if (why == msg::Reject::None) why = msg::checkState(incoming_, floating_);
   if (why == msg::Reject::None && have_state_ && incoming_.utime <= newest_.utime)

@@ -143,6 +143,15 @@ Reject checkPlan(const contact_plan_t& m) {
   return m.cyclic == 0 || m.cyclic == 1 ? Reject::None : Reject::BadField;
 }
 
+bool decode(const void* buf, int size, robot_state_t& m) {
+  if (m.decode(buf, 0, size) < 0) return false;
+  // Shrinking, or growing within the capacity shape() reserved: no allocation.
+  m.q.resize(m.nq);
+  m.v.resize(m.nv);
+  m.contact.resize(m.ncontacts);
+  return true;
+}
+
 void shape(robot_state_t& m, int nq, int nv, int ncontacts) {
   m.nq = nq;
   m.nv = nv;

@@ -49,6 +49,10 @@ Reject checkPlan(const contact_plan_t& m);
 int stateWireSize(int nq, int nv, int ncontacts);
 int policyWireSize(int knots, int nq, int nv, int nu);
 
+// Decodes a buffer that passed checkStateWire, and trims the arrays to their counts: lcm-gen's
+// decoder skips an array whose count is 0, which would leave a reused object's old entries.
+bool decode(const void* buf, int size, robot_state_t& m);
+
 // Resizes a message's arrays to these dimensions (sets the count fields too). Done once at setup,
 // so that later decodes and encodes of the same dimensions allocate nothing.
 void shape(robot_state_t& m, int nq, int nv, int ncontacts);

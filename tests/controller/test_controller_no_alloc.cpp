@@ -1,0 +1,83 @@
+// The controller's tick allocates nothing after start-up (ARCHITECTURE.md §4): decoding the state
+// bytes, validating them, shifting the horizon, the solve, the policy and the status messages,
+// encoding them and handing them to the publisher, through fallbacks too.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+#include "allocation_counter.hpp"
+#include "controller/mpc_node.hpp"
+#include "controller_cases.hpp"
+
+namespace stride {
+namespace {
+
+using testing::allocations;
+
+struct Sink : Publisher {
+  long bytes = 0;
+  void publish(const std::string&, const void*, int size) override { bytes += size; }
+};
+
+TEST(ControllerNoAllocation, CounterSeesAllocations) {
+  EXPECT_GE(allocations([] { std::vector<double> v(100); }), 1);
+}
+
+void tickNoAllocation(const std::string& robot, int ticks) {
+  ControllerConfig config = loadControllerConfig(controller_cases::configPath(robot));
+  config.max_previous_ticks = 2;
+  Sink out;
+  MpcNode node(config, out, TimeSource::RealTime);  // stale = arrived too long ago
+  robot_state_t s = controller_cases::standingState(node.mpc().robot(), 1000);
+  std::vector<unsigned char> bytes(s.getEncodedSize());
+  const auto period = static_cast<std::int64_t>(1e6 / config.rate_hz);
+  auto feed = [&](std::int64_t utime) {
+    s.utime = utime;
+    // A little motion, so that every tick has work to do.
+    s.v[2] = 0.01 * std::sin(1e-5 * static_cast<double>(utime));
+    s.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    lcm::ReceiveBuffer rbuf{bytes.data(), static_cast<uint32_t>(bytes.size()), 0};
+    node.onState(&rbuf, config.state_channel);
+  };
+  feed(1000);
+  node.tick(Mpc::Clock::time_point::max());  // start-up: builds and solves the problem
+  ASSERT_EQ(node.mpc().policy().status, kPolicySolved);
+  std::int64_t t = 1000;
+  for (int i = 0; i < ticks; ++i) {
+    t += period;
+    const long n = allocations([&] {
+      feed(t);
+      node.tick(Mpc::Clock::time_point::max());
+    });
+    EXPECT_EQ(n, 0) << robot << " tick " << i;
+  }
+  EXPECT_EQ(node.mpc().counters().fallbacks, 0);
+  // A deadline already passed: the best iterate, flagged.
+  t += period;
+  EXPECT_EQ(allocations([&] {
+              feed(t);
+              node.tick(Mpc::Clock::now());
+            }),
+            0);
+  EXPECT_EQ(node.mpc().policy().status, kPolicyDeadline);
+  // Fallbacks: no new state for longer than max_state_age: the previous policy, then hold.
+  std::this_thread::sleep_for(std::chrono::duration<double>(config.max_state_age * 1.5));
+  std::vector<int> statuses;
+  statuses.reserve(4);
+  EXPECT_EQ(allocations([&] {
+              for (int i = 0; i < 4; ++i) {
+                node.tick(Mpc::Clock::time_point::max());
+                statuses.push_back(node.mpc().policy().status);
+              }
+            }),
+            0);
+  EXPECT_EQ(statuses, (std::vector<int>{kPolicyPrevious, kPolicyPrevious, kPolicyHold, kPolicyHold}));
+  EXPECT_GT(out.bytes, 0);
+}
+
+TEST(ControllerNoAllocation, QuadrupedTicks) { tickNoAllocation("stride_quad", 30); }
+TEST(ControllerNoAllocation, HumanoidTicks) { tickNoAllocation("stride_humanoid", 10); }
+
+}  // namespace
+}  // namespace stride

@@ -1,0 +1,260 @@
+// LCM messages: a memq round trip of every type, and the node's rejection of malformed input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <lcm/lcm-cpp.hpp>
+#include <limits>
+
+#include "controller/mpc_node.hpp"
+#include "controller_cases.hpp"
+
+namespace stride {
+namespace {
+
+using controller_cases::configPath;
+using controller_cases::standingState;
+
+// Receives one message of type T on a channel.
+template <typename T>
+struct Catcher {
+  T msg;
+  int count = 0;
+  void on(const lcm::ReceiveBuffer*, const std::string&, const T* m) {
+    msg = *m;
+    ++count;
+  }
+};
+
+template <typename T>
+T roundTrip(lcm::LCM& lcm, const std::string& channel, const T& sent) {
+  Catcher<T> c;
+  lcm::Subscription* sub = lcm.subscribe(channel, &Catcher<T>::on, &c);
+  EXPECT_EQ(lcm.publish(channel, &sent), 0);
+  EXPECT_GT(lcm.handleTimeout(1000), 0);
+  lcm.unsubscribe(sub);
+  EXPECT_EQ(c.count, 1);
+  return c.msg;
+}
+
+TEST(Messages, MemqRoundTripOfEveryType) {
+  lcm::LCM lcm("memq://");  // in process: no network at all
+  ASSERT_TRUE(lcm.good());
+
+  robot_state_t s;
+  msg::shape(s, 19, 18, 4);
+  s.utime = 123456789;
+  for (int i = 0; i < 19; ++i) s.q[i] = 0.1 * i;
+  for (int i = 0; i < 18; ++i) s.v[i] = -0.2 * i;
+  s.contact = {1, 0, 1, 1};
+  const robot_state_t s2 = roundTrip(lcm, "STATE", s);
+  EXPECT_EQ(s2.utime, s.utime);
+  EXPECT_EQ(s2.q, s.q);
+  EXPECT_EQ(s2.v, s.v);
+  EXPECT_EQ(s2.contact, s.contact);
+
+  policy_t p;
+  msg::shape(p, 3, 19, 18, 12);
+  p.utime = 42;
+  p.tick = 7;
+  p.t0 = 1.25;
+  p.dt = 0.01;
+  p.phase = 3;
+  p.status = 1;
+  for (int k = 0; k < 3; ++k) {
+    for (int i = 0; i < p.nx; ++i) p.x_ref[k][i] = k + 0.01 * i;
+    for (int i = 0; i < p.nu; ++i) p.u_ff[k][i] = -k - 0.02 * i;
+    for (int i = 0; i < p.nk; ++i) p.K[k][i] = std::sin(k * 1000 + i);
+  }
+  const policy_t p2 = roundTrip(lcm, "POLICY", p);
+  EXPECT_EQ(p2.x_ref, p.x_ref);
+  EXPECT_EQ(p2.u_ff, p.u_ff);
+  EXPECT_EQ(p2.K, p.K);
+  EXPECT_EQ(p2.t0, p.t0);
+  EXPECT_EQ(p2.status, p.status);
+  EXPECT_EQ(msg::policyWireSize(3, 19, 18, 12), p.getEncodedSize());
+  EXPECT_EQ(msg::stateWireSize(19, 18, 4), s.getEncodedSize());
+
+  mpc_status_t st{};
+  st.utime = 5;
+  st.tick = 6;
+  st.solve_ms = 1.5;
+  st.iterations = 1;
+  st.cost = 12.5;
+  st.deadline_misses = 2;
+  st.rejected_messages = 9;
+  st.policy_status = 2;
+  const mpc_status_t st2 = roundTrip(lcm, "STATUS", st);
+  EXPECT_EQ(st2.solve_ms, st.solve_ms);
+  EXPECT_EQ(st2.cost, st.cost);
+  EXPECT_EQ(st2.deadline_misses, st.deadline_misses);
+  EXPECT_EQ(st2.rejected_messages, st.rejected_messages);
+  EXPECT_EQ(st2.policy_status, st.policy_status);
+
+  contact_plan_t plan;
+  plan.utime = 1000;
+  plan.cyclic = 1;
+  plan.ncontacts = 2;
+  plan.contacts = {"L_sole", "R_sole"};
+  plan.nphases = 2;
+  plan.duration = {0.2, 0.6};
+  plan.closed = {{1, 1}, {0, 1}};
+  const contact_plan_t plan2 = roundTrip(lcm, "PLAN", plan);
+  EXPECT_EQ(plan2.contacts, plan.contacts);
+  EXPECT_EQ(plan2.duration, plan.duration);
+  EXPECT_EQ(plan2.closed, plan.closed);
+  std::vector<unsigned char> bytes(plan.getEncodedSize());
+  plan.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  EXPECT_EQ(msg::checkPlanWire(bytes.data(), static_cast<int>(bytes.size()), 16, 100),
+            msg::Reject::None);
+  EXPECT_EQ(msg::checkPlan(plan2), msg::Reject::None);
+}
+
+// Records what the node publishes.
+struct Recorder : Publisher {
+  int policies = 0, statuses = 0;
+  void publish(const std::string& channel, const void*, int) override {
+    if (channel == "STRIDE_POLICY") ++policies;
+    if (channel == "STRIDE_STATUS") ++statuses;
+  }
+};
+
+class NodeInput : public testing::Test {
+ protected:
+  NodeInput()
+      : config_(loadControllerConfig(configPath("stride_quad"))),
+        node_(config_, out_, TimeSource::Stamps) {}
+
+  void feed(const void* data, int size) {
+    lcm::ReceiveBuffer rbuf{const_cast<void*>(data), static_cast<uint32_t>(size), 0};
+    node_.onState(&rbuf, "STRIDE_STATE");
+  }
+  void feed(const robot_state_t& m) {
+    std::vector<unsigned char> b(m.getEncodedSize());
+    m.encode(b.data(), 0, static_cast<int>(b.size()));
+    feed(b.data(), static_cast<int>(b.size()));
+  }
+  robot_state_t good(std::int64_t utime) { return standingState(node_.mpc().robot(), utime); }
+
+  ControllerConfig config_;
+  Recorder out_;
+  MpcNode node_;
+};
+
+TEST_F(NodeInput, RejectsAndCountsMalformedStates) {
+  using msg::Reject;
+  feed(good(1000));
+  EXPECT_EQ(node_.acceptedStates(), 1);
+  EXPECT_EQ(node_.rejected(), 0);
+
+  robot_state_t m = good(2000);
+  m.q[8] = std::numeric_limits<double>::quiet_NaN();
+  feed(m);
+  EXPECT_EQ(node_.rejected(Reject::NonFinite), 1);
+  m = good(2000);
+  m.v[3] = std::numeric_limits<double>::infinity();
+  feed(m);
+  EXPECT_EQ(node_.rejected(Reject::NonFinite), 2);
+
+  m = good(2000);
+  m.q[6] = 0.9;  // |quaternion| = 0.9
+  feed(m);
+  EXPECT_EQ(node_.rejected(Reject::NotUnitQuaternion), 1);
+
+  // Wrong sizes: another robot's state, and a count that does not match the bytes.
+  robot_state_t other;
+  msg::shape(other, 29, 28, 0);
+  other.q[6] = 1.0;
+  other.utime = 2000;
+  feed(other);
+  EXPECT_EQ(node_.rejected(Reject::WrongSize), 1);
+  m = good(2000);
+  std::vector<unsigned char> b(m.getEncodedSize());
+  m.encode(b.data(), 0, static_cast<int>(b.size()));
+  std::vector<unsigned char> huge = b;
+  huge[16] = 0x7f;  // nq = 2^31 - ...: must never reach the decoder
+  feed(huge.data(), static_cast<int>(huge.size()));
+  EXPECT_EQ(node_.rejected(Reject::WrongSize), 2);
+  feed(b.data(), static_cast<int>(b.size()) - 3);  // truncated inside the contact count
+  EXPECT_EQ(node_.rejected(Reject::Undecodable), 1);
+  feed(b.data(), 10);
+  EXPECT_EQ(node_.rejected(Reject::Undecodable), 2);
+  std::vector<unsigned char> wrong_hash = b;
+  wrong_hash[0] ^= 0xff;
+  feed(wrong_hash.data(), static_cast<int>(wrong_hash.size()));
+  EXPECT_EQ(node_.rejected(Reject::Undecodable), 3);
+  std::vector<unsigned char> longer = b;
+  longer.push_back(0);  // a byte more than the counts imply
+  feed(longer.data(), static_cast<int>(longer.size()));
+  EXPECT_EQ(node_.rejected(Reject::WrongSize), 3);
+
+  // Stamps: equal or older than the newest accepted state are out of order.
+  feed(good(1000));
+  feed(good(500));
+  EXPECT_EQ(node_.rejected(Reject::OutOfOrder), 2);
+  m = good(3000);
+  m.contact = {1, 2};
+  m.ncontacts = 2;
+  feed(m);
+  EXPECT_EQ(node_.rejected(Reject::BadField), 1);
+
+  EXPECT_EQ(node_.acceptedStates(), 1);
+  EXPECT_EQ(node_.rejected(), 12);
+  feed(good(3000));
+  EXPECT_EQ(node_.acceptedStates(), 2);
+
+  // The status message carries the count.
+  node_.tick(Mpc::Clock::time_point::max());
+  EXPECT_EQ(node_.mpc().status().rejected_messages, 12);
+  EXPECT_EQ(out_.policies, 1);
+  EXPECT_EQ(out_.statuses, 1);
+}
+
+TEST_F(NodeInput, NoStateNoPolicy) {
+  node_.tick(Mpc::Clock::time_point::max());
+  node_.tick(Mpc::Clock::time_point::max());
+  EXPECT_EQ(out_.policies, 0);
+  EXPECT_EQ(out_.statuses, 2);
+  EXPECT_EQ(node_.mpc().counters().ticks_without_state, 2);
+}
+
+TEST_F(NodeInput, MalformedPlansAreRejected) {
+  contact_plan_t plan;
+  plan.utime = 0;
+  plan.cyclic = 1;
+  plan.ncontacts = 1;
+  plan.contacts = {"no_such_foot"};
+  plan.nphases = 1;
+  plan.duration = {0.5};
+  plan.closed = {{1}};
+  std::vector<unsigned char> b(plan.getEncodedSize());
+  plan.encode(b.data(), 0, static_cast<int>(b.size()));
+  lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
+  node_.onPlan(&rbuf, "STRIDE_PLAN");
+  node_.applyPendingPlan();  // an unknown contact
+  EXPECT_EQ(node_.rejected(msg::Reject::BadField), 1);
+  plan.duration = {-1.0};
+  plan.contacts = {"FL_foot"};
+  b.assign(plan.getEncodedSize(), 0);
+  plan.encode(b.data(), 0, static_cast<int>(b.size()));
+  rbuf = {b.data(), static_cast<uint32_t>(b.size()), 0};
+  node_.onPlan(&rbuf, "STRIDE_PLAN");
+  EXPECT_EQ(node_.rejected(msg::Reject::BadField), 2);
+  rbuf.data_size = 20;
+  node_.onPlan(&rbuf, "STRIDE_PLAN");
+  EXPECT_EQ(node_.rejected(), 3);
+  EXPECT_EQ(node_.planUpdates(), 0);
+  // A valid plan for this robot is taken.
+  plan.contacts = {"FL_foot", "FR_foot", "HL_foot", "HR_foot"};
+  plan.ncontacts = 4;
+  plan.duration = {1.0};
+  plan.closed = {{1, 1, 1, 1}};
+  b.assign(plan.getEncodedSize(), 0);
+  plan.encode(b.data(), 0, static_cast<int>(b.size()));
+  rbuf = {b.data(), static_cast<uint32_t>(b.size()), 0};
+  node_.onPlan(&rbuf, "STRIDE_PLAN");
+  node_.applyPendingPlan();
+  EXPECT_EQ(node_.planUpdates(), 1);
+}
+
+}  // namespace
+}  // namespace stride
