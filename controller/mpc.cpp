@@ -192,6 +192,7 @@ void Mpc::writePolicy(std::int64_t utime, double t, std::int8_t status) {
   const auto& K = solver_->K();
   const int ndx = 2 * nv_;
   policy_.utime = utime;
+  policy_.knot0_utime = utime;
   policy_.tick = counters_.ticks;
   policy_.t0 = t;
   policy_.dt = config_.locomotion.dt;
@@ -221,10 +222,12 @@ void Mpc::writePolicy(std::int64_t utime, double t, std::int8_t status) {
 
 bool Mpc::previousPolicy(std::int64_t utime) {
   if (!have_previous_) return false;
-  const double elapsed = (utime - previous_.utime) * 1e-6;
+  const double elapsed = (utime - previous_.knot0_utime) * 1e-6;
   const int skip = static_cast<int>(std::floor(elapsed / previous_.dt));
   if (skip < 0 || skip >= previous_.knots - 1) return false;  // nothing left to interpolate
-  policy_.utime = previous_.utime + static_cast<std::int64_t>(std::llround(skip * previous_.dt * 1e6));
+  policy_.utime = utime;
+  policy_.knot0_utime =
+      previous_.knot0_utime + static_cast<std::int64_t>(std::llround(skip * previous_.dt * 1e6));
   policy_.t0 = previous_.t0 + skip * previous_.dt;
   policy_.dt = previous_.dt;
   policy_.tick = counters_.ticks;
@@ -246,6 +249,7 @@ void Mpc::holdPolicy(std::int64_t utime, double t) {
   const Eigen::VectorXd& u_hold = loco_->holdingControl(loco_->schedule().localPhase(phase));
   const int ndx = 2 * nv_, base = robot_.model.hasFreeFlyer() ? 6 : 0;
   policy_.utime = utime;
+  policy_.knot0_utime = utime;
   policy_.t0 = t;
   policy_.dt = config_.locomotion.dt;
   policy_.tick = counters_.ticks;

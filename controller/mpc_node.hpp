@@ -18,28 +18,9 @@
 #include <vector>
 
 #include "controller/mpc.hpp"
+#include "messages/publisher.hpp"
 
 namespace stride {
-
-// Where the node's output goes: LCM in the daemon, a recorder in tests.
-class Publisher {
- public:
-  virtual ~Publisher() = default;
-  virtual void publish(const std::string& channel, const void* data, int size) = 0;
-};
-
-class LcmPublisher : public Publisher {
- public:
-  explicit LcmPublisher(lcm::LCM& lcm) : lcm_(lcm) {}
-  void publish(const std::string& channel, const void* data, int size) override {
-    failures_ += lcm_.publish(channel, data, static_cast<unsigned>(size)) != 0;
-  }
-  long failures() const { return failures_; }
-
- private:
-  lcm::LCM& lcm_;
-  long failures_ = 0;
-};
 
 enum class TimeSource { RealTime, Stamps };
 

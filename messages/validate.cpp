@@ -61,7 +61,7 @@ int stateWireSize(int nq, int nv, int ncontacts) {
 
 int policyWireSize(int knots, int nq, int nv, int nu) {
   const long per_knot = 8L * ((nq + nv) + nu + static_cast<long>(nu) * 2 * nv);
-  return static_cast<int>(kHash + 8 + 8 + 8 + 8 + 7 * 4 + knots * per_knot + 4 + 1);
+  return static_cast<int>(kHash + 5 * 8 + 7 * 4 + knots * per_knot + 4 + 1);
 }
 
 Reject checkStateWire(const void* buf, int size, int nq, int nv, int max_contacts) {
@@ -77,7 +77,7 @@ Reject checkStateWire(const void* buf, int size, int nq, int nv, int max_contact
 Reject checkPolicyWire(const void* buf, int size, int nq, int nv, int nu, int max_knots) {
   std::int32_t f[7];  // knots nq nv nu nx ndx nk
   for (int i = 0; i < 7; ++i)
-    if (!readInt32(buf, size, kHash + 32 + 4 * i, f[i])) return Reject::Undecodable;
+    if (!readInt32(buf, size, kHash + 40 + 4 * i, f[i])) return Reject::Undecodable;
   if (f[0] < 1 || f[0] > max_knots || f[1] != nq || f[2] != nv || f[3] != nu ||
       f[4] != nq + nv || f[5] != 2 * nv || f[6] != nu * 2 * nv)
     return Reject::WrongSize;

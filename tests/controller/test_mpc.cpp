@@ -158,7 +158,8 @@ TEST(Mpc, FallbacksOnStaleStates) {
   s.utime += 10000;
   ASSERT_TRUE(mpc.tick(&s, 1.0, Mpc::Clock::time_point::max()));
   EXPECT_EQ(mpc.policy().status, kPolicyPrevious);
-  EXPECT_EQ(mpc.policy().utime, 10000);
+  EXPECT_EQ(mpc.policy().utime, 10000);        // answers this state
+  EXPECT_EQ(mpc.policy().knot0_utime, 10000);  // its knot 0: the old knot 1 (10 ms later)
   EXPECT_EQ(mpc.policy().u_ff[0], u1);
   for (int i = 0; i < 2; ++i) ASSERT_TRUE(mpc.tick(&s, 1.0, Mpc::Clock::time_point::max()));
   EXPECT_EQ(mpc.policy().status, kPolicyPrevious);

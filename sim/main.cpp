@@ -1,0 +1,149 @@
+// stride-sim: the mock robot (sim/README.md). Integrates the robot with contacts found from the
+// ground's geometry, applies the controller's latest policy at every step, publishes estimates.
+//   stride-sim --robot config/robots/stride_quad/stride_quad.yaml --lockstep --rate 200
+//   stride-sim --robot ... --rate 1000 --push 6:0.1:15,0,0          real time, with a push
+
+#include <time.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+
+#include "sim/sim_node.hpp"
+
+namespace {
+std::atomic<bool> g_stop{false};
+void onSignal(int) { g_stop = true; }
+
+std::int64_t monotonicMicros() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
+}
+
+// "start:duration:fx,fy,fz" (seconds, newtons, world axes).
+bool parsePush(const std::string& text, stride::sim::Push& push) {
+  std::istringstream in(text);
+  char c1, c2, c3, c4;
+  double fx, fy, fz;
+  if (!(in >> push.start >> c1 >> push.duration >> c2 >> fx >> c3 >> fy >> c4 >> fz)) return false;
+  if (c1 != ':' || c2 != ':' || c3 != ',' || c4 != ',' || !(push.duration > 0.0)) return false;
+  push.force = Eigen::Vector3d(fx, fy, fz);
+  return push.force.allFinite() && std::isfinite(push.start);
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"stride-sim: mock robot for stride-mpc (flat ground, unilateral contacts, friction)"};
+  std::string robot_yaml, url, summary;
+  bool lockstep = false;
+  double duration = 10.0, timeout = 5.0, drop_height = 0.0;
+  std::vector<std::string> pushes;
+  stride::sim::SimOptions sim;
+  stride::sim::SimNodeOptions node_options;
+  app.add_option("--robot", robot_yaml, "robot YAML (config/robots/)")->required();
+  app.add_flag("--lockstep", lockstep,
+               "advance one state period only after the controller answered (deterministic)");
+  app.add_option("--rate", node_options.state_rate_hz,
+                 "state estimates per second (lock-step: the controller's rate)");
+  app.add_option("--duration", duration, "seconds of simulated time");
+  app.add_option("--url", url, "LCM URL (default: LCM_DEFAULT_URL)");
+  app.add_option("--dt", sim.dt, "physics step [s]");
+  app.add_option("--substeps", sim.substeps, "substeps per physics step");
+  app.add_option("--mu", sim.friction, "ground friction coefficient");
+  app.add_option("--ground", sim.ground_height, "ground height [m]");
+  app.add_option("--drop-height", drop_height, "start this high above the ground [m]");
+  app.add_option("--noise-q", node_options.noise_q, "joint position noise std [rad]");
+  app.add_option("--noise-v", node_options.noise_v, "velocity noise std");
+  app.add_option("--delay", node_options.delay, "publish estimates this many periods late");
+  app.add_option("--drop", node_options.drop, "probability of dropping an estimate");
+  app.add_option("--seed", node_options.seed, "noise and drop seed");
+  app.add_option("--push", pushes, "a push on the base: start:duration:fx,fy,fz (repeatable)");
+  app.add_option("--lockstep-timeout", timeout, "lock-step: wall seconds to wait for an answer");
+  app.add_option("--summary", summary, "write the run's summary as JSON here");
+  CLI11_PARSE(app, argc, argv);
+
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+  try {
+    for (const std::string& p : pushes) {
+      stride::sim::Push push;
+      if (!parsePush(p, push)) {
+        std::fprintf(stderr, "stride-sim: --push '%s': expected start:duration:fx,fy,fz\n",
+                     p.c_str());
+        return 2;
+      }
+      node_options.pushes.pushes.push_back(push);
+    }
+    if (url.empty() && std::getenv("LCM_DEFAULT_URL") != nullptr) url = std::getenv("LCM_DEFAULT_URL");
+    if (url.empty()) {
+      std::fprintf(stderr, "stride-sim: no LCM URL: --url or LCM_DEFAULT_URL\n");
+      return 2;
+    }
+    const stride::Robot robot = stride::loadRobot(robot_yaml);
+    lcm::LCM lcm(url);
+    if (!lcm.good()) {
+      std::fprintf(stderr, "stride-sim: cannot open LCM '%s'\n", url.c_str());
+      return 2;
+    }
+    if (!lockstep) node_options.utime_base = monotonicMicros();
+    stride::LcmPublisher publisher(lcm);
+    stride::sim::SimNode node(robot, sim, node_options, publisher);
+    node.subscribe(lcm);
+    Eigen::VectorXd q = robot.default_q, v = Eigen::VectorXd::Zero(robot.model.nv);
+    if (robot.model.hasFreeFlyer()) q[2] += drop_height;
+    node.reset(q, v);
+    std::printf("stride-sim: %s, %s, %.0f Hz physics, estimates at %.0f Hz, %.1f s, '%s'\n",
+                robot.name.c_str(), lockstep ? "lock-step" : "real time", 1.0 / sim.dt,
+                node_options.state_rate_hz, duration, url.c_str());
+    std::fflush(stdout);
+
+    const int per_state = node.stepsPerState();
+    if (lockstep) {
+      while (!g_stop && node.simulator().time() < duration - 1e-9) {
+        const std::int64_t stamp = node.publishState();
+        if (stamp >= 0) {
+          const std::int64_t give_up = monotonicMicros() + static_cast<std::int64_t>(timeout * 1e6);
+          while (!node.answered(stamp) && !g_stop) {
+            const std::int64_t left_ms = (give_up - monotonicMicros()) / 1000;
+            if (left_ms <= 0) {
+              node.countLockstepTimeout();
+              break;
+            }
+            if (lcm.handleTimeout(static_cast<int>(std::min<std::int64_t>(left_ms, 100))) < 0) {
+              std::fprintf(stderr, "stride-sim: LCM receive failed\n");
+              g_stop = true;
+            }
+          }
+        }
+        node.advance(per_state);
+      }
+    } else {
+      const long step_ns = std::lround(sim.dt * 1e9);
+      timespec next;
+      clock_gettime(CLOCK_MONOTONIC, &next);
+      long steps = 0;
+      while (!g_stop && node.simulator().time() < duration - 1e-9) {
+        if (steps % per_state == 0) node.publishState();
+        while (lcm.handleTimeout(0) > 0) {
+        }
+        node.advance(1);
+        ++steps;
+        next.tv_nsec += step_ns;
+        while (next.tv_nsec >= 1000000000L) {
+          next.tv_nsec -= 1000000000L;
+          ++next.tv_sec;
+        }
+        clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
+      }
+    }
+    node.writeSummary(summary);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "stride-sim: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,157 @@
+#include "sim/sim_node.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "solver/contact/knot_dynamics.hpp"
+
+namespace stride::sim {
+
+SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions& options,
+                 Publisher& out)
+    : robot_(robot),
+      options_(options),
+      sim_(robot, sim),
+      out_(out),
+      evaluator_(robot.model, actuatedDimension(robot.model)),
+      hold_(robot.model, robot.default_q, options.hold_kp, options.hold_kd),
+      noise_(options.noise_q, options.noise_v, options.seed),
+      delay_(robot.model.nq, robot.model.nv, options.delay),
+      dropper_(options.drop, options.seed + 1) {
+  const Model& model = robot.model;
+  steps_per_state_ = std::max(1, static_cast<int>(std::lround(1.0 / (options.state_rate_hz * sim.dt))));
+  msg::shape(state_msg_, model.nq, model.nv, static_cast<int>(robot.contacts.size()));
+  buffer_.resize(state_msg_.getEncodedSize());
+  q_pub_ = Eigen::VectorXd::Zero(model.nq);
+  v_pub_ = Eigen::VectorXd::Zero(model.nv);
+  tau_ = Eigen::VectorXd::Zero(sim_.nu());
+}
+
+void SimNode::subscribe(lcm::LCM& in) {
+  in.subscribe(options_.policy_channel, &SimNode::onPolicy, this)->setQueueCapacity(100);
+}
+
+std::int64_t SimNode::utime() const {
+  return options_.utime_base + static_cast<std::int64_t>(std::llround(sim_.time() * 1e6));
+}
+
+void SimNode::reset(const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
+  sim_.reset(q, v, 0.0);
+  delay_.clear();
+  have_policy_ = false;
+  last_answer_ = -1;
+  stats_ = SimNodeStats{};
+  stats_.x0 = q[0];
+  stats_.y0 = q[1];
+  stats_.z0 = q[2];
+  track();
+}
+
+void SimNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  const Model& model = robot_.model;
+  const int size = static_cast<int>(rbuf->data_size);
+  const bool ok = msg::checkPolicyWire(rbuf->data, size, model.nq, model.nv, sim_.nu(),
+                                       options_.max_policy_knots) == msg::Reject::None &&
+                  incoming_.decode(rbuf->data, 0, size) >= 0 &&
+                  msg::checkPolicy(incoming_, model.hasFreeFlyer()) == msg::Reject::None;
+  if (!ok) {
+    ++stats_.policies_rejected;
+    return;
+  }
+  if (policy_.knots != incoming_.knots) policy_.resize(incoming_.knots, model.nq, model.nv, sim_.nu());
+  policy_.t0 = static_cast<double>(incoming_.knot0_utime - options_.utime_base) * 1e-6;
+  policy_.dt = incoming_.dt;
+  for (int k = 0; k < incoming_.knots; ++k) {
+    std::copy(incoming_.x_ref[k].begin(), incoming_.x_ref[k].end(), policy_.xRef(k));
+    std::copy(incoming_.u_ff[k].begin(), incoming_.u_ff[k].end(), policy_.uFf(k));
+    std::copy(incoming_.K[k].begin(), incoming_.K[k].end(), policy_.gain(k));
+  }
+  have_policy_ = true;
+  last_answer_ = std::max(last_answer_, incoming_.utime);
+  ++stats_.policies;
+}
+
+std::int64_t SimNode::publishState() {
+  const Model& model = robot_.model;
+  double t = sim_.time();
+  q_pub_ = sim_.q();
+  v_pub_ = sim_.v();
+  if (delay_.delay() > 0) {
+    delay_.push(t, q_pub_, v_pub_);
+    if (!delay_.delayed(t, q_pub_, v_pub_)) return -1;  // not enough history yet
+  }
+  if (dropper_.drop()) {
+    ++stats_.states_dropped;
+    return -1;
+  }
+  noise_.apply(model, q_pub_, v_pub_);
+  state_msg_.utime = options_.utime_base + static_cast<std::int64_t>(std::llround(t * 1e6));
+  std::copy(q_pub_.data(), q_pub_.data() + model.nq, state_msg_.q.begin());
+  std::copy(v_pub_.data(), v_pub_.data() + model.nv, state_msg_.v.begin());
+  for (int c = 0; c < state_msg_.ncontacts; ++c)
+    state_msg_.contact[c] = sim_.normalForce(c) > 0.0 ? 1 : 0;
+  const int n = state_msg_.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
+  if (n > 0) out_.publish(options_.state_channel, buffer_.data(), n);
+  ++stats_.states_published;
+  return state_msg_.utime;
+}
+
+void SimNode::advance(int steps) {
+  for (int i = 0; i < steps; ++i) {
+    const double t = sim_.time();
+    const Vector6d push = options_.pushes.wrenchAt(t);
+    if (!push.isZero()) sim_.applyExternalWrench(push, options_.pushes.activeUntil(t));
+    PolicyStatus status = PolicyStatus::Invalid;
+    if (have_policy_) status = evaluator_.evaluate(policy_, t, sim_.q(), sim_.v(), tau_);
+    if (status == PolicyStatus::Exhausted) ++stats_.exhausted_steps;
+    if (status == PolicyStatus::Invalid) {
+      hold_.torque(robot_.model, sim_.q(), sim_.v(), tau_);
+      ++stats_.hold_steps;
+    }
+    sim_.step(tau_);
+    ++stats_.steps;
+    track();
+  }
+}
+
+void SimNode::track() {
+  const Eigen::VectorXd& q = sim_.q();
+  stats_.z_min = std::min(stats_.z_min, q[2]);
+  stats_.z_max = std::max(stats_.z_max, q[2]);
+  const double qx = q[3], qy = q[4];
+  const double tilt =
+      std::acos(std::clamp(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0)) * 180.0 / M_PI;
+  stats_.max_tilt_deg = std::max(stats_.max_tilt_deg, tilt);
+  for (int c = 0; c < static_cast<int>(robot_.contacts.size()); ++c)
+    stats_.peak_normal_force = std::max(stats_.peak_normal_force, sim_.normalForce(c));
+  if (q[2] < options_.fall_height * stats_.z0 || tilt > options_.fall_tilt_deg) stats_.fell = true;
+}
+
+void SimNode::writeSummary(const std::string& path) const {
+  const SimNodeStats& s = stats_;
+  const Eigen::VectorXd& q = sim_.q();
+  const double distance = std::hypot(q[0] - s.x0, q[1] - s.y0);
+  std::printf(
+      "stride-sim: %.2f s simulated, walked %.3f m (x %+.3f), base height %.3f .. %.3f m, max "
+      "tilt %.1f deg, %s; %lld states published (%lld dropped), %lld policies (%lld rejected), "
+      "%lld steps on the hold PD, %lld past a policy's end, %lld lock-step timeouts\n",
+      sim_.time(), distance, q[0] - s.x0, s.z_min, s.z_max, s.max_tilt_deg,
+      s.fell ? "FELL" : "did not fall", static_cast<long long>(s.states_published),
+      static_cast<long long>(s.states_dropped), static_cast<long long>(s.policies),
+      static_cast<long long>(s.policies_rejected), static_cast<long long>(s.hold_steps),
+      static_cast<long long>(s.exhausted_steps), static_cast<long long>(s.lockstep_timeouts));
+  if (path.empty()) return;
+  std::ofstream f(path);
+  f << "{\n  \"sim_time_s\": " << sim_.time() << ",\n  \"distance_m\": " << distance
+    << ",\n  \"base_height_min_m\": " << s.z_min << ",\n  \"base_height_max_m\": " << s.z_max
+    << ",\n  \"max_tilt_deg\": " << s.max_tilt_deg << ",\n  \"fell\": "
+    << (s.fell ? "true" : "false") << ",\n  \"peak_normal_force_N\": " << s.peak_normal_force
+    << ",\n  \"states_published\": " << s.states_published << ",\n  \"policies\": " << s.policies
+    << ",\n  \"policies_rejected\": " << s.policies_rejected << ",\n  \"hold_steps\": "
+    << s.hold_steps << ",\n  \"exhausted_steps\": " << s.exhausted_steps
+    << ",\n  \"lockstep_timeouts\": " << s.lockstep_timeouts << "\n}\n";
+}
+
+}  // namespace stride::sim

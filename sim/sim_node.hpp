@@ -1,0 +1,99 @@
+#pragma once
+// stride-sim's LCM side: publishes the mock robot's state estimates (with the configured noise,
+// delay and drops) and applies the newest valid policy at every physics step (ARCHITECTURE.md §1,
+// §6). Until the first policy arrives, and whenever one runs out, a joint PD holds the default
+// posture (counted).
+//
+// Time: the robot's clock is utime = utime_base + sim time, in µs. In lock-step the base is fixed
+// (deterministic stamps); in real time it is CLOCK_MONOTONIC at start and the loop keeps sim time
+// on the wall clock. A policy's knot 0 sits at its utime on that clock.
+
+#include <lcm/lcm-cpp.hpp>
+#include <string>
+
+#include "config/robot_config.hpp"
+#include "messages/publisher.hpp"
+#include "messages/validate.hpp"
+#include "sim/disturbances.hpp"
+#include "sim/policy.hpp"
+#include "sim/simulator.hpp"
+
+namespace stride::sim {
+
+struct SimNodeOptions {
+  double state_rate_hz = 1000.0;  // estimates published per second of sim time
+  double noise_q = 0.0, noise_v = 0.0;  // joint position / velocity noise std [rad, rad/s, m/s]
+  int delay = 0;                        // estimates published this many publications late
+  double drop = 0.0;                    // probability of dropping an estimate
+  std::uint64_t seed = 1;
+  PushSchedule pushes;
+  double hold_kp = 5.0, hold_kd = 0.1;  // the PD before the first policy
+  std::string state_channel = "STRIDE_STATE", policy_channel = "STRIDE_POLICY";
+  std::int64_t utime_base = 1000000;
+  int max_policy_knots = 64;
+  // Fallen: base below this fraction of its start height, or tilted more than this.
+  double fall_height = 0.5, fall_tilt_deg = 60.0;
+};
+
+struct SimNodeStats {
+  std::int64_t states_published = 0, states_dropped = 0;
+  std::int64_t policies = 0, policies_rejected = 0;
+  std::int64_t hold_steps = 0, exhausted_steps = 0, steps = 0;
+  std::int64_t lockstep_timeouts = 0;
+  double x0 = 0, y0 = 0, z0 = 0, z_min = 1e300, z_max = -1e300, max_tilt_deg = 0.0;
+  double peak_normal_force = 0.0;
+  bool fell = false;
+};
+
+class SimNode {
+ public:
+  SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions& options,
+          Publisher& out);
+
+  void subscribe(lcm::LCM& in);
+  void onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+
+  // Puts the robot at (q, v) at sim time 0.
+  void reset(const Eigen::VectorXd& q, const Eigen::VectorXd& v);
+  // Publishes the current estimate (through delay, noise and drops); returns the stamp the
+  // controller will answer, or -1 when nothing went out.
+  std::int64_t publishState();
+  // True once a policy answering a state stamped `utime` (or later) has arrived.
+  bool answered(std::int64_t utime) const { return have_policy_ && last_answer_ >= utime; }
+  // Advances `steps` physics steps, each with the policy evaluated at its start.
+  void advance(int steps);
+
+  Simulator& simulator() { return sim_; }
+  const Simulator& simulator() const { return sim_; }
+  std::int64_t utime() const;
+  const SimNodeStats& stats() const { return stats_; }
+  void countLockstepTimeout() { ++stats_.lockstep_timeouts; }
+  int stepsPerState() const { return steps_per_state_; }
+
+  // A human summary on stdout and, when path is not empty, JSON.
+  void writeSummary(const std::string& path) const;
+
+ private:
+  void track();
+
+  const Robot& robot_;
+  SimNodeOptions options_;
+  Simulator sim_;
+  Publisher& out_;
+  PolicyEvaluator evaluator_;
+  HoldPolicy hold_;
+  StateNoise noise_;
+  StateDelay delay_;
+  MessageDropper dropper_;
+  int steps_per_state_;
+  policy_t incoming_;
+  Policy policy_;
+  bool have_policy_ = false;
+  std::int64_t last_answer_ = -1;
+  robot_state_t state_msg_;
+  std::vector<unsigned char> buffer_;
+  Eigen::VectorXd q_pub_, v_pub_, tau_;
+  SimNodeStats stats_;
+};
+
+}  // namespace stride::sim
