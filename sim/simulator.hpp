@@ -65,7 +65,9 @@ struct SimCounters {
 struct PointContact {
   bool candidate = false;   // within the detection margin at the last substep
   bool in_contact = false;  // carried a positive normal impulse at the last substep
-  double height = 0.0;      // signed height above the ground at the last substep (< 0: inside)
+  // Signed height above the ground (< 0: inside) where the last substep detected contacts, i.e. at
+  // its start: the geometry of the state before the step, not recomputed after it.
+  double height = 0.0;
   Eigen::Vector3d force = Eigen::Vector3d::Zero();  // world force on the robot, mean over the step
 };
 
@@ -74,7 +76,8 @@ class Simulator {
   // `points`: the candidate contact points (contactPointsFromRobot). Throws std::invalid_argument
   // for bad options or points.
   Simulator(const Model& model, std::vector<ContactPoint> points, const SimOptions& options = {});
-  // The robot's own contact points.
+  // The robot's own contact points; starts at rest in robot.default_q. (The other constructor
+  // starts at rest in the neutral configuration: call reset.)
   explicit Simulator(const Robot& robot, const SimOptions& options = {});
 
   // Sets the state and time, clears external wrenches and the warm start. Throws

@@ -175,6 +175,26 @@ TEST(Simulator, TouchDownIsPlastic) {
   EXPECT_NEAR(sim.totalNormalForce(), sled.kMass * kG, 1e-3 * kG);
 }
 
+// Started 5 mm inside the ground, the sled is pushed out at the capped correction speed and
+// comes to rest on the surface without being thrown up.
+TEST(Simulator, PenetrationIsCorrectedGently) {
+  sim_test::Sled sled;
+  Simulator sim(sled.model, sled.points);
+  Eigen::VectorXd q = sled.restingQ();
+  q[2] -= 0.005;
+  sim.reset(q, Eigen::VectorXd::Zero(6));
+  const Eigen::VectorXd none(0);
+  double highest = -1.0;
+  for (int i = 0; i < 500; ++i) {
+    sim.step(none);
+    EXPECT_LE(sim.v()[2], sim.options().max_correction_velocity + 1e-9);
+    highest = std::max(highest, sim.q()[2]);
+  }
+  EXPECT_LT(highest, sled.kHalfZ + 1e-3);
+  EXPECT_NEAR(sim.q()[2], sled.kHalfZ, sim.options().penetration_slop + 1e-5);
+  EXPECT_LT(sim.v().norm(), 1e-6);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Coulomb friction on the sled: launched at 0.5 m/s it decelerates at μ g and stops after
 // v²/(2 μ g); pushed below μ m g it sticks, above it slides with (F − μ m g)/m.
