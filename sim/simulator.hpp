@@ -1,0 +1,158 @@
+#pragma once
+// The mock robot's physics: rigid multibody dynamics with unilateral ground contact and Coulomb
+// friction, integrated by a velocity-level time-stepping scheme (Stewart-Trinkle / Anitescu):
+//
+//   M (v⁺ − v) = h (S τ − b(q, v) + J_extᵀ f_ext) + J_cᵀ p,    q⁺ = q ⊕ h v⁺,
+//
+// with, for each candidate point, the impulse p = (p_x, p_y, p_n) (world axes, ground normal +z):
+//   0 ≤ p_n  ⟂  v_n⁺ − v_target ≥ 0      (no penetration at the end of the step; v_target carries
+//                                          the distance still to close and the drift correction)
+//   |p_t| ≤ μ p_n, p_t opposing the sliding velocity (maximal dissipation, circular cone).
+// Solved by projected Gauss-Seidel on the Delassus matrix G = J M⁻¹ Jᵀ. Touch-downs are plastic.
+// Details and the reasons: sim/README.md.
+//
+// Real time: the Model is copied in and a workspace sized for every candidate point at once is
+// built at construction; step() allocates nothing and never throws.
+
+#include <cstdint>
+#include <vector>
+
+#include "config/robot_config.hpp"
+#include "sim/ground_contact.hpp"
+#include "solver/multibody/data.hpp"
+
+namespace stride::sim {
+
+struct SimOptions {
+  double dt = 1e-3;  // one step(); a step runs `substeps` substeps of dt / substeps
+  int substeps = 1;
+  double ground_height = 0.0;
+  double friction = 0.8;         // Coulomb coefficient μ
+  bool clamp_torques = true;     // clamp τ to the model's effort limits
+  double contact_margin = 1e-3;  // a point is a candidate below this height (plus its fall in h)
+  // Penetration correction: a point deeper than `penetration_slop` is pushed out at
+  // `penetration_gain` × (depth − slop) / h, capped at `max_correction_velocity` (m/s).
+  double penetration_gain = 0.1;
+  double penetration_slop = 1e-4;
+  double max_correction_velocity = 0.2;
+  // Projected Gauss-Seidel: stop when no impulse moved by more than `pgs_tolerance` times the
+  // largest impulse over one sweep, or after `pgs_max_iterations` sweeps.
+  int pgs_max_iterations = 100;
+  double pgs_tolerance = 1e-7;
+  // Added to each diagonal entry of G relative to its 3 x 3 block's mean diagonal: keeps redundant
+  // points (a sole's 4 corners) well posed; a compliance of ~1e-8 of the point's mobility.
+  double regularization = 1e-8;
+};
+
+enum class StepStatus : std::uint8_t {
+  Ok,
+  RejectedTorque,      // non-finite τ: zero torque was applied instead
+  NonFiniteState,      // the step produced a non-finite state: q kept, v set to zero
+  SingularMassMatrix,  // M not positive definite (non-finite q?): the state was not advanced
+};
+const char* toString(StepStatus status);
+
+struct SimCounters {
+  std::int64_t steps = 0;
+  std::int64_t rejected_torques = 0;  // steps whose τ was not finite
+  std::int64_t clamped_steps = 0;     // steps where at least one torque was clamped
+  std::int64_t nonfinite_states = 0;  // substeps whose result was not finite (state held)
+  std::int64_t pgs_unconverged = 0;   // substeps where PGS hit pgs_max_iterations
+  int last_pgs_iterations = 0;        // sweeps of the last substep with contacts
+};
+
+// What one candidate point did in the last step.
+struct PointContact {
+  bool candidate = false;   // within the detection margin at the last substep
+  bool in_contact = false;  // carried a positive normal impulse at the last substep
+  // Signed height above the ground (< 0: inside) where the last substep detected contacts, i.e. at
+  // its start: the geometry of the state before the step, not recomputed after it.
+  double height = 0.0;
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();  // world force on the robot, mean over the step
+};
+
+class Simulator {
+ public:
+  // `points`: the candidate contact points (contactPointsFromRobot). Throws std::invalid_argument
+  // for bad options or points.
+  Simulator(const Model& model, std::vector<ContactPoint> points, const SimOptions& options = {});
+  // The robot's own contact points; starts at rest in robot.default_q. (The other constructor
+  // starts at rest in the neutral configuration: call reset.)
+  explicit Simulator(const Robot& robot, const SimOptions& options = {});
+
+  // Sets the state and time, clears external wrenches and the warm start. Throws
+  // std::invalid_argument for wrong sizes or non-finite values; normalizes the quaternion.
+  void reset(const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Ref<const Eigen::VectorXd>& v,
+             double time = 0.0);
+  // Advances one dt with the actuated torques τ (size nu), clamped to the effort limits if enabled.
+  // Non-finite τ is replaced by zero (StepStatus::RejectedTorque, counted). Never throws for a
+  // correctly sized τ; allocates nothing.
+  StepStatus step(const Eigen::Ref<const Eigen::VectorXd>& tau);
+
+  // A wrench [force; moment about the base origin] in world axes, acting on the base until the
+  // simulated time reaches `until_time` (replaces any previous one). Floating-base robots only.
+  void applyExternalWrench(const Vector6d& wrench_world_on_base, double until_time);
+  void clearExternalWrench() { wrench_until_ = -1.0; }
+
+  const Eigen::VectorXd& q() const { return q_; }
+  const Eigen::VectorXd& v() const { return v_; }
+  double time() const { return time_; }
+  const Model& model() const { return model_; }
+  const SimOptions& options() const { return options_; }
+  int nu() const { return nu_; }
+  // The torque applied during the last step (after rejection and clamping).
+  const Eigen::VectorXd& appliedTorque() const { return tau_applied_; }
+
+  const std::vector<ContactPoint>& contactPoints() const { return points_; }
+  const std::vector<PointContact>& pointContacts() const { return contacts_; }
+  // 3 x points: the world force on the robot at each point, mean over the last step.
+  const Eigen::Matrix3Xd& contactForces() const { return forces_; }
+  // The sum of the normal forces of one robot contact (ContactPoint::contact), last step.
+  double normalForce(int contact) const;
+  double totalNormalForce() const { return forces_.row(2).sum(); }
+
+  const SimCounters& counters() const { return counters_; }
+  StepStatus lastStatus() const { return last_status_; }
+  // Kinetic energy ½ vᵀ M v at the current state (recomputes M: a diagnostic, not for the tick).
+  double kineticEnergy();
+
+ private:
+  // One substep of length h; returns false when the state could not be advanced.
+  StepStatus substep(double h);
+  int solveContacts(double h, int active);  // PGS over the first `active` compacted points
+
+  Model model_;
+  SimOptions options_;
+  std::vector<ContactPoint> points_;
+  FlatGround ground_;
+  Data data_;
+  int nu_ = 0;
+  int tau_first_ = 0;  // first actuated velocity index (6 for a free-flyer)
+
+  Eigen::VectorXd q_, v_;
+  double time_ = 0.0;
+  Vector6d wrench_ = Vector6d::Zero();
+  double wrench_until_ = -1.0;
+
+  // Per-step workspaces, sized at construction (P = number of candidate points).
+  Eigen::VectorXd tau_applied_;  // nu
+  Eigen::VectorXd rhs_;          // nv: generalized force, then acceleration
+  Eigen::VectorXd v_free_;       // nv: velocity without contact impulses
+  Eigen::VectorXd q_prev_;       // nq: kept to hold the state on a non-finite result
+  ContactGeometry geometry_;
+  std::vector<int> active_;  // indices of the candidate points of this substep
+  Eigen::MatrixXd Jc_;       // 3P x nv: rows of the active points, compacted
+  RowMatrixXd MinvJt_;       // nv x 3P: M⁻¹ Jcᵀ (row-major: the LᵀDL solve runs on rows)
+  Eigen::MatrixXd G_;        // 3P x 3P Delassus matrix
+  Eigen::VectorXd c_;        // 3P: contact velocity without impulses minus its target
+  Eigen::VectorXd p_;        // 3P: impulses of the active points
+  Eigen::Matrix3Xd warm_;    // 3 x P: last impulse of each point (warm start), per point
+  Eigen::Matrix3Xd impulse_sum_;  // 3 x P: impulses summed over the substeps of this step
+  Eigen::Matrix3Xd forces_;       // 3 x P
+  std::vector<PointContact> contacts_;
+
+  SimCounters counters_;
+  StepStatus last_status_ = StepStatus::Ok;
+};
+
+}  // namespace stride::sim

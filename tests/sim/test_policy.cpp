@@ -1,0 +1,270 @@
+// The policy the mock robot applies (sim/policy.hpp) and its disturbance helpers
+// (sim/disturbances.hpp).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "sim/disturbances.hpp"
+#include "sim_cases.hpp"
+#include "solver/multibody/lie_group.hpp"
+
+namespace stride {
+namespace {
+
+using sim::Policy;
+using sim::PolicyEvaluator;
+using sim::PolicyStatus;
+using sim_test::robot;
+
+// A 4-knot policy for stride_quad with random references (base poses far apart, so that the
+// manifold interpolation matters), feedforwards and gains.
+Policy randomPolicy(const Model& model, std::mt19937& rng) {
+  const int nu = model.nv - 6, ndx = 2 * model.nv;
+  Policy p;
+  p.resize(4, model.nq, model.nv, nu);
+  p.t0 = 0.3;
+  p.dt = 0.02;
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int k = 0; k < p.knots; ++k) {
+    Eigen::Map<Eigen::VectorXd>(p.xRef(k), model.nq) = randomConfiguration(model, rng);
+    for (int i = 0; i < model.nv; ++i) p.xRef(k)[model.nq + i] = u(rng);
+    for (int i = 0; i < nu; ++i) p.uFf(k)[i] = u(rng);
+    for (int i = 0; i < nu * ndx; ++i) p.gain(k)[i] = u(rng);
+  }
+  return p;
+}
+
+Eigen::VectorXd knotQ(const Policy& p, int k) {
+  return Eigen::Map<const Eigen::VectorXd>(p.xRef(k), p.nq);
+}
+Eigen::VectorXd knotV(const Policy& p, int k) {
+  return Eigen::Map<const Eigen::VectorXd>(p.xRef(k) + p.nq, p.nv);
+}
+
+// u_k + K_k (x_k ⊖ x), written out from the wire layout.
+Eigen::VectorXd knotTorque(const Model& model, const Policy& p, int k, const Eigen::VectorXd& q,
+                           const Eigen::VectorXd& v) {
+  Eigen::VectorXd dx(2 * p.nv);
+  dx << difference(model, q, knotQ(p, k)), knotV(p, k) - v;
+  Eigen::VectorXd tau = Eigen::Map<const Eigen::VectorXd>(p.uFf(k), p.nu);
+  for (int i = 0; i < p.nu; ++i)
+    for (int j = 0; j < 2 * p.nv; ++j)
+      tau[i] += p.K[k * p.nu * 2 * p.nv + i * 2 * p.nv + j] * dx[j];
+  return tau;
+}
+
+struct PolicySetup : ::testing::Test {
+  const Model& model = robot("stride_quad").model;
+  std::mt19937 rng{7};
+  Policy policy = randomPolicy(model, rng);
+  Eigen::VectorXd q = randomConfiguration(model, rng);
+  Eigen::VectorXd v = Eigen::VectorXd::Random(model.nv);
+  PolicyEvaluator eval{model, 12};
+  Eigen::VectorXd tau = Eigen::VectorXd::Zero(12);
+};
+
+TEST_F(PolicySetup, ExactAtKnots) {
+  ASSERT_TRUE(policy.isValid(model, 12));
+  for (int k = 0; k < policy.knots; ++k) {
+    const PolicyStatus s = eval.evaluate(policy, policy.t0 + k * policy.dt, q, v, tau);
+    EXPECT_EQ(s, PolicyStatus::Ok) << "knot " << k;
+    EXPECT_TRUE(tau.isApprox(knotTorque(model, policy, k, q, v), 1e-9)) << "knot " << k;
+    EXPECT_LT(difference(model, knotQ(policy, k), eval.qRef()).norm(), 1e-9);
+  }
+}
+
+TEST_F(PolicySetup, LinearBetweenKnotsAndGeodesicOnTheManifold) {
+  const Eigen::VectorXd d01 = difference(model, knotQ(policy, 1), knotQ(policy, 2));
+  for (double s : {0.1, 0.25, 0.5, 0.9}) {
+    const double t = policy.t0 + (1 + s) * policy.dt;
+    EXPECT_EQ(eval.evaluate(policy, t, q, v, tau), PolicyStatus::Ok);
+    // τ is the blend of the two knots' τ (u and K linear, and K(x_ref ⊖ x) evaluated at the
+    // interpolated reference for both).
+    const Eigen::VectorXd qs = eval.qRef(), vs = eval.vRef();
+    Eigen::VectorXd dx(2 * model.nv);
+    dx << difference(model, q, qs), vs - v;
+    Eigen::VectorXd expected(12);
+    for (int i = 0; i < 12; ++i) {
+      double a = 0, b = 0;
+      for (int j = 0; j < 2 * model.nv; ++j) {
+        a += policy.gain(1)[i * 2 * model.nv + j] * dx[j];
+        b += policy.gain(2)[i * 2 * model.nv + j] * dx[j];
+      }
+      expected[i] = (1 - s) * (policy.uFf(1)[i] + a) + s * (policy.uFf(2)[i] + b);
+    }
+    EXPECT_TRUE(tau.isApprox(expected, 1e-10)) << "s = " << s;
+    EXPECT_TRUE(vs.isApprox((1 - s) * knotV(policy, 1) + s * knotV(policy, 2), 1e-12));
+    // On the geodesic from q1 to q2: s of the way from q1 and 1 − s of the way to q2 (the second
+    // is a property of the path, not of how it was computed).
+    EXPECT_TRUE(difference(model, knotQ(policy, 1), qs).isApprox(s * d01, 1e-9)) << "s = " << s;
+    EXPECT_TRUE(difference(model, qs, knotQ(policy, 2)).isApprox((1 - s) * d01, 1e-9))
+        << "s = " << s;
+  }
+  // With no gains, τ is exactly linear in t.
+  std::fill(policy.K.begin(), policy.K.end(), 0.0);
+  eval.evaluate(policy, policy.t0 + 1.3 * policy.dt, q, v, tau);
+  for (int i = 0; i < 12; ++i)
+    EXPECT_NEAR(tau[i], 0.7 * policy.uFf(1)[i] + 0.3 * policy.uFf(2)[i], 1e-12);
+}
+
+TEST_F(PolicySetup, InterpolatedQuaternionStaysUnit) {
+  for (int i = 0; i <= 300; ++i) {
+    eval.evaluate(policy, policy.t0 + i * 1e-4 * 2, q, v, tau);
+    EXPECT_NEAR(eval.qRef().segment<4>(3).norm(), 1.0, 1e-12) << "t index " << i;
+  }
+}
+
+TEST_F(PolicySetup, HoldsBeforeStartAndPastTheEnd) {
+  const int last = policy.knots - 1;
+  EXPECT_EQ(eval.evaluate(policy, policy.t0 - 0.5, q, v, tau), PolicyStatus::BeforeStart);
+  EXPECT_TRUE(tau.isApprox(knotTorque(model, policy, 0, q, v), 1e-9));
+  for (double after : {1e-6, 0.01, 10.0}) {
+    EXPECT_EQ(eval.evaluate(policy, policy.t0 + last * policy.dt + after, q, v, tau),
+              PolicyStatus::Exhausted);
+    EXPECT_TRUE(tau.isApprox(knotTorque(model, policy, last, q, v), 1e-9));
+  }
+}
+
+TEST_F(PolicySetup, RejectsMismatchedOrCorruptPolicies) {
+  Policy wrong = policy;
+  wrong.nq = 5;
+  tau.setOnes();
+  EXPECT_EQ(eval.evaluate(wrong, policy.t0, q, v, tau), PolicyStatus::Invalid);
+  EXPECT_TRUE(tau.isZero());
+  EXPECT_FALSE(wrong.isValid(model, 12));
+  Policy nan = policy;
+  nan.K[17] = std::nan("");
+  EXPECT_FALSE(nan.isValid(model, 12));
+  Policy quat = policy;
+  quat.xRef(2)[6] += 0.1;
+  EXPECT_FALSE(quat.isValid(model, 12));
+  Policy short_k = policy;
+  short_k.K.pop_back();
+  EXPECT_FALSE(short_k.isValid(model, 12));
+  EXPECT_EQ(eval.evaluate(short_k, policy.t0, q, v, tau), PolicyStatus::Invalid);
+}
+
+// K (x_ref ⊖ x) pushes the state toward x_ref: a positive joint error gives a positive torque
+// through a positive gain, and in closed loop on the simulator (no gravity, floating in the air)
+// the joints converge to the reference.
+TEST(Policy, GainsPushTheStateTowardTheReference) {
+  Model model = robot("stride_quad").model;
+  model.gravity.setZero();
+  const int nv = model.nv, nu = 12;
+  const Eigen::VectorXd q_ref = robot("stride_quad").default_q;
+  Policy p;
+  p.resize(1, model.nq, nv, nu);
+  Eigen::Map<Eigen::VectorXd>(p.xRef(0), model.nq) = q_ref;
+  for (int i = 0; i < nu; ++i) {
+    p.gain(0)[i * 2 * nv + 6 + i] = 2.0;        // on the joint position error
+    p.gain(0)[i * 2 * nv + nv + 6 + i] = 0.05;  // on the joint velocity error
+  }
+  PolicyEvaluator eval(model, nu);
+  Eigen::VectorXd q = q_ref, v = Eigen::VectorXd::Zero(nv), tau(nu);
+  q[7 + 4] -= 0.2;  // FR_HFE below its reference
+  eval.evaluate(p, 0.0, q, v, tau);
+  EXPECT_NEAR(tau[4], 2.0 * 0.2, 1e-12);
+
+  sim::Simulator sim(model, {});
+  q.tail(12) += Eigen::VectorXd::LinSpaced(12, -0.2, 0.2);
+  sim.reset(q, v);
+  const double e0 = (sim.q().tail(12) - q_ref.tail(12)).norm();
+  for (int i = 0; i < 1000; ++i) {
+    eval.evaluate(p, sim.time(), sim.q(), sim.v(), tau);
+    sim.step(tau);
+  }
+  EXPECT_LT((sim.q().tail(12) - q_ref.tail(12)).norm(), 0.05 * e0);
+}
+
+TEST(Policy, HoldPolicyIsAJointPd) {
+  const Model& model = robot("stride_quad").model;
+  const Eigen::VectorXd q_ref = robot("stride_quad").default_q;
+  sim::HoldPolicy hold(model, q_ref, 10.0, 0.5);
+  Eigen::VectorXd q = q_ref, v = Eigen::VectorXd::Zero(18), tau(12);
+  q[0] += 1.0;  // the base is not actuated: no effect
+  q[7 + 2] += 0.1;
+  v[6 + 3] = 2.0;
+  hold.torque(model, q, v, tau);
+  Eigen::VectorXd expected = Eigen::VectorXd::Zero(12);
+  expected[2] = -1.0;
+  expected[3] = -1.0;
+  EXPECT_TRUE(tau.isApprox(expected, 1e-12));
+}
+
+// ---------------------------------------------------------------------------------------------
+TEST(Disturbances, StateNoiseIsSeededAndLeavesTheBasePose) {
+  const Model& model = robot("stride_quad").model;
+  const Eigen::VectorXd q0 = robot("stride_quad").default_q, v0 = Eigen::VectorXd::Zero(18);
+  sim::StateNoise a(0.01, 0.1, 42), b(0.01, 0.1, 42), c(0.01, 0.1, 43);
+  Eigen::VectorXd qa = q0, va = v0, qb = q0, vb = v0, qc = q0, vc = v0;
+  a.apply(model, qa, va);
+  b.apply(model, qb, vb);
+  c.apply(model, qc, vc);
+  EXPECT_EQ(qa, qb);
+  EXPECT_EQ(va, vb);
+  EXPECT_NE(qa, qc);
+  EXPECT_EQ(qa.head(7), q0.head(7));
+  // Sample statistics over many draws.
+  double sum = 0, sum2 = 0;
+  const int n = 2000;
+  for (int i = 0; i < n; ++i) {
+    Eigen::VectorXd q = q0, v = v0;
+    a.apply(model, q, v);
+    sum += v.sum();
+    sum2 += v.squaredNorm();
+  }
+  EXPECT_NEAR(sum / (n * 18), 0.0, 0.005);
+  EXPECT_NEAR(std::sqrt(sum2 / (n * 18)), 0.1, 0.005);
+}
+
+TEST(Disturbances, DelayReturnsTheStateOfNPushesAgo) {
+  sim::StateDelay delay(2, 1, 3);
+  double t;
+  Eigen::VectorXd q(2), v(1);
+  for (int i = 0; i < 10; ++i) {
+    delay.push(0.1 * i, Eigen::Vector2d(i, -i), Eigen::VectorXd::Constant(1, 10.0 * i));
+    const bool ready = delay.delayed(t, q, v);
+    EXPECT_EQ(ready, i >= 3);
+    if (!ready) continue;
+    EXPECT_DOUBLE_EQ(t, 0.1 * (i - 3));
+    EXPECT_EQ(q, Eigen::Vector2d(i - 3, 3 - i));
+    EXPECT_EQ(v[0], 10.0 * (i - 3));
+  }
+  sim::StateDelay none(2, 1, 0);
+  none.push(1.0, Eigen::Vector2d(1, 2), Eigen::VectorXd::Constant(1, 3.0));
+  ASSERT_TRUE(none.delayed(t, q, v));
+  EXPECT_EQ(q, Eigen::Vector2d(1, 2));
+}
+
+TEST(Disturbances, DroppedMessagesAtTheirRate) {
+  sim::MessageDropper a(0.2, 1), b(0.2, 1), never(0.0, 1);
+  int dropped = 0;
+  for (int i = 0; i < 10000; ++i) {
+    const bool d = a.drop();
+    EXPECT_EQ(d, b.drop());
+    dropped += d;
+    EXPECT_FALSE(never.drop());
+  }
+  EXPECT_EQ(a.dropped(), dropped);
+  EXPECT_NEAR(dropped / 10000.0, 0.2, 0.015);
+}
+
+TEST(Disturbances, PushScheduleSumsActivePushes) {
+  sim::PushSchedule s;
+  s.pushes.push_back({1.0, 0.2, Eigen::Vector3d(10, 0, 0), Eigen::Vector3d::Zero()});
+  s.pushes.push_back({1.1, 0.5, Eigen::Vector3d(0, 5, 0), Eigen::Vector3d(0, 0, 1)});
+  EXPECT_TRUE(s.wrenchAt(0.99).isZero());
+  EXPECT_EQ(s.wrenchAt(1.0).head<3>(), Eigen::Vector3d(10, 0, 0));
+  Vector6d both;
+  both << 10, 5, 0, 0, 0, 1;
+  EXPECT_EQ(s.wrenchAt(1.15), both);
+  EXPECT_DOUBLE_EQ(s.activeUntil(1.15), 1.6);
+  EXPECT_EQ(s.wrenchAt(1.2).head<3>(), Eigen::Vector3d(0, 5, 0));
+  EXPECT_TRUE(s.wrenchAt(1.6).isZero());
+  EXPECT_DOUBLE_EQ(s.activeUntil(2.0), 2.0);
+}
+
+}  // namespace
+}  // namespace stride

@@ -1,0 +1,98 @@
+// After construction, Simulator::step (with and without contacts, clamping, NaN rejection and an
+// external wrench), the policy evaluation, the hold policy and the disturbance helpers touch no
+// heap: malloc and its relatives are counted (tests/allocation_counter.hpp), with Eigen's own check
+// armed as well; the interposition is per binary, hence this separate executable.
+
+#include <gtest/gtest.h>
+
+#include "allocation_counter.hpp"
+
+#include <cmath>
+#include <random>
+
+#include "sim/disturbances.hpp"
+#include "sim_cases.hpp"
+#include "solver/multibody/lie_group.hpp"
+
+namespace stride {
+namespace {
+
+using testing::allocations;
+
+TEST(SimNoAllocation, CounterSeesAllocations) {
+  EXPECT_GE(allocations([] {
+              Eigen::internal::set_is_malloc_allowed(true);
+              std::vector<int> v(10);
+              (void)v;
+            }),
+            1);
+}
+
+TEST(SimNoAllocation, Step) {
+  for (const char* name : {"stride_quad", "stride_humanoid"}) {
+    const Robot& r = sim_test::robot(name);
+    for (int substeps : {1, 3}) {
+      sim::SimOptions opt;
+      opt.substeps = substeps;
+      sim::Simulator sim(r, opt);
+      // Dropped from 2 cm: the steps see flight, touch-downs and resting contact.
+      Eigen::VectorXd q = r.default_q;
+      q[2] += 0.02;
+      sim.reset(q, Eigen::VectorXd::Zero(r.model.nv));
+      const sim::HoldPolicy hold = sim_test::holdDefault(r);
+      Eigen::VectorXd tau(sim.nu()), bad = Eigen::VectorXd::Constant(sim.nu(), std::nan(""));
+      Eigen::VectorXd big = Eigen::VectorXd::Constant(sim.nu(), 1e4);
+      Vector6d push = Vector6d::Zero();
+      push[0] = 1.0;
+      sim.applyExternalWrench(push, 0.05);
+      const long n = allocations([&] {
+        for (int i = 0; i < 200; ++i) {
+          hold.torque(r.model, sim.q(), sim.v(), tau);
+          sim.step(i == 50 ? bad : i == 60 ? big : tau);
+        }
+      });
+      EXPECT_EQ(n, 0) << name << ", substeps " << substeps;
+      EXPECT_EQ(sim.counters().rejected_torques, 1);
+      EXPECT_GE(sim.counters().clamped_steps, 1);
+      EXPECT_GT(sim.totalNormalForce(), 0.0) << name << ": the contacts were exercised";
+    }
+  }
+}
+
+TEST(SimNoAllocation, PolicyAndDisturbances) {
+  const Robot& r = sim_test::robot("stride_quad");
+  const Model& model = r.model;
+  sim::Policy p;
+  p.resize(5, model.nq, model.nv, 12);
+  p.dt = 0.01;
+  std::mt19937 rng(1);
+  for (int k = 0; k < p.knots; ++k) {
+    Eigen::Map<Eigen::VectorXd>(p.xRef(k), model.nq) = randomConfiguration(model, rng);
+    for (size_t i = 0; i < p.K.size(); ++i) p.K[i] = 0.01 * static_cast<double>(i % 7);
+  }
+  sim::PolicyEvaluator eval(model, 12);
+  sim::StateNoise noise(0.01, 0.1, 3);
+  sim::StateDelay delay(model.nq, model.nv, 4);
+  sim::MessageDropper dropper(0.3, 4);
+  sim::PushSchedule pushes;
+  pushes.pushes.push_back({0.01, 0.02, Eigen::Vector3d(1, 0, 0), Eigen::Vector3d::Zero()});
+  Eigen::VectorXd q = r.default_q, v = Eigen::VectorXd::Zero(model.nv), tau(12);
+  Eigen::VectorXd qd(model.nq), vd(model.nv);
+  double td, sink = 0;
+  const long n = allocations([&] {
+    for (int i = 0; i < 80; ++i) {
+      const double t = -0.01 + 0.001 * i;  // before, during and after the policy
+      eval.evaluate(p, t, q, v, tau);
+      noise.apply(model, q, v);
+      delay.push(t, q, v);
+      if (delay.delayed(td, qd, vd)) sink += td;
+      sink += dropper.drop();
+      sink += pushes.wrenchAt(t).sum() + pushes.activeUntil(t);
+    }
+  });
+  EXPECT_EQ(n, 0);
+  EXPECT_TRUE(std::isfinite(sink));
+}
+
+}  // namespace
+}  // namespace stride
