@@ -16,7 +16,7 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
       sim_(robot, sim),
       out_(out),
       evaluator_(robot.model, actuatedDimension(robot.model)),
-      hold_(robot.model, robot.default_q, options.hold_kp, options.hold_kd),
+      hold_(robot.model, robot.default_q, options.hold_kp, options.hold_kd, sim.dt),
       noise_(options.noise_q, options.noise_v, options.seed),
       delay_(robot.model.nq, robot.model.nv, options.delay),
       dropper_(options.drop, options.seed + 1) {

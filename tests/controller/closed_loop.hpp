@@ -1,0 +1,70 @@
+#pragma once
+// The closed loop in one process: stride-sim's node and stride-mpc's node on one in-process LCM
+// bus (memq://), in lock-step: the sim publishes a state every controller period, the controller
+// ticks on it, the sim applies the answer for one period. Deterministic and network-free.
+
+#include <functional>
+#include <lcm/lcm-cpp.hpp>
+
+#include "controller/mpc_node.hpp"
+#include "sim/sim_node.hpp"
+
+namespace stride::closed_loop {
+
+struct Sample {
+  double t;
+  Eigen::VectorXd q, v;
+  double cost, gap;
+  int policy_status;
+  double k_max;  // largest |K| entry of the policy's first knot
+  double step, reg;
+};
+
+struct Run {
+  std::vector<Sample> samples;  // one per tick
+  sim::SimNodeStats sim;
+  MpcCounters mpc;
+  std::int64_t rejected = 0;
+  Eigen::VectorXd q_end;
+};
+
+inline Run run(const ControllerConfig& config, const sim::SimNodeOptions& sim_options,
+               double duration, const std::function<void(const Sample&)>& each = nullptr) {
+  lcm::LCM lcm("memq://");
+  LcmPublisher publisher(lcm);
+  MpcNode mpc(config, publisher, TimeSource::Stamps);
+  mpc.subscribe(lcm);
+  const Robot& robot = mpc.mpc().robot();
+  sim::SimOptions sim_physics;
+  sim::SimNodeOptions o = sim_options;
+  o.state_rate_hz = config.rate_hz;
+  sim::SimNode sim(robot, sim_physics, o, publisher);
+  sim.subscribe(lcm);
+  sim.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
+  Run r;
+  while (sim.simulator().time() < duration - 1e-9) {
+    const std::int64_t stamp = sim.publishState();
+    while (lcm.handleTimeout(0) > 0) {
+    }
+    if (mpc.tickDue()) mpc.tick(Mpc::Clock::time_point::max());
+    while (lcm.handleTimeout(0) > 0) {
+    }
+    if (stamp >= 0 && !sim.answered(stamp)) sim.countLockstepTimeout();
+    double k_max = 0.0;
+    for (double k : mpc.mpc().policy().K[0]) k_max = std::max(k_max, std::abs(k));
+    Sample s{sim.simulator().time(), sim.simulator().q(),          sim.simulator().v(),
+             mpc.mpc().status().cost, mpc.mpc().status().gap, mpc.mpc().status().policy_status,
+             k_max, mpc.mpc().status().step, mpc.mpc().status().regularization};
+    if (each) each(s);
+    r.samples.push_back(std::move(s));
+    sim.advance(sim.stepsPerState());
+    if (sim.stats().fell) break;
+  }
+  r.sim = sim.stats();
+  r.mpc = mpc.mpc().counters();
+  r.rejected = mpc.rejected();
+  r.q_end = sim.simulator().q();
+  return r;
+}
+
+}  // namespace stride::closed_loop
