@@ -18,6 +18,7 @@ struct Sample {
   int policy_status;
   double k_max;  // largest |K| entry of the policy's first knot
   double step, reg;
+  int feet_down;  // robot contacts carrying load (sim)
 };
 
 struct Run {
@@ -27,6 +28,11 @@ struct Run {
   std::int64_t rejected = 0;
   Eigen::VectorXd q_end;
 };
+
+inline double tiltDeg(const Eigen::VectorXd& q) {
+  const double qx = q[3], qy = q[4];
+  return std::acos(std::clamp(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0)) * 180.0 / M_PI;
+}
 
 inline Run run(const ControllerConfig& config, const sim::SimNodeOptions& sim_options,
                double duration, const std::function<void(const Sample&)>& each = nullptr) {
@@ -54,7 +60,9 @@ inline Run run(const ControllerConfig& config, const sim::SimNodeOptions& sim_op
     for (double k : mpc.mpc().policy().K[0]) k_max = std::max(k_max, std::abs(k));
     Sample s{sim.simulator().time(), sim.simulator().q(),          sim.simulator().v(),
              mpc.mpc().status().cost, mpc.mpc().status().gap, mpc.mpc().status().policy_status,
-             k_max, mpc.mpc().status().step, mpc.mpc().status().regularization};
+             k_max, mpc.mpc().status().step, mpc.mpc().status().regularization, 0};
+    for (int c = 0; c < static_cast<int>(robot.contacts.size()); ++c)
+      s.feet_down += sim.simulator().normalForce(c) > 0.0;
     if (each) each(s);
     r.samples.push_back(std::move(s));
     sim.advance(sim.stepsPerState());

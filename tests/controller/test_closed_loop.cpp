@@ -1,0 +1,69 @@
+// The closed loop in lock-step, in one process (memq): the mock robot plays the in-house robots,
+// the controller keeps them up. Physics is asserted, not exact numbers: base height and tilt within
+// bounds, feet really lifting, progress forward, recovery after a push.
+#include <gtest/gtest.h>
+
+#include "closed_loop.hpp"
+#include "controller_cases.hpp"
+
+namespace stride {
+namespace {
+
+using closed_loop::tiltDeg;
+
+// Stands 5 s, trots in place, then forward from 7.5 s (the stand-5-s-trot-5-s).
+TEST(ClosedLoop, QuadrupedStandsThenTrots) {
+  ControllerConfig config = loadControllerConfig(controller_cases::configPath("stride_quad"));
+  config.gait.stand = 5.0;
+  config.gait.step_after = 7.5;
+  config.locomotion.step_after = 7.5;
+  const closed_loop::Run r = closed_loop::run(config, sim::SimNodeOptions{}, 10.0);
+  ASSERT_FALSE(r.sim.fell);
+  ASSERT_NEAR(r.samples.back().t, 10.0 - 0.005, 1e-9);
+  const double z0 = r.samples.front().q[2];
+  double drift_standing = 0.0, max_tilt = 0.0, z_min = 1e9, z_max = -1e9;
+  int fewer_feet = 0;
+  for (const closed_loop::Sample& s : r.samples) {
+    if (s.t < 4.0) drift_standing = std::max(drift_standing, (s.q.head<3>() - r.samples[0].q.head<3>()).norm());
+    max_tilt = std::max(max_tilt, tiltDeg(s.q));
+    z_min = std::min(z_min, s.q[2]);
+    z_max = std::max(z_max, s.q[2]);
+    if (s.t > 5.2) fewer_feet += s.feet_down <= 2;
+    EXPECT_EQ(s.policy_status, 0) << "t " << s.t;
+  }
+  EXPECT_LT(drift_standing, 0.002);  // standing is standing, before the trot enters the horizon
+  EXPECT_LT(max_tilt, 10.0);
+  EXPECT_GT(z_min, z0 - 0.05);
+  EXPECT_LT(z_max, z0 + 0.03);
+  EXPECT_GT(fewer_feet, 200) << "the trot lifts two feet at a time";
+  EXPECT_GT(r.q_end[0] - r.samples.front().q[0], 0.05) << "walks forward after 7.5 s";
+  EXPECT_EQ(r.sim.policies_rejected, 0);
+  EXPECT_EQ(r.sim.hold_steps, 0);
+  EXPECT_EQ(r.mpc.fallbacks, 0);
+  EXPECT_EQ(r.rejected, 0);
+}
+
+// A shove on the standing robot's base: it must absorb it and settle back.
+TEST(ClosedLoop, QuadrupedRecoversFromAPush) {
+  ControllerConfig config = loadControllerConfig(controller_cases::configPath("stride_quad"));
+  config.gait.type = "stand";
+  sim::SimNodeOptions o;
+  sim::Push push;
+  push.start = 1.0;
+  push.duration = 0.1;
+  push.force = Eigen::Vector3d(0.0, 15.0, 0.0);  // 1.5 N s on 2.5 kg: 0.6 m/s sideways
+  o.pushes.pushes.push_back(push);
+  const closed_loop::Run r = closed_loop::run(config, o, 3.0);
+  ASSERT_FALSE(r.sim.fell);
+  double moved = 0.0;
+  for (const closed_loop::Sample& s : r.samples)
+    moved = std::max(moved, std::abs(s.q[1] - r.samples[0].q[1]));
+  EXPECT_GT(moved, 0.005) << "the push must move the robot";
+  const closed_loop::Sample& end = r.samples.back();
+  EXPECT_LT(tiltDeg(end.q), 2.0);
+  EXPECT_NEAR(end.q[2], r.samples[0].q[2], 0.01);
+  EXPECT_LT(end.v.head<6>().norm(), 0.05) << "settled";
+}
+
+}  // namespace
+}  // namespace stride
