@@ -80,8 +80,8 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   }
   if (!root.IsMap()) r.fail("", "the top level must be a mapping");
   r.onlyKeys(root, "",
-             {"robot", "rate_hz", "horizon", "policy_knots", "solver", "contacts", "weights", "gait",
-              "lcm", "safety", "realtime"});
+             {"robot", "rate_hz", "horizon", "policy_knots", "solver", "contacts", "weights",
+              "gait", "lcm", "safety", "realtime"});
 
   ControllerConfig c;
   c.path = yaml_path;
@@ -150,7 +150,7 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   const YAML::Node weights = root["weights"];
   r.onlyKeys(weights, "weights",
              {"base_position", "base_orientation", "joint_position", "base_velocity",
-              "joint_velocity", "control", "swing", "friction", "terminal_state"});
+              "joint_velocity", "control", "swing", "friction", "cop", "terminal_state"});
   LocomotionWeights& w = lo.weights;
   if (weights) {
     r.get(weights, "base_position", "weights", w.base_position);
@@ -161,15 +161,15 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(weights, "control", "weights", w.control);
     r.get(weights, "swing", "weights", w.swing);
     r.get(weights, "friction", "weights", w.friction);
+    r.get(weights, "cop", "weights", w.cop);
     r.get(weights, "terminal_state", "weights", w.terminal_state);
   }
   for (double v : {w.base_position, w.base_orientation, w.joint_position, w.base_velocity,
-                   w.joint_velocity, w.control, w.swing, w.friction, w.terminal_state})
+                   w.joint_velocity, w.control, w.swing, w.friction, w.cop, w.terminal_state})
     r.nonNegative(v, "weights");
 
   const YAML::Node gait = root["gait"];
-  r.onlyKeys(gait, "gait",
-             {"type", "stand", "support", "swing", "duration", "step", "step_after"});
+  r.onlyKeys(gait, "gait", {"type", "stand", "support", "swing", "duration", "step", "step_after"});
   GaitConfig& g = c.gait;
   if (gait) {
     r.get(gait, "type", "gait", g.type);
@@ -206,8 +206,8 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(lcm, "status", "lcm", c.status_channel);
     r.get(lcm, "plan", "lcm", c.plan_channel);
   }
-  for (const std::string* ch : {&c.state_channel, &c.policy_channel, &c.status_channel,
-                                &c.plan_channel})
+  for (const std::string* ch :
+       {&c.state_channel, &c.policy_channel, &c.status_channel, &c.plan_channel})
     if (ch->empty() || ch->size() > 63) r.fail("lcm", "channel names must have 1 to 63 characters");
 
   const YAML::Node safety = root["safety"];

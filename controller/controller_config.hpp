@@ -34,8 +34,8 @@ struct ControllerConfig {
   GaitConfig gait;
 
   SolverKind solver = SolverKind::BoxFddp;
-  int max_iterations = 1;        // per tick
-  int initial_iterations = 100;  // the first solve, before the first policy
+  int max_iterations = 1;          // per tick
+  int initial_iterations = 100;    // the first solve, before the first policy
   double deadline_fraction = 0.8;  // of the tick period, for the solve
   int threads = 1;
 

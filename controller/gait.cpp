@@ -21,16 +21,20 @@ ContactPlan makeGaitPlan(const GaitConfig& gait, const std::vector<ContactSpec>&
   std::vector<ContactPhase> cycle;
   if (gait.type == "trot") {
     if (nc != 4) throw ConfigError("gait 'trot' needs 4 contacts (FL, FR, HL, HR)");
-    cycle = {{gait.support, all}, {gait.swing, without({0, 3})},
-             {gait.support, all}, {gait.swing, without({1, 2})}};
+    cycle = {{gait.support, all},
+             {gait.swing, without({0, 3})},
+             {gait.support, all},
+             {gait.swing, without({1, 2})}};
   } else if (gait.type == "walk" && nc == 4) {
     for (int foot : {2, 0, 3, 1}) {
       cycle.push_back({gait.support, all});
       cycle.push_back({gait.swing, without({foot})});
     }
   } else if (gait.type == "walk" && nc == 2) {
-    cycle = {{gait.support, all}, {gait.swing, without({0})},
-             {gait.support, all}, {gait.swing, without({1})}};
+    cycle = {{gait.support, all},
+             {gait.swing, without({0})},
+             {gait.support, all},
+             {gait.swing, without({1})}};
   } else if (gait.type == "walk") {
     throw ConfigError("gait 'walk' needs 2 (biped) or 4 (quadruped) contacts");
   }
@@ -42,8 +46,8 @@ ContactPlan makeGaitPlan(const GaitConfig& gait, const std::vector<ContactSpec>&
   if (!cycle.empty()) {
     double cycle_time = 0.0;
     for (const ContactPhase& p : cycle) cycle_time += p.duration;
-    const long cycles = std::max(0L, static_cast<long>(std::floor((gait.duration - gait.stand) /
-                                                                  cycle_time)));
+    const long cycles =
+        std::max(0L, static_cast<long>(std::floor((gait.duration - gait.stand) / cycle_time)));
     for (long i = 0; i < cycles; ++i)
       for (const ContactPhase& p : cycle) plan.phases.push_back(p);
   }

@@ -15,7 +15,9 @@
 
 namespace {
 std::atomic<bool> g_stop{false};
-void onSignal(int) { g_stop = true; }
+void onSignal(int) {
+  g_stop = true;
+}
 
 std::string defaultUrl() {
   const char* env = std::getenv("LCM_DEFAULT_URL");
@@ -81,13 +83,13 @@ int main(int argc, char** argv) {
     stride::MpcNode node(config, publisher,
                          on_stamps ? stride::TimeSource::Stamps : stride::TimeSource::RealTime);
     node.subscribe(in);
-    std::printf("stride-mpc: %s, %d knots of %.0f ms, %s, %d iteration(s) per tick at %.0f Hz, "
-                "%s mode, in '%s', out '%s'\n",
-                node.mpc().robot().name.c_str(), config.locomotion.knots,
-                config.locomotion.dt * 1e3, stride::toString(config.solver),
-                config.max_iterations, config.rate_hz,
-                replaying ? "replay" : (lockstep ? "lock-step" : "real-time"),
-                config.input_url.c_str(), config.output_url.c_str());
+    std::printf(
+        "stride-mpc: %s, %d knots of %.0f ms, %s, %d iteration(s) per tick at %.0f Hz, "
+        "%s mode, in '%s', out '%s'\n",
+        node.mpc().robot().name.c_str(), config.locomotion.knots, config.locomotion.dt * 1e3,
+        stride::toString(config.solver), config.max_iterations, config.rate_hz,
+        replaying ? "replay" : (lockstep ? "lock-step" : "real-time"), config.input_url.c_str(),
+        config.output_url.c_str());
     std::fflush(stdout);
 
     stride::RunOptions options;

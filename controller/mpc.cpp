@@ -13,6 +13,9 @@ namespace {
 // Velocity-level Baumgarte term of the controller's contact model (a + kd v = 0 at the foot): a
 // foot's drift velocity decays in 1/kd = 20 ms instead of growing over the 1 s horizon.
 constexpr double kContactDamping = 50.0;
+// The planned centre of pressure stays in this fraction of the sole: at the edge, the slightest
+// disturbance tips the foot.
+constexpr double kSoleMargin = 0.8;
 
 double millisSince(Solver::Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Solver::Clock::now() - t0).count();
@@ -26,6 +29,7 @@ Mpc::Mpc(const ControllerConfig& config) : config_(config), robot_(loadRobot(con
   nu_ = actuatedDimension(model);
   for (const ContactSpec& c : robot_.contacts)
     contacts_.add(model, c.frame, c.dim, ReferenceFrame::LocalWorldAligned, 0.0, kContactDamping);
+  config_.locomotion.sole_half_extents = kSoleMargin * robot_.sole_half_extents;
   plan_ = makeGaitPlan(config_.gait, robot_.contacts);
   plan_.validate(contacts_);
   x_ = Eigen::VectorXd::Zero(nq_ + nv_);

@@ -101,11 +101,11 @@ class Mpc {
   std::unique_ptr<LocomotionProblem> loco_;
   std::unique_ptr<Solver> solver_;
   std::vector<Eigen::VectorXd> xs_warm_, us_warm_;  // standing warm start (restarts)
-  double t_warm_ = 0.0;       // plan time of the warm start's knot 0
+  double t_warm_ = 0.0;                             // plan time of the warm start's knot 0
   bool need_restart_ = false;  // the last solve failed: start again from standing
   bool have_solved_ = false;   // a solve of this problem succeeded (else the next is the first)
   bool startup_tick_ = false;
-  int previous_ticks_ = 0;     // consecutive ticks on the previous policy
+  int previous_ticks_ = 0;  // consecutive ticks on the previous policy
 
   Eigen::VectorXd x_;  // the state as a solver vector
   policy_t policy_, previous_;

@@ -20,9 +20,8 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
   msg::shape(incoming_, model.nq, model.nv, kMaxContactFlags);
   msg::shape(newest_, model.nq, model.nv, kMaxContactFlags);
   mpc_status_t status{};
-  buffer_.resize(std::max(
-      msg::policyWireSize(config.policy_knots, model.nq, model.nv, mpc_.nu()),
-      status.getEncodedSize()));
+  buffer_.resize(std::max(msg::policyWireSize(config.policy_knots, model.nq, model.nv, mpc_.nu()),
+                          status.getEncodedSize()));
   latencies_.reserve(kLatencyCapacity);
 }
 
@@ -103,10 +102,9 @@ bool MpcNode::tickDue() const {
 void MpcNode::tick(Clock::time_point deadline) {
   const Clock::time_point start = Clock::now();
   const robot_state_t* state = have_state_ ? &newest_ : nullptr;
-  const double age =
-      !have_state_ || time_ == TimeSource::Stamps
-          ? 0.0
-          : static_cast<double>(monotonicMicros() - newest_arrival_us_) * 1e-6;
+  const double age = !have_state_ || time_ == TimeSource::Stamps
+                         ? 0.0
+                         : static_cast<double>(monotonicMicros() - newest_arrival_us_) * 1e-6;
   const bool publish = mpc_.tick(state, age, deadline);
   new_state_ = false;
   if (have_state_) {

@@ -46,9 +46,7 @@ class MpcNode {
   Mpc& mpc() { return mpc_; }
   const Mpc& mpc() const { return mpc_; }
   std::int64_t rejected() const { return rejected_total_; }
-  std::int64_t rejected(msg::Reject reason) const {
-    return rejected_[static_cast<int>(reason)];
-  }
+  std::int64_t rejected(msg::Reject reason) const { return rejected_[static_cast<int>(reason)]; }
   std::int64_t acceptedStates() const { return accepted_; }
   std::int64_t planUpdates() const { return plan_updates_; }
   // Tick latencies [ms] of every tick that published a policy (capacity fixed at construction;

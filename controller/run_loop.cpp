@@ -26,9 +26,12 @@ bool before(const timespec& a, const timespec& b) {
   return a.tv_sec < b.tv_sec || (a.tv_sec == b.tv_sec && a.tv_nsec < b.tv_nsec);
 }
 double secondsBetween(const timespec& a, const timespec& b) {
-  return static_cast<double>(b.tv_sec - a.tv_sec) + 1e-9 * static_cast<double>(b.tv_nsec - a.tv_nsec);
+  return static_cast<double>(b.tv_sec - a.tv_sec) +
+         1e-9 * static_cast<double>(b.tv_nsec - a.tv_nsec);
 }
-bool stopped(const RunOptions& o) { return o.stop != nullptr && o.stop->load(); }
+bool stopped(const RunOptions& o) {
+  return o.stop != nullptr && o.stop->load();
+}
 }  // namespace
 
 void applyRealTimeSettings(int cpu, int fifo_priority) {
@@ -139,12 +142,12 @@ void writeSummary(const MpcNode& node, const std::string& path) {
   if (path.empty()) return;
   std::ofstream f(path);
   f << "{\n  \"ticks\": " << c.ticks << ",\n  \"states_accepted\": " << node.acceptedStates()
-    << ",\n  \"rejected_messages\": " << node.rejected() << ",\n  \"tick_latency_ms\": {\"p50\": "
-    << lat.p50 << ", \"p99\": " << lat.p99 << ", \"max\": " << lat.max << ", \"count\": "
-    << lat.count << "},\n  \"deadline_misses\": " << c.deadline_misses
-    << ",\n  \"fallbacks\": " << c.fallbacks << ",\n  \"stale_states\": " << c.stale_states
-    << ",\n  \"failed_solves\": " << c.failed_solves << ",\n  \"ticks_without_state\": "
-    << c.ticks_without_state << "\n}\n";
+    << ",\n  \"rejected_messages\": " << node.rejected()
+    << ",\n  \"tick_latency_ms\": {\"p50\": " << lat.p50 << ", \"p99\": " << lat.p99
+    << ", \"max\": " << lat.max << ", \"count\": " << lat.count
+    << "},\n  \"deadline_misses\": " << c.deadline_misses << ",\n  \"fallbacks\": " << c.fallbacks
+    << ",\n  \"stale_states\": " << c.stale_states << ",\n  \"failed_solves\": " << c.failed_solves
+    << ",\n  \"ticks_without_state\": " << c.ticks_without_state << "\n}\n";
   if (!f) std::fprintf(stderr, "stride-mpc: cannot write the summary to '%s'\n", path.c_str());
 }
 

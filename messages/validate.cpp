@@ -78,8 +78,8 @@ Reject checkPolicyWire(const void* buf, int size, int nq, int nv, int nu, int ma
   std::int32_t f[7];  // knots nq nv nu nx ndx nk
   for (int i = 0; i < 7; ++i)
     if (!readInt32(buf, size, kHash + 40 + 4 * i, f[i])) return Reject::Undecodable;
-  if (f[0] < 1 || f[0] > max_knots || f[1] != nq || f[2] != nv || f[3] != nu ||
-      f[4] != nq + nv || f[5] != 2 * nv || f[6] != nu * 2 * nv)
+  if (f[0] < 1 || f[0] > max_knots || f[1] != nq || f[2] != nv || f[3] != nu || f[4] != nq + nv ||
+      f[5] != 2 * nv || f[6] != nu * 2 * nv)
     return Reject::WrongSize;
   return size == policyWireSize(f[0], nq, nv, nu) ? Reject::None : Reject::WrongSize;
 }

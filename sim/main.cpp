@@ -16,7 +16,9 @@
 
 namespace {
 std::atomic<bool> g_stop{false};
-void onSignal(int) { g_stop = true; }
+void onSignal(int) {
+  g_stop = true;
+}
 
 std::int64_t monotonicMicros() {
   timespec ts;
@@ -37,7 +39,8 @@ bool parsePush(const std::string& text, stride::sim::Push& push) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"stride-sim: mock robot for stride-mpc (flat ground, unilateral contacts, friction)"};
+  CLI::App app{
+      "stride-sim: mock robot for stride-mpc (flat ground, unilateral contacts, friction)"};
   std::string robot_yaml, url, summary;
   bool lockstep = false;
   double duration = 10.0, timeout = 5.0, drop_height = 0.0;
@@ -78,7 +81,8 @@ int main(int argc, char** argv) {
       }
       node_options.pushes.pushes.push_back(push);
     }
-    if (url.empty() && std::getenv("LCM_DEFAULT_URL") != nullptr) url = std::getenv("LCM_DEFAULT_URL");
+    if (url.empty() && std::getenv("LCM_DEFAULT_URL") != nullptr)
+      url = std::getenv("LCM_DEFAULT_URL");
     if (url.empty()) {
       std::fprintf(stderr, "stride-sim: no LCM URL: --url or LCM_DEFAULT_URL\n");
       return 2;

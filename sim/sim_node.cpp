@@ -21,7 +21,8 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
       delay_(robot.model.nq, robot.model.nv, options.delay),
       dropper_(options.drop, options.seed + 1) {
   const Model& model = robot.model;
-  steps_per_state_ = std::max(1, static_cast<int>(std::lround(1.0 / (options.state_rate_hz * sim.dt))));
+  steps_per_state_ =
+      std::max(1, static_cast<int>(std::lround(1.0 / (options.state_rate_hz * sim.dt))));
   msg::shape(state_msg_, model.nq, model.nv, static_cast<int>(robot.contacts.size()));
   buffer_.resize(state_msg_.getEncodedSize());
   q_pub_ = Eigen::VectorXd::Zero(model.nq);
@@ -60,7 +61,8 @@ void SimNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     ++stats_.policies_rejected;
     return;
   }
-  if (policy_.knots != incoming_.knots) policy_.resize(incoming_.knots, model.nq, model.nv, sim_.nu());
+  if (policy_.knots != incoming_.knots)
+    policy_.resize(incoming_.knots, model.nq, model.nv, sim_.nu());
   policy_.t0 = static_cast<double>(incoming_.knot0_utime - options_.utime_base) * 1e-6;
   policy_.dt = incoming_.dt;
   for (int k = 0; k < incoming_.knots; ++k) {
@@ -146,11 +148,12 @@ void SimNode::writeSummary(const std::string& path) const {
   std::ofstream f(path);
   f << "{\n  \"sim_time_s\": " << sim_.time() << ",\n  \"distance_m\": " << distance
     << ",\n  \"base_height_min_m\": " << s.z_min << ",\n  \"base_height_max_m\": " << s.z_max
-    << ",\n  \"max_tilt_deg\": " << s.max_tilt_deg << ",\n  \"fell\": "
-    << (s.fell ? "true" : "false") << ",\n  \"peak_normal_force_N\": " << s.peak_normal_force
+    << ",\n  \"max_tilt_deg\": " << s.max_tilt_deg
+    << ",\n  \"fell\": " << (s.fell ? "true" : "false")
+    << ",\n  \"peak_normal_force_N\": " << s.peak_normal_force
     << ",\n  \"states_published\": " << s.states_published << ",\n  \"policies\": " << s.policies
-    << ",\n  \"policies_rejected\": " << s.policies_rejected << ",\n  \"hold_steps\": "
-    << s.hold_steps << ",\n  \"exhausted_steps\": " << s.exhausted_steps
+    << ",\n  \"policies_rejected\": " << s.policies_rejected
+    << ",\n  \"hold_steps\": " << s.hold_steps << ",\n  \"exhausted_steps\": " << s.exhausted_steps
     << ",\n  \"lockstep_timeouts\": " << s.lockstep_timeouts << "\n}\n";
 }
 

@@ -21,7 +21,7 @@
 namespace stride::sim {
 
 struct SimNodeOptions {
-  double state_rate_hz = 1000.0;  // estimates published per second of sim time
+  double state_rate_hz = 1000.0;        // estimates published per second of sim time
   double noise_q = 0.0, noise_v = 0.0;  // joint position / velocity noise std [rad, rad/s, m/s]
   int delay = 0;                        // estimates published this many publications late
   double drop = 0.0;                    // probability of dropping an estimate
@@ -47,8 +47,7 @@ struct SimNodeStats {
 
 class SimNode {
  public:
-  SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions& options,
-          Publisher& out);
+  SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions& options, Publisher& out);
 
   void subscribe(lcm::LCM& in);
   void onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channel);

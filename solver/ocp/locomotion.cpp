@@ -12,6 +12,7 @@
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/rnea.hpp"
 #include "solver/ocp/residual_contact.hpp"
+#include "solver/ocp/residual_cop.hpp"
 #include "solver/ocp/residual_frame.hpp"
 #include "solver/ocp/residual_state.hpp"
 
@@ -100,6 +101,8 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
 
   cone_term_.resize(nc);
   swing_term_.resize(nc);
+  cop_term_.assign(nc, -1);
+  const bool with_cop = options.sole_half_extents.minCoeff() > 0.0;
   std::vector<std::unique_ptr<ActionModel>> running;
   // One multibody workspace per thread the problem may use (knots.hpp, SharedWorkspace).
   auto workspace = std::make_shared<SharedWorkspace>(model, std::max(omp_get_max_threads(), 2));
@@ -117,6 +120,11 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
                                     model, nu, contacts_, name, options.mu,
                                     Eigen::Matrix3d::Identity(), options.min_normal_force),
                                 FrictionConeResidual::activation(), w.friction);
+      if (with_cop && contacts_[c].dim == 6)
+        cop_term_[c] = costs.add("cop_" + name,
+                                 std::make_unique<CenterOfPressureResidual>(
+                                     model, nu, contacts_, name, options.sole_half_extents),
+                                 CenterOfPressureResidual::activation(), w.cop);
       swing_term_[c] =
           costs.add("swing_" + name,
                     std::make_unique<FrameTranslationResidual>(model, nu, name, initial_feet_[c]),
@@ -199,6 +207,7 @@ bool LocomotionProblem::update(double t0) {
       touchdown = touchdown || lands;
       knot.contacts().setActive(c, closed);
       costs[cone_term_[c]].active = closed;
+      if (cop_term_[c] >= 0) costs[cop_term_[c]].active = closed;
       CostTerm& swing = costs[swing_term_[c]];
       swing.active = !closed || lands;
       if (swing.active)
@@ -214,6 +223,8 @@ bool LocomotionProblem::update(double t0) {
       CostTerm& cone = costs[cone_term_[c]];
       cone.weight = w_cone;
       static_cast<FrictionConeResidual&>(*cone.residual).setMinimumNormalForce(f_min);
+      if (cop_term_[c] >= 0)
+        costs[cop_term_[c]].weight = options_.weights.cop / (impulse ? dt * dt : 1.0);
     }
     static_cast<ControlResidual&>(*costs[control_term_].residual)
         .setReference(u_hold_[schedule_.localPhase(g)]);

@@ -8,6 +8,8 @@
 //   "control"      ½ w |u - u_ref|²: u_ref = the torques that hold x_nominal still on the
 //                  phase's closed contacts (minimum-norm forces), so standing costs nothing;
 //   "cone_<c>"     friction cone of contact c, on while c is closed;
+//   "cop_<c>"      centre of pressure of surface contact c inside its sole (options.
+//                  sole_half_extents), on while c is closed;
 //   "swing_<c>"    position of foot c on its swing arc, on while c is open and at its touch-down
 //                  knot (reference: the new foothold, so the foot lands where planned).
 // The terminal knot has "state" only. A touch-down inserts an impulse knot (options.impulses) with
@@ -41,6 +43,7 @@ struct LocomotionWeights {
   double control = 1e-2;
   double swing = 1e4;            // per axis, on the foot position error [m]
   double friction = 1e2;         // on the cone rows' violation [N]
+  double cop = 1e2;              // on the centre-of-pressure rows' violation [N m] (6D contacts)
   double terminal_state = 10.0;  // the terminal state weights are the running ones times this
 };
 
@@ -55,7 +58,10 @@ struct LocomotionOptions {
   // ones move the foot by `step`. So one plan can stand, trot in place, then walk.
   double step_after = 0.0;
   LocomotionWeights weights;
-  bool impulses = true;        // impulse knots at touch-downs (else contact knots throughout)
+  bool impulses = true;  // impulse knots at touch-downs (else contact knots throughout)
+  // Surface (6D) contacts: the centre of pressure stays in this rectangle around the contact
+  // frame (half extents along its x and y; zero: no such term). Use the sole's, shrunk by a margin.
+  Eigen::Vector2d sole_half_extents = Eigen::Vector2d::Zero();
   bool torque_limits = false;  // controlLower/Upper from the model's effort limits (else ±inf)
 };
 
@@ -109,13 +115,13 @@ class LocomotionProblem {
   LocomotionOptions options_;
   std::unique_ptr<ShootingProblem> problem_;
   std::vector<Eigen::Vector3d> initial_feet_;
-  std::vector<long> fixed_steps_;  // per contact: touch-downs up to options.step_after
+  std::vector<long> fixed_steps_;        // per contact: touch-downs up to options.step_after
   std::vector<Eigen::VectorXd> u_hold_;  // per local phase
   Eigen::VectorXd u_lower_, u_upper_;
   // Term indices, the same in every running knot (all are built alike).
   int state_term_ = -1, control_term_ = -1;
-  std::vector<int> cone_term_, swing_term_;
-  Eigen::VectorXd x_ref_;  // scratch for the state references
+  std::vector<int> cone_term_, swing_term_, cop_term_;  // cop: -1 for point contacts
+  Eigen::VectorXd x_ref_;                               // scratch for the state references
   double t0_ = 0.0;
   std::vector<double> knot_time_;  // T + 1
 };

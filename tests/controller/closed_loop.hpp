@@ -58,9 +58,16 @@ inline Run run(const ControllerConfig& config, const sim::SimNodeOptions& sim_op
     if (stamp >= 0 && !sim.answered(stamp)) sim.countLockstepTimeout();
     double k_max = 0.0;
     for (double k : mpc.mpc().policy().K[0]) k_max = std::max(k_max, std::abs(k));
-    Sample s{sim.simulator().time(), sim.simulator().q(),          sim.simulator().v(),
-             mpc.mpc().status().cost, mpc.mpc().status().gap, mpc.mpc().status().policy_status,
-             k_max, mpc.mpc().status().step, mpc.mpc().status().regularization, 0};
+    Sample s{sim.simulator().time(),
+             sim.simulator().q(),
+             sim.simulator().v(),
+             mpc.mpc().status().cost,
+             mpc.mpc().status().gap,
+             mpc.mpc().status().policy_status,
+             k_max,
+             mpc.mpc().status().step,
+             mpc.mpc().status().regularization,
+             0};
     for (int c = 0; c < static_cast<int>(robot.contacts.size()); ++c)
       s.feet_down += sim.simulator().normalForce(c) > 0.0;
     if (each) each(s);

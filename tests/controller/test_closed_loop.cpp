@@ -24,7 +24,8 @@ TEST(ClosedLoop, QuadrupedStandsThenTrots) {
   double drift_standing = 0.0, max_tilt = 0.0, z_min = 1e9, z_max = -1e9;
   int fewer_feet = 0;
   for (const closed_loop::Sample& s : r.samples) {
-    if (s.t < 4.0) drift_standing = std::max(drift_standing, (s.q.head<3>() - r.samples[0].q.head<3>()).norm());
+    if (s.t < 4.0)
+      drift_standing = std::max(drift_standing, (s.q.head<3>() - r.samples[0].q.head<3>()).norm());
     max_tilt = std::max(max_tilt, tiltDeg(s.q));
     z_min = std::min(z_min, s.q[2]);
     z_max = std::max(z_max, s.q[2]);
@@ -63,6 +64,36 @@ TEST(ClosedLoop, QuadrupedRecoversFromAPush) {
   EXPECT_LT(tiltDeg(end.q), 2.0);
   EXPECT_NEAR(end.q[2], r.samples[0].q[2], 0.01);
   EXPECT_LT(end.v.head<6>().norm(), 0.05) << "settled";
+}
+
+}  // namespace
+}  // namespace stride
+
+namespace stride {
+namespace {
+
+// The humanoid stands, then walks 10 cm steps on its soles (lock-step, memq).
+TEST(ClosedLoop, HumanoidStandsAndSteps) {
+  ControllerConfig config = loadControllerConfig(controller_cases::configPath("stride_humanoid"));
+  config.gait.stand = 1.0;
+  config.gait.step_after = 1.0;
+  config.locomotion.step_after = 1.0;
+  const closed_loop::Run r = closed_loop::run(config, sim::SimNodeOptions{}, 5.0);
+  ASSERT_FALSE(r.sim.fell);
+  const double z0 = r.samples.front().q[2];
+  double max_tilt = 0.0, z_min = 1e9;
+  int single_support = 0;
+  for (const closed_loop::Sample& s : r.samples) {
+    max_tilt = std::max(max_tilt, tiltDeg(s.q));
+    z_min = std::min(z_min, s.q[2]);
+    single_support += s.feet_down == 1;
+  }
+  EXPECT_LT(max_tilt, 10.0);
+  EXPECT_GT(z_min, z0 - 0.05);
+  EXPECT_GT(single_support, 50) << "steps lift one foot at a time (samples at 50 Hz)";
+  EXPECT_GT(r.q_end[0] - r.samples.front().q[0], 0.1) << "walks forward";
+  EXPECT_EQ(r.sim.policies_rejected, 0);
+  EXPECT_EQ(r.mpc.fallbacks, 0);
 }
 
 }  // namespace

@@ -72,12 +72,17 @@ void tickNoAllocation(const std::string& robot, int ticks) {
               }
             }),
             0);
-  EXPECT_EQ(statuses, (std::vector<int>{kPolicyPrevious, kPolicyPrevious, kPolicyHold, kPolicyHold}));
+  EXPECT_EQ(statuses,
+            (std::vector<int>{kPolicyPrevious, kPolicyPrevious, kPolicyHold, kPolicyHold}));
   EXPECT_GT(out.bytes, 0);
 }
 
-TEST(ControllerNoAllocation, QuadrupedTicks) { tickNoAllocation("stride_quad", 30); }
-TEST(ControllerNoAllocation, HumanoidTicks) { tickNoAllocation("stride_humanoid", 10); }
+TEST(ControllerNoAllocation, QuadrupedTicks) {
+  tickNoAllocation("stride_quad", 30);
+}
+TEST(ControllerNoAllocation, HumanoidTicks) {
+  tickNoAllocation("stride_humanoid", 10);
+}
 
 }  // namespace
 }  // namespace stride

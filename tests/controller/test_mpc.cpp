@@ -37,8 +37,8 @@ std::string configError(const std::string& yaml) {
 }
 
 TEST(ControllerConfig, ErrorsNameTheFileAndTheKey) {
-  const std::string robot = "robot: " + std::string(STRIDE_CONFIG_DIR) +
-                            "/robots/stride_quad/stride_quad.yaml\n";
+  const std::string robot =
+      "robot: " + std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml\n";
   EXPECT_NE(configError("rate_hz: 100\n").find("robot"), std::string::npos);
   EXPECT_NE(configError(robot + "rate_hz: -5\n").find("rate_hz"), std::string::npos);
   EXPECT_NE(configError(robot + "rate_hz: fast\n").find("rate_hz"), std::string::npos);
@@ -50,8 +50,7 @@ TEST(ControllerConfig, ErrorsNameTheFileAndTheKey) {
             std::string::npos);
   EXPECT_NE(configError(robot + "horizon: [1, 2\n").find("malformed"), std::string::npos);
   EXPECT_EQ(configError(robot), "") << "a file with only the robot is valid (defaults)";
-  EXPECT_NE(configError(robot + "rate_hz: -5\n").find("stride_bad_config.yaml"),
-            std::string::npos);
+  EXPECT_NE(configError(robot + "rate_hz: -5\n").find("stride_bad_config.yaml"), std::string::npos);
   try {
     loadControllerConfig("/nonexistent/stride.yaml");
     FAIL() << "a missing file must throw";
@@ -61,8 +60,8 @@ TEST(ControllerConfig, ErrorsNameTheFileAndTheKey) {
 }
 
 TEST(Gait, TrotAndWalkPlans) {
-  const Robot quad = loadRobot(std::string(STRIDE_CONFIG_DIR) +
-                               "/robots/stride_quad/stride_quad.yaml");
+  const Robot quad =
+      loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
   GaitConfig g;
   g.type = "trot";
   g.stand = 1.0;
@@ -87,16 +86,16 @@ TEST(Gait, TrotAndWalkPlans) {
   }
   EXPECT_EQ(open_at_once, 1);
 
-  const Robot biped = loadRobot(std::string(STRIDE_CONFIG_DIR) +
-                                "/robots/stride_humanoid/stride_humanoid.yaml");
+  const Robot biped =
+      loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml");
   EXPECT_NO_THROW(makeGaitPlan(g, biped.contacts));
   g.type = "trot";
   EXPECT_THROW(makeGaitPlan(g, biped.contacts), ConfigError);
 }
 
 TEST(Gait, StepsInPlaceUntilStepAfter) {
-  const Robot quad = loadRobot(std::string(STRIDE_CONFIG_DIR) +
-                               "/robots/stride_quad/stride_quad.yaml");
+  const Robot quad =
+      loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
   ContactSet contacts;
   for (const auto& c : quad.contacts)
     contacts.add(quad.model, c.frame, 3, ReferenceFrame::LocalWorldAligned);

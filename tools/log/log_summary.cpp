@@ -101,19 +101,20 @@ int main(int argc, char** argv) {
   }
   const double distance = std::hypot(x1 - x0, y1 - y0);
   const double p50 = percentile(latency_ms, 0.5) * 1e3, p99 = percentile(latency_ms, 0.99) * 1e3;
-  const double lmax = latency_ms.empty()
-                          ? 0.0
-                          : *std::max_element(latency_ms.begin(), latency_ms.end()) * 1e3;
-  std::printf("session %.1f s: walked %.3f m (x %+.3f, y %+.3f), base height %.3f .. %.3f m, "
-              "max tilt %.1f deg, %s\n",
-              t_last - t_first, distance, x1 - x0, y1 - y0, z_min, z_max, max_tilt,
-              fell ? "FELL" : "did not fall");
-  std::printf("controller: %ld ticks, tick latency p50 %.0f us, p99 %.0f us, max %.0f us, "
-              "solve p50 %.0f us, %lld deadline misses, %lld fallbacks, %lld rejected messages\n",
-              statuses, p50, p99, lmax, percentile(solve_ms, 0.5) * 1e3,
-              static_cast<long long>(last_status.deadline_misses),
-              static_cast<long long>(last_status.fallbacks),
-              static_cast<long long>(last_status.rejected_messages));
+  const double lmax =
+      latency_ms.empty() ? 0.0 : *std::max_element(latency_ms.begin(), latency_ms.end()) * 1e3;
+  std::printf(
+      "session %.1f s: walked %.3f m (x %+.3f, y %+.3f), base height %.3f .. %.3f m, "
+      "max tilt %.1f deg, %s\n",
+      t_last - t_first, distance, x1 - x0, y1 - y0, z_min, z_max, max_tilt,
+      fell ? "FELL" : "did not fall");
+  std::printf(
+      "controller: %ld ticks, tick latency p50 %.0f us, p99 %.0f us, max %.0f us, "
+      "solve p50 %.0f us, %lld deadline misses, %lld fallbacks, %lld rejected messages\n",
+      statuses, p50, p99, lmax, percentile(solve_ms, 0.5) * 1e3,
+      static_cast<long long>(last_status.deadline_misses),
+      static_cast<long long>(last_status.fallbacks),
+      static_cast<long long>(last_status.rejected_messages));
   if (bad > 0) std::printf("log: %ld undecodable events skipped\n", bad);
   if (!summary_path.empty()) {
     std::ofstream f(summary_path);
@@ -121,11 +122,10 @@ int main(int argc, char** argv) {
       << ",\n  \"base_height_min_m\": " << z_min << ",\n  \"base_height_max_m\": " << z_max
       << ",\n  \"max_tilt_deg\": " << max_tilt << ",\n  \"fell\": " << (fell ? "true" : "false")
       << ",\n  \"tick_latency_us\": {\"p50\": " << p50 << ", \"p99\": " << p99
-      << ", \"max\": " << lmax << "},\n  \"solve_time_us_p50\": "
-      << percentile(solve_ms, 0.5) * 1e3 << ",\n  \"deadline_misses\": "
-      << last_status.deadline_misses << ",\n  \"fallbacks\": " << last_status.fallbacks
-      << ",\n  \"ticks\": " << statuses << ",\n  \"rejected_messages\": "
-      << last_status.rejected_messages << "\n}\n";
+      << ", \"max\": " << lmax << "},\n  \"solve_time_us_p50\": " << percentile(solve_ms, 0.5) * 1e3
+      << ",\n  \"deadline_misses\": " << last_status.deadline_misses
+      << ",\n  \"fallbacks\": " << last_status.fallbacks << ",\n  \"ticks\": " << statuses
+      << ",\n  \"rejected_messages\": " << last_status.rejected_messages << "\n}\n";
     if (!f) {
       std::fprintf(stderr, "stride-log-summary: cannot write '%s'\n", summary_path.c_str());
       return 1;
