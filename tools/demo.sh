@@ -16,11 +16,12 @@
 #                    on lo; for watching with lcm-spy from the host: tools/lcm-spy.sh)
 #   --out DIR        where the log and summaries go (default build/demo)
 #   --summary FILE   the summary as JSON (default DIR/summary.json)
+#   --spy            also start lcm-spy (tools/lcm-spy.sh) on the demo's bus; needs a display
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 
-duration=10 robot=quad mode=realtime host_network=0 out="" summary=""
+duration=10 robot=quad mode=realtime host_network=0 out="" summary="" spy=0
 args=("$@")
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -30,6 +31,7 @@ while [ $# -gt 0 ]; do
     --host-network) host_network=1; shift ;;
     --out) out="$2"; shift 2 ;;
     --summary) summary="$2"; shift 2 ;;
+    --spy) spy=1; shift ;;
     -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown option '$1' (--help)" >&2; exit 2 ;;
   esac
@@ -98,6 +100,11 @@ limit=$(awk -v d="$duration" 'BEGIN { printf "%d", d * 4 + 120 }')  # wall-clock
 
 timeout "$limit" lcm-logger --quiet "$log" &
 pids+=($!)
+if [ "$spy" = 1 ]; then
+  timeout "$limit" "$root/tools/lcm-spy.sh" --lcm-url="$LCM_DEFAULT_URL" > "$out/lcm-spy.txt" 2>&1 &
+  pids+=($!)
+  sleep 3  # the JVM starts slowly
+fi
 mpc_args=(--config "$config" --summary "$out/mpc.json")
 sim_args=(--robot "$robot_yaml" --duration "$duration" --summary "$out/sim.json")
 if [ "$mode" = lockstep ]; then
