@@ -12,9 +12,10 @@ namespace {
 // μ never restarts from 0 when raised, so the retries of a failed backward pass are bounded.
 constexpr double kRegFloor = 1e-9;
 // The Euler-structured products have half the flops of the dense ones but more, smaller
-// operations: measured (thread CPU time, min of 300) 11.2 vs 12.8 ms per backward pass on talos
-// (nv 38, 100 knots) and 0.89 vs 0.76 ms on solo (nv 14). Below this size the dense GEMMs win.
-constexpr int kStructureMinNv = 24;
+// operations. Measured (100 knots, median of 5, interleaved runs) with the products through the
+// velocity rows G, H: anymal and hyq (nv 18) 1.20-1.32 ms per backward pass against 1.30-1.43
+// dense; solo (nv 14) 0.71-0.72 against 0.67-0.72. So the structured route runs from nv = 16.
+constexpr int kStructureMinNv = 16;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // Makes a square matrix exactly symmetric (the Riccati recursion drifts by rounding otherwise).
