@@ -18,14 +18,11 @@ constexpr double kRegFloor = 1e-9;
 constexpr int kStructureMinNv = 16;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-// Makes a square matrix exactly symmetric (the Riccati recursion drifts by rounding otherwise).
-void symmetrize(Eigen::MatrixXd& A) {
+// Copies a square matrix's lower triangle to its upper one.
+void mirrorLower(Eigen::MatrixXd& A) {
   const int n = static_cast<int>(A.rows());
   for (int j = 0; j < n; ++j)
-    for (int i = j + 1; i < n; ++i) {
-      const double s = 0.5 * (A(i, j) + A(j, i));
-      A(i, j) = A(j, i) = s;
-    }
+    for (int i = j + 1; i < n; ++i) A(j, i) = A(i, j);
 }
 }  // namespace
 
@@ -247,7 +244,8 @@ void Solver::eulerProducts(const ActionData& d, int nu) {
   transposeTimesBlockLeft(EtVFx.leftCols(ndx_), e.Jq, nb, rowwork_);
   Qxx_ = d.Lxx;
   Qxx_.topRows(n) += EtVFx;
-  Qxx_.noalias() += G.transpose() * BtVFx;
+  // Qxx is symmetric: its lower triangle is the sum of its terms' lower triangles.
+  Qxx_.triangularView<Eigen::Lower>() += G.transpose() * BtVFx;
   if (nu == 0) return;
   // V Fu = VB H; Qxu = Lxu + [Jqᵀ (V Fu)_q; 0] + Gᵀ Bᵀ V Fu; Quu = Luu + Hᵀ Bᵀ V Fu.
   const auto H = d.Fu.bottomRows(n);
@@ -291,7 +289,7 @@ bool Solver::backwardPass() {
     } else {
       VFx_.noalias() = Vxx_next_ * d.Fx;
       Qxx_ = d.Lxx;
-      Qxx_.noalias() += d.Fx.transpose() * VFx_;
+      Qxx_.triangularView<Eigen::Lower>() += d.Fx.transpose() * VFx_;
     }
     Qx_ = d.Lx;
     Qx_.noalias() += d.Fx.transpose() * Vx_gap_;
@@ -348,9 +346,10 @@ bool Solver::backwardPass() {
       // At the (box-)QP solution Kᵀ(Qu + Quu k) = 0 and Kᵀ(Qux + Quu K) = 0 on the free set, so
       // V'x = Qx + Qxu k and V'xx = Qxx + Qxu K for both branches.
       Vx_.noalias() += Qxu * kk;
-      Vxx_.noalias() += Qxu * KK;
+      Vxx_.triangularView<Eigen::Lower>() += Qxu * KK;
     }
-    symmetrize(Vxx_);
+    // Only the lower triangles of Qxx and Vxx are formed (half the products): mirrored here.
+    mirrorLower(Vxx_);
     Vx_next_.swap(Vx_);
     Vxx_next_.swap(Vxx_);
   }
