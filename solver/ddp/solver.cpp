@@ -18,6 +18,32 @@ constexpr double kRegFloor = 1e-9;
 constexpr int kStructureMinNv = 16;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
+// A^-1 (n x n, top-left of X) from the Cholesky factor L of A in the lower triangle of the top-left
+// n x n of L: L^-1 by forward substitution, then A^-1 = L^-T L^-1. Plain loops: at a dozen rows
+// Eigen's blocked triangular solves spend more time in their setup than in the arithmetic (two
+// solves were 5% of solo's backward pass).
+void invertFromCholesky(const Eigen::MatrixXd& L, int n, Eigen::MatrixXd& X) {
+  // The reciprocal pivots first (X's diagonal): a division inside the loop would sit on its
+  // dependency chain.
+  for (int j = 0; j < n; ++j) X(j, j) = 1.0 / L(j, j);
+  for (int j = 0; j < n; ++j)
+    for (int i = j + 1; i < n; ++i) {
+      double s = 0.0;
+      for (int k = j; k < i; ++k) s -= L(i, k) * X(k, j);
+      X(i, j) = s * X(i, i);
+    }
+  // (L^-T L^-1)(i, j) = Σ_{k >= max(i, j)} X(k, i) X(k, j); the upper triangle first, so that the
+  // lower one still holds L^-1 while it is read.
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i <= j; ++i) {
+      double s = 0.0;
+      for (int k = j; k < n; ++k) s += X(k, i) * X(k, j);
+      X(i, j) = s;
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = j + 1; i < n; ++i) X(i, j) = X(j, i);
+}
+
 // Copies a square matrix's lower triangle to its upper one.
 void mirrorLower(Eigen::MatrixXd& A) {
   const int n = static_cast<int>(A.rows());
@@ -335,11 +361,8 @@ bool Solver::backwardPass() {
         // Quu^-1 explicitly (nu columns through the factor), then k and K by products: the
         // triangular solves on the ndx + 1 right-hand sides cost more than the products at these
         // sizes.
-        const auto L = Quu.triangularView<Eigen::Lower>();
-        auto Quu_inv = Quu_inv_.topLeftCorner(nu, nu);
-        Quu_inv.setIdentity();
-        L.solveInPlace(Quu_inv);
-        L.adjoint().solveInPlace(Quu_inv);
+        invertFromCholesky(Quu_, nu, Quu_inv_);
+        const auto Quu_inv = Quu_inv_.topLeftCorner(nu, nu);
         kk.noalias() = -Quu_inv * Qu;
         KK.noalias() = -Quu_inv * Qxu.transpose();
       }
