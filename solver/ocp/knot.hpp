@@ -34,8 +34,8 @@ struct KnotWorkspace {
 // Knot workspaces shared by the knots of a problem, one per thread. Every byte a knot touches in
 // calc / calcDiff that it does not keep is scratch, so the knots a thread evaluates one after the
 // other reuse one workspace that stays in cache instead of each streaming its own from memory
-// (solo, 100 knots: 24 µs per knot calcDiff with a workspace per knot, 18 with a shared Data,
-// ... with the whole scratch shared; see README.md).
+// (solo, 100 knots: 24 µs per knot calcDiff with a workspace per knot, 18 with only the Data
+// shared, 12 with the whole scratch shared: the same as in a 4-knot problem; see README.md).
 //
 // A workspace serves knots of the same model whose contact sets have the same size and whose
 // costs have the same terms (residual types and dimensions, in order): residual workspaces depend
