@@ -271,7 +271,8 @@ void addTransposedRows(const double* jc, const double* d, Eigen::Index ld, doubl
 void kktDerivatives(const Model& model, Data& data, const ContactSet& contacts, ContactData& cd,
                     Eigen::MatrixXd& primal_dq, Eigen::MatrixXd& dual_dq,
                     Eigen::MatrixXd* primal_dv, Eigen::MatrixXd* dual_dv,
-                    Eigen::MatrixXd* primal_dtau, Eigen::MatrixXd* dual_dtau, int tau_first) {
+                    Eigen::MatrixXd* primal_dtau, Eigen::MatrixXd* dual_dtau, int tau_first,
+                    bool primal_matrices = true) {
   const int nc = cd.nc, nv = model.nv;
   // K^-1 explicitly: it is at most a few dozen rows, and one small product per block is cheaper
   // than a triangular solve per block.
@@ -326,6 +327,7 @@ void kktDerivatives(const Model& model, Data& data, const ContactSet& contacts, 
     used += cols;
   }
   solveMassMatrixRows(model, data, cd.rhs3.leftCols(used));
+  if (!primal_matrices) return;
   used = 0;
   for (Eigen::MatrixXd* p : {&primal_dq, primal_dv, primal_dtau}) {
     if (!p) continue;
@@ -500,7 +502,7 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
                                          const Eigen::Ref<const Eigen::VectorXd>& q,
                                          const Eigen::Ref<const Eigen::VectorXd>& v,
                                          const Eigen::Ref<const Eigen::VectorXd>& tau,
-                                         double damping, int tau_first) {
+                                         double damping, int tau_first, PrimalDerivatives primal) {
   if (tau_first < 0 || tau_first > model.nv)
     throwSizeError("contactDynamicsDerivatives", "tau_first", model.nv, tau_first);
   // λ comes back in each contact's force frame; the derivatives are taken in LOCAL coordinates
@@ -514,7 +516,7 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
   computeRNEADerivativesFromKinematics(model, data, v, cd.ddq, cd.fext, true);
   constraintDerivatives(model, data, contacts, cd);
   kktDerivatives(model, data, contacts, cd, cd.ddq_dq, cd.lambda_dq, &cd.ddq_dv, &cd.lambda_dv,
-                 &cd.ddq_dtau, &cd.lambda_dtau, tau_first);
+                 &cd.ddq_dtau, &cd.lambda_dtau, tau_first, primal == PrimalDerivatives::Matrices);
   // Back to the contacts' force frames (λ itself is already rotated by contactDynamics).
   rotateForces(model, data, contacts, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, &cd.lambda_dtau,
                tau_first);

@@ -73,6 +73,12 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
                                          const Eigen::Ref<const Eigen::VectorXd>& v,
                                          const Eigen::Ref<const Eigen::VectorXd>& tau,
                                          double damping = 0.0);
+// Where the derivatives of v̇ go: into cdata.ddq_dq, ddq_dv, ddq_dtau (Matrices), or left as the
+// rows the solve with M produced (Rows): cdata.rhs3 (row-major) then holds
+// [∂v̇/∂q | ∂v̇/∂v | ∂v̇/∂τ columns tau_first..nv-1] side by side, and the three matrices are not
+// written. The knot reads the rows directly into its Jacobians: the copy to column-major
+// matrices, a strided scalar loop, was ~2% of a solo knot.
+enum class PrimalDerivatives : std::uint8_t { Matrices, Rows };
 // The same with the τ derivatives restricted to the columns [tau_first, nv) of cdata.ddq_dtau and
 // cdata.lambda_dtau (their other columns are left as they were): the knot needs only the actuated
 // columns, ∂/∂u = ∂/∂τ [0; I], and each column costs a solve with M.
@@ -81,7 +87,8 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
                                          const Eigen::Ref<const Eigen::VectorXd>& q,
                                          const Eigen::Ref<const Eigen::VectorXd>& v,
                                          const Eigen::Ref<const Eigen::VectorXd>& tau,
-                                         double damping, int tau_first);
+                                         double damping, int tau_first,
+                                         PrimalDerivatives primal = PrimalDerivatives::Matrices);
 
 // v⁺ and Λ (cdata.v_after, cdata.impulses) when the active contacts close at velocity v⁻.
 ContactStatus impulseDynamics(const Model& model, Data& data, const ContactSet& contacts,

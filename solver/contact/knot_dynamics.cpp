@@ -22,7 +22,6 @@ KnotData::KnotData(const Model& model, const ContactSet& contacts)
   Gu = Eigen::MatrixXd::Zero(m, nu);
   // dIntegrate is the identity but for a free-flyer's 6 x 6 block: only that block is updated.
   Jq = Jv = Eigen::MatrixXd::Identity(nv, nv);
-  rows6 = Matrix6Xd::Zero(6, nv);
 }
 
 namespace {
@@ -43,7 +42,7 @@ ContactStatus step(const Model& model, Data& data, const ContactSet& contacts, K
   kd.tau.tail(kd.nu) = u;
   ContactStatus status =
       derivatives ? contactDynamicsDerivatives(model, data, contacts, kd.contact, q, v, kd.tau,
-                                               damping, off)
+                                               damping, off, PrimalDerivatives::Rows)
                   : contactDynamics(model, data, contacts, kd.contact, q, v, kd.tau, damping);
   if (status != ContactStatus::Ok) {
     kd.q_next = q;
@@ -75,39 +74,36 @@ ContactStatus knotDynamicsDerivatives(const Model& model, Data& data, const Cont
   if (status != ContactStatus::Ok) return status;
   const int nv = model.nv, nu = kd.nu, nc = kd.contact.nc;
   const ContactData& cd = kd.contact;
-  // Velocity rows: v⁺ = v + dt v̇.
-  auto dvq = kd.Fx.bottomLeftCorner(nv, nv);
-  auto dvv = kd.Fx.bottomRightCorner(nv, nv);
-  auto dvu = kd.Fu.bottomRows(nv);
-  dvq = dt * cd.ddq_dq;
-  dvv = dt * cd.ddq_dv;
-  dvv.diagonal().array() += 1.0;
-  dvu = dt * cd.ddq_dtau.rightCols(nu);
-  // Configuration rows: q⁺ = q ⊕ dt v⁺, so ∂q⁺ = Jq dq + Jv dt ∂v⁺. Jq and Jv are the identity
-  // except for a free-flyer's 6 x 6 block, so only those rows need a product.
   // dIntegrate(q, dt v⁺) without rewriting its identity part (set at construction).
-  if (model.hasFreeFlyer()) {
+  const int nb = model.hasFreeFlyer() ? 6 : 0;
+  if (nb) {
     const Vector6d step6 = kd.step.head<6>();
     kd.Jq.topLeftCorner<6, 6>() = exp6(step6).inverse().toActionMatrix();
     kd.Jv.topLeftCorner<6, 6>() = Jexp6(step6);
   }
-  auto dqq = kd.Fx.topLeftCorner(nv, nv);
-  auto dqv = kd.Fx.topRightCorner(nv, nv);
-  auto dqu = kd.Fu.topRows(nv);
-  dqq = dt * dvq;
-  dqv = dt * dvv;
-  dqu = dt * dvu;
-  if (model.hasFreeFlyer()) {
-    const Matrix6d Jv6 = kd.Jv.topLeftCorner<6, 6>();
-    // Through a preallocated 6-row workspace: the in-place product would need a heap temporary.
-    for (auto block : {dqq, dqv, dqu}) {
-      kd.rows6.leftCols(block.cols()).noalias() = Jv6 * block.topRows<6>();
-      block.topRows<6>() = kd.rows6.leftCols(block.cols());
+  const Matrix6d Jq6 = kd.Jq.topLeftCorner<6, 6>(), Jv6 = kd.Jv.topLeftCorner<6, 6>();
+  // Column by column, straight from the rows of the solve with M (cd.rhs3: [∂v̇/∂q | ∂v̇/∂v |
+  // ∂v̇/∂u], PrimalDerivatives::Rows), each column of Fx, Fu written once:
+  //   velocity rows: v⁺ = v + dt v̇, so dt ∂v̇ (+ I on the v block);
+  //   configuration rows: q⁺ = q ⊕ dt v⁺, so ∂q⁺ = Jq dq + Jv dt ∂v⁺, where Jq and Jv are the
+  //   identity except a free-flyer's 6 x 6 block: only those rows need a product.
+  const double* P = cd.rhs3.data();
+  const Eigen::Index ld = cd.rhs3.outerStride();
+  for (int j = 0; j < 2 * nv + nu; ++j) {
+    double* col = j < 2 * nv ? kd.Fx.col(j).data() : kd.Fu.col(j - 2 * nv).data();
+    const double* p = P + j;
+    double* vel = col + nv;
+    for (int i = 0; i < nv; ++i) vel[i] = dt * p[i * ld];
+    if (j >= nv && j < 2 * nv) vel[j - nv] += 1.0;
+    for (int i = nb; i < nv; ++i) col[i] = dt * vel[i];
+    if (nb) {
+      const Vector6d dv6 = dt * Eigen::Map<const Vector6d>(vel);
+      Eigen::Map<Vector6d>(col).noalias() = Jv6 * dv6;
     }
-    dqq.topLeftCorner<6, 6>() += kd.Jq.topLeftCorner<6, 6>();
-    dqq.bottomRightCorner(nv - 6, nv - 6).diagonal().array() += 1.0;
-  } else {
-    dqq.diagonal().array() += 1.0;
+    if (j < nb)
+      Eigen::Map<Vector6d>(col) += Jq6.col(j);
+    else if (j < nv)
+      col[j] += 1.0;
   }
   // Forces: λ = g(x, u).
   kd.Gx.topLeftCorner(nc, nv) = cd.lambda_dq.topRows(nc);

@@ -21,9 +21,10 @@ struct KnotData {
   Eigen::MatrixXd Fx, Fu;          // 2nv x 2nv, 2nv x nu
   Eigen::MatrixXd Gx, Gu;          // maxNc x 2nv, maxNc x nu (top nc rows)
   Eigen::MatrixXd Jq, Jv;          // dIntegrate at (q, dt v⁺)
-  Matrix6Xd rows6;                 // workspace
-  // v̇ (contact.ddq), λ (contact.lambda), ... After knotDynamicsDerivatives, contact.ddq_dtau and
-  // contact.lambda_dtau hold only their actuated columns (the last nu): the knot skips the rest.
+  // v̇ (contact.ddq), λ (contact.lambda), ... After knotDynamicsDerivatives, contact.lambda_dtau
+  // holds only its actuated columns (the last nu: the knot skips the rest), and the derivatives of
+  // v̇ are only in Fx, Fu: contact.ddq_dq, ddq_dv, ddq_dtau are not written
+  // (PrimalDerivatives::Rows).
   ContactData contact;
 };
 

@@ -12,19 +12,43 @@ namespace {
 // μ never restarts from 0 when raised, so the retries of a failed backward pass are bounded.
 constexpr double kRegFloor = 1e-9;
 // The Euler-structured products have half the flops of the dense ones but more, smaller
-// operations: measured (thread CPU time, min of 300) 11.2 vs 12.8 ms per backward pass on talos
-// (nv 38, 100 knots) and 0.89 vs 0.76 ms on solo (nv 14). Below this size the dense GEMMs win.
-constexpr int kStructureMinNv = 24;
+// operations. Measured (100 knots, median of 5, interleaved runs) with the products through the
+// velocity rows G, H: anymal and hyq (nv 18) 1.20-1.32 ms per backward pass against 1.30-1.43
+// dense; solo (nv 14) 0.71-0.72 against 0.67-0.72. So the structured route runs from nv = 16.
+constexpr int kStructureMinNv = 16;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-// Makes a square matrix exactly symmetric (the Riccati recursion drifts by rounding otherwise).
-void symmetrize(Eigen::MatrixXd& A) {
-  const int n = static_cast<int>(A.rows());
+// A^-1 (n x n, top-left of X) from the Cholesky factor L of A in the lower triangle of the top-left
+// n x n of L: L^-1 by forward substitution, then A^-1 = L^-T L^-1. Plain loops: at a dozen rows
+// Eigen's blocked triangular solves spend more time in their setup than in the arithmetic (two
+// solves were 5% of solo's backward pass).
+void invertFromCholesky(const Eigen::MatrixXd& L, int n, Eigen::MatrixXd& X) {
+  // The reciprocal pivots first (X's diagonal): a division inside the loop would sit on its
+  // dependency chain.
+  for (int j = 0; j < n; ++j) X(j, j) = 1.0 / L(j, j);
   for (int j = 0; j < n; ++j)
     for (int i = j + 1; i < n; ++i) {
-      const double s = 0.5 * (A(i, j) + A(j, i));
-      A(i, j) = A(j, i) = s;
+      double s = 0.0;
+      for (int k = j; k < i; ++k) s -= L(i, k) * X(k, j);
+      X(i, j) = s * X(i, i);
     }
+  // (L^-T L^-1)(i, j) = Σ_{k >= max(i, j)} X(k, i) X(k, j); the upper triangle first, so that the
+  // lower one still holds L^-1 while it is read.
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i <= j; ++i) {
+      double s = 0.0;
+      for (int k = j; k < n; ++k) s += X(k, i) * X(k, j);
+      X(i, j) = s;
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = j + 1; i < n; ++i) X(i, j) = X(j, i);
+}
+
+// Copies a square matrix's lower triangle to its upper one.
+void mirrorLower(Eigen::MatrixXd& A) {
+  const int n = static_cast<int>(A.rows());
+  for (int j = 0; j < n; ++j)
+    for (int i = j + 1; i < n; ++i) A(j, i) = A(i, j);
 }
 }  // namespace
 
@@ -59,7 +83,6 @@ Solver::Solver(ShootingProblem& problem, SolverKind kind, const SolverOptions& o
     const int nu = problem.nu(k);
     us_.push_back(Eigen::VectorXd::Zero(nu));
     k_.push_back(Eigen::VectorXd::Zero(nu));
-    Qu_.push_back(Eigen::VectorXd::Zero(nu));
     K_.push_back(Eigen::MatrixXd::Zero(nu, n));
   }
   us_try_ = us_;
@@ -72,6 +95,7 @@ Solver::Solver(ShootingProblem& problem, SolverKind kind, const SolverOptions& o
   colwork_ = Eigen::Matrix<double, Eigen::Dynamic, 6>::Zero(n, 6);
   rowwork_ = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, std::max(n, m));
   W_ = Eigen::MatrixXd::Zero(m, n);
+  Qu_ = Eigen::VectorXd::Zero(m);
   w_ = Eigen::VectorXd::Zero(m);
   dx_ = dx_next_ = tmp_x_ = Eigen::VectorXd::Zero(n);
   du_ = Eigen::VectorXd::Zero(m);
@@ -213,62 +237,60 @@ void transposeTimesBlockLeft(Eigen::MatrixBase<Derived>&& X, const Eigen::Matrix
 }
 }  // namespace
 
-// Qxx, Qxu, Quu through the Euler structure (action.hpp): with V the regularized next value
-// Hessian, V Fx = V E + (V B) a_x and Fxᵀ Y = Eᵀ Y + a_xᵀ (Bᵀ Y), where products with E and B cost
-// O(n²) (identities, scaled, but for one 6 x 6 block) and only the products with a_x = [a_q a_v]
-// (nv x 2nv) and a_u are dense: half the flops of Fxᵀ V Fx formed directly.
+// Qxx, Qxu, Quu through the Euler structure (action.hpp): Fx = E + B G, Fu = B H with
+// E = [Jq 0; 0 0], B = [dt Jv; I] and G, H the velocity rows of Fx, Fu (the knot's own results).
+// With V the regularized next value Hessian, V Fx = [V_q Jq, 0] + (V B) G and
+// Fxᵀ Y = [Jqᵀ Y_q; 0] + Gᵀ (Bᵀ Y), where products with Jq, Jv cost O(n²) (identities but for one
+// 6 x 6 block) and only the products with G (nv x 2nv) and H (nv x nu) are dense: half the flops of
+// Fxᵀ V Fx formed directly.
 void Solver::eulerProducts(const ActionData& d, int nu) {
   const EulerStructure& e = d.euler;
   const int n = ndx_ / 2, nb = e.nb;  // nb: 0 or 6
   const double dt = e.dt;
   const Eigen::MatrixXd& V = Vxx_next_;
-  // VB = V B = dt² V_q Jv + dt V_v (2n x n); VE = V E = [V_q Jq, dt V_q Jv + V_v].
+  const auto G = d.Fx.bottomRows(n);
+  // VB = V B = dt V_q Jv + V_v (2n x n).
   auto VB = VB_.leftCols(n);
   VB = V.leftCols(n);
   timesBlockRight(VB.leftCols(n), e.Jv, nb, colwork_);
-  Eigen::MatrixXd& VE = VFx_;
-  VE.leftCols(n) = V.leftCols(n);
-  timesBlockRight(VE.leftCols(n), e.Jq, nb, colwork_);
-  VE.rightCols(n) = dt * VB + V.rightCols(n);
-  VB = dt * dt * VB + dt * V.rightCols(n);
-  // V Fx = V E + VB [a_q a_v].
-  VFx_.leftCols(n).noalias() += VB * *e.a_q;
-  VFx_.rightCols(n).noalias() += VB * *e.a_v;
-  // Bᵀ (V Fx) (n x 2n) and Eᵀ (V Fx) (2n x 2n).
+  VB = dt * VB + V.rightCols(n);
+  // V Fx = [V_q Jq, 0] + VB G.
+  VFx_.leftCols(n) = V.leftCols(n);
+  timesBlockRight(VFx_.leftCols(n), e.Jq, nb, colwork_);
+  VFx_.rightCols(n).setZero();
+  VFx_.noalias() += VB * G;
+  // Bᵀ V Fx = dt Jvᵀ (V Fx)_q + (V Fx)_v (n x 2n).
   auto BtVFx = BtY_.leftCols(ndx_);
   BtVFx = VFx_.topRows(n);
   transposeTimesBlockLeft(BtVFx.leftCols(ndx_), e.Jv, nb, rowwork_);
-  // Qxx = Lxx + Eᵀ V Fx + a_xᵀ Bᵀ V Fx.
+  BtVFx = dt * BtVFx + VFx_.bottomRows(n);
+  // Qxx = Lxx + [Jqᵀ (V Fx)_q; 0] + Gᵀ Bᵀ V Fx.
+  auto EtVFx = EtY_.leftCols(ndx_);
+  EtVFx = VFx_.topRows(n);
+  transposeTimesBlockLeft(EtVFx.leftCols(ndx_), e.Jq, nb, rowwork_);
   Qxx_ = d.Lxx;
-  Qxx_.bottomRows(n) += dt * BtVFx + VFx_.bottomRows(n);
-  BtVFx = dt * dt * BtVFx + dt * VFx_.bottomRows(n);
-  auto EtTop = EtY_.leftCols(ndx_);
-  EtTop = VFx_.topRows(n);
-  transposeTimesBlockLeft(EtTop.leftCols(ndx_), e.Jq, nb, rowwork_);
-  Qxx_.topRows(n) += EtTop;
-  Qxx_.topRows(n).noalias() += e.a_q->transpose() * BtVFx;
-  Qxx_.bottomRows(n).noalias() += e.a_v->transpose() * BtVFx;
+  Qxx_.topRows(n) += EtVFx;
+  // Qxx is symmetric: its lower triangle is the sum of its terms' lower triangles.
+  Qxx_.triangularView<Eigen::Lower>() += G.transpose() * BtVFx;
   if (nu == 0) return;
-  // V Fu = VB a_u; Bᵀ V Fu; Qxu = Lxu + Eᵀ V Fu + a_xᵀ Bᵀ V Fu; Quu = Luu + a_uᵀ Bᵀ V Fu.
-  const auto a_u = e.a_tau->rightCols(nu);
+  // V Fu = VB H; Qxu = Lxu + [Jqᵀ (V Fu)_q; 0] + Gᵀ Bᵀ V Fu; Quu = Luu + Hᵀ Bᵀ V Fu.
+  const auto H = d.Fu.bottomRows(n);
   auto VFu = VFu_.leftCols(nu);
-  VFu.noalias() = VB * a_u;
+  VFu.noalias() = VB * H;
   auto BtVFu = BtY_.leftCols(nu);
   BtVFu = VFu.topRows(n);
   transposeTimesBlockLeft(BtVFu.leftCols(nu), e.Jv, nb, rowwork_);
-  auto Qxu = Qxu_.leftCols(nu);
-  Qxu = d.Lxu;
-  Qxu.bottomRows(n) += dt * BtVFu + VFu.bottomRows(n);
-  BtVFu = dt * dt * BtVFu + dt * VFu.bottomRows(n);
+  BtVFu = dt * BtVFu + VFu.bottomRows(n);
   auto EtVFu = EtY_.leftCols(nu);
   EtVFu = VFu.topRows(n);
   transposeTimesBlockLeft(EtVFu.leftCols(nu), e.Jq, nb, rowwork_);
+  auto Qxu = Qxu_.leftCols(nu);
+  Qxu = d.Lxu;
   Qxu.topRows(n) += EtVFu;
-  Qxu.topRows(n).noalias() += e.a_q->transpose() * BtVFu;
-  Qxu.bottomRows(n).noalias() += e.a_v->transpose() * BtVFu;
+  Qxu.noalias() += G.transpose() * BtVFu;
   auto Quu = Quu_.topLeftCorner(nu, nu);
   Quu = d.Luu;
-  Quu.noalias() += a_u.transpose() * BtVFu;
+  Quu.noalias() += H.transpose() * BtVFu;
 }
 
 bool Solver::backwardPass() {
@@ -293,7 +315,7 @@ bool Solver::backwardPass() {
     } else {
       VFx_.noalias() = Vxx_next_ * d.Fx;
       Qxx_ = d.Lxx;
-      Qxx_.noalias() += d.Fx.transpose() * VFx_;
+      Qxx_.triangularView<Eigen::Lower>() += d.Fx.transpose() * VFx_;
     }
     Qx_ = d.Lx;
     Qx_.noalias() += d.Fx.transpose() * Vx_gap_;
@@ -304,7 +326,7 @@ bool Solver::backwardPass() {
       auto Quu = Quu_.topLeftCorner(nu, nu);
       auto Qxu = Qxu_.leftCols(nu);
       auto W = W_.topRows(nu);
-      Eigen::VectorXd& Qu = Qu_[k];
+      auto Qu = Qu_.head(nu);
       Eigen::VectorXd& kk = k_[k];
       Eigen::MatrixXd& KK = K_[k];
       if (!euler) {
@@ -339,20 +361,18 @@ bool Solver::backwardPass() {
         // Quu^-1 explicitly (nu columns through the factor), then k and K by products: the
         // triangular solves on the ndx + 1 right-hand sides cost more than the products at these
         // sizes.
-        const auto L = Quu.triangularView<Eigen::Lower>();
-        auto Quu_inv = Quu_inv_.topLeftCorner(nu, nu);
-        Quu_inv.setIdentity();
-        L.solveInPlace(Quu_inv);
-        L.adjoint().solveInPlace(Quu_inv);
+        invertFromCholesky(Quu_, nu, Quu_inv_);
+        const auto Quu_inv = Quu_inv_.topLeftCorner(nu, nu);
         kk.noalias() = -Quu_inv * Qu;
         KK.noalias() = -Quu_inv * Qxu.transpose();
       }
       // At the (box-)QP solution Kᵀ(Qu + Quu k) = 0 and Kᵀ(Qux + Quu K) = 0 on the free set, so
       // V'x = Qx + Qxu k and V'xx = Qxx + Qxu K for both branches.
       Vx_.noalias() += Qxu * kk;
-      Vxx_.noalias() += Qxu * KK;
+      Vxx_.triangularView<Eigen::Lower>() += Qxu * KK;
     }
-    symmetrize(Vxx_);
+    // Only the lower triangles of Qxx and Vxx are formed (half the products): mirrored here.
+    mirrorLower(Vxx_);
     Vx_next_.swap(Vx_);
     Vxx_next_.swap(Vxx_);
   }

@@ -137,13 +137,14 @@ class Solver {
   int T_, ndx_;
   std::vector<Eigen::VectorXd> xs_, us_, xs_try_, us_try_;
   std::vector<Eigen::VectorXd> fs_;  // gaps f_0 = x0 ⊖ x_0, f_{k+1} = f(x_k, u_k) ⊖ x_{k+1}
-  std::vector<Eigen::VectorXd> k_, Qu_;
+  // Per knot only what the forward pass reads: the policy.
+  std::vector<Eigen::VectorXd> k_;
   std::vector<Eigen::MatrixXd> K_;
   // Value function of the knot after the current one and of the current one (rolling buffers).
   Eigen::VectorXd Vx_next_, Vx_, Vx_gap_;
   Eigen::MatrixXd Vxx_next_, Vxx_;
-  // Per-knot Riccati workspaces.
-  Eigen::VectorXd Qx_;
+  // Riccati workspaces of the current knot (the pass is serial: one set for all knots).
+  Eigen::VectorXd Qx_, Qu_;
   Eigen::MatrixXd Qxx_, Qxu_, Quu_, Quu_inv_, VFx_, VFu_, W_;
   Eigen::VectorXd w_;
   Eigen::MatrixXd VB_, BtY_, EtY_;  // Euler-structure products

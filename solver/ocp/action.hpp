@@ -4,6 +4,7 @@
 // tangent space of the state. calc computes values, calcDiff values and derivatives; both write
 // into an ActionData built once by the model. New kinds of knots need no solver change.
 
+#include <limits>
 #include <memory>
 
 #include "solver/multibody/model.hpp"
@@ -44,18 +45,19 @@ enum class KnotStatus : std::uint8_t {
 const char* toString(KnotStatus status);
 
 // The structure of a semi-implicit Euler knot's Jacobians (ARCHITECTURE §3), which the Riccati
-// recursion exploits to halve its products: with a = v̇(x, u), v⁺ = v + dt a, q⁺ = q ⊕ dt v⁺,
-//   Fx = E + B [a_q a_v],   Fu = B a_u,   E = [Jq  dt Jv; 0  I],   B = [dt² Jv; dt I],
-// where Jq, Jv (the Jacobians of ⊕) are the identity except a leading nb x nb block (a free-flyer's
-// 6 x 6). a_q, a_v, a_u point into the knot's own data; a_u is the last nu columns of *a_tau.
+// recursion exploits to halve its products. With a = v̇(x, u), v⁺ = v + dt a, q⁺ = q ⊕ dt v⁺, the
+// velocity rows of the Jacobians are G = ∂v⁺/∂x = [dt a_q, I + dt a_v] and H = ∂v⁺/∂u = dt a_u,
+// and the configuration rows follow from them:
+//   Fx = [Jq 0; 0 0] + [dt Jv; I] G,   Fu = [dt Jv; I] H,
+// where Jq, Jv (the Jacobians of ⊕ at (q, dt v⁺)) are the identity except a leading nb x nb block
+// (a free-flyer's 6 x 6). G and H are the bottom nv rows of Fx and Fu themselves, so the structure
+// needs only these blocks: it refers to nothing outside the ActionData (a knot's scratch is
+// shared with other knots and is gone after its calcDiff).
 struct EulerStructure {
   bool valid = false;
   double dt = 0.0;
   int nb = 0;
   Eigen::Matrix<double, 6, 6> Jq, Jv;  // leading blocks, top-left nb x nb used
-  const Eigen::MatrixXd* a_q = nullptr;
-  const Eigen::MatrixXd* a_v = nullptr;
-  const Eigen::MatrixXd* a_tau = nullptr;
 };
 
 struct ActionData {
@@ -89,6 +91,9 @@ class ActionModel {
                         const Eigen::Ref<const Eigen::VectorXd>& u) const = 0;
   // Terminal knots have no dynamics; the solvers call them with u of size 0.
   virtual bool isTerminal() const { return false; }
+  // How many threads may evaluate knots of this model at once (knots whose scratch is shared per
+  // thread: knot.hpp); the problem runs on no more.
+  virtual int maxThreads() const { return std::numeric_limits<int>::max(); }
 
  private:
   StateSpace state_;

@@ -17,16 +17,48 @@ KnotStatus knotStatus(ContactStatus s) {
 }
 }  // namespace
 
-KnotActionData::KnotActionData(const Model& model, const ContactSet& contacts,
-                               const CostModel& costs)
-    : ActionData(model.nq + model.nv, 2 * model.nv, actuatedDimension(model)),
-      data(model),
-      knot(model, contacts),
-      costs(costs.createData()),
-      v(Eigen::VectorXd::Zero(model.nv)) {}
+KnotWorkspace::KnotWorkspace(const Model& model, const ContactSet& contacts, const CostModel& costs)
+    : data(model), knot(model, contacts), costs(costs.createData()) {}
 
-SharedWorkspace::SharedWorkspace(const Model& model, int threads) {
-  for (int t = 0; t < std::max(threads, 1); ++t) data_.push_back(std::make_unique<Data>(model));
+KnotActionData::KnotActionData(const Model& model, const ContactSet& contacts,
+                               const CostModel& costs, int slot)
+    : ActionData(model.nq + model.nv, 2 * model.nv, actuatedDimension(model)),
+      forces_(Eigen::VectorXd::Zero(contacts.maxNc())),
+      slot_(slot) {
+  if (slot < 0) own_ = std::make_unique<KnotWorkspace>(model, contacts, costs);
+}
+
+SharedWorkspace::SharedWorkspace(const Model& model, int threads)
+    : model_(model), threads_(std::max(threads, 1)) {
+  for (int t = 0; t < threads_; ++t) data_.push_back(std::make_unique<Data>(model));
+}
+
+namespace {
+std::vector<std::pair<const std::type_info*, int>> termSignature(const CostModel& costs) {
+  std::vector<std::pair<const std::type_info*, int>> terms;
+  for (int i = 0; i < costs.size(); ++i) {
+    const Residual& r = *costs[i].residual;
+    terms.emplace_back(&typeid(r), r.dim());
+  }
+  return terms;
+}
+}  // namespace
+
+int SharedWorkspace::reserve(const ContactSet& contacts, const CostModel& costs) {
+  const auto terms = termSignature(costs);
+  for (size_t s = 0; s < slots_.size(); ++s) {
+    const Slot& slot = slots_[s];
+    if (slot.max_nc != contacts.maxNc() || slot.terms.size() != terms.size()) continue;
+    bool same = true;
+    for (size_t i = 0; i < terms.size() && same; ++i)
+      same = *slot.terms[i].first == *terms[i].first && slot.terms[i].second == terms[i].second;
+    if (same) return static_cast<int>(s);
+  }
+  Slot slot{contacts.maxNc(), terms, {}};
+  for (int t = 0; t < threads_; ++t)
+    slot.scratch.push_back(std::make_unique<KnotWorkspace>(model_, contacts, costs));
+  slots_.push_back(std::move(slot));
+  return static_cast<int>(slots_.size()) - 1;
 }
 
 KnotModel::KnotModel(const Model& model, const ContactSet& contacts, double dt,
@@ -38,30 +70,36 @@ KnotModel::KnotModel(const Model& model, const ContactSet& contacts, double dt,
       dt_(dt),
       workspace_(std::move(workspace)) {}
 
-Data& KnotModel::workspace(KnotActionData& d) const {
-  const int thread = omp_get_thread_num();
-  return workspace_ && thread < workspace_->threads() ? workspace_->forThread(thread) : d.data;
+int KnotModel::maxThreads() const {
+  return workspace_ ? workspace_->threads() : ActionModel::maxThreads();
+}
+
+KnotWorkspace& KnotModel::workspace(KnotActionData& d) const {
+  // The problem never runs more threads than the shared workspace serves (maxThreads).
+  if (d.slot_ < 0) return *d.own_;
+  return workspace_->scratch(d.slot_, omp_get_thread_num());
 }
 
 std::unique_ptr<ActionData> KnotModel::createData() const {
-  return std::make_unique<KnotActionData>(model_, contacts_, costs_);
+  const int slot = workspace_ ? workspace_->reserve(contacts_, costs_) : -1;
+  return std::make_unique<KnotActionData>(model_, contacts_, costs_, slot);
 }
 
-KnotContext KnotModel::context(KnotActionData& d, Data& data) const {
-  const bool impulse = mode_ == KnotMode::Impulse;
-  return KnotContext{model_,     data,
-                     &contacts_, impulse ? &d.knot.contact.impulses : &d.knot.contact.lambda,
-                     &d.knot.Gx, &d.knot.Gu};
+KnotContext KnotModel::context(KnotActionData& d, KnotWorkspace& w) const {
+  return KnotContext{model_, w.data, &contacts_, &d.forces_, &w.knot.Gx, &w.knot.Gu};
 }
 
 // The dynamics of the knot's mode; false (with the status set, the state held and the cost
 // infinite) when they cannot be solved.
-bool KnotModel::dynamics(KnotActionData& d, Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
+bool KnotModel::dynamics(KnotActionData& d, KnotWorkspace& w,
+                         const Eigen::Ref<const Eigen::VectorXd>& x,
                          const Eigen::Ref<const Eigen::VectorXd>& u, bool derivatives) const {
   const int nq = model_.nq, nv = model_.nv;
   const auto q = x.head(nq);
   const auto v = x.tail(nv);
-  KnotData& kd = d.knot;
+  Data& data = w.data;
+  KnotData& kd = w.knot;
+  ContactData& cd = kd.contact;
   ContactStatus s;
   if (mode_ == KnotMode::Contact) {
     s = derivatives ? knotDynamicsDerivatives(model_, data, contacts_, kd, q, v, u, dt_, damping)
@@ -71,7 +109,8 @@ bool KnotModel::dynamics(KnotActionData& d, Data& data, const Eigen::Ref<const E
       d.x_next.tail(nv) = kd.v_next;
       if (derivatives) {
         // Swapped, not copied: knotDynamicsDerivatives rewrites every entry of kd.Fx, kd.Fu on each
-        // call, so the two buffers can trade places (O(1), no allocation).
+        // call, so the two buffers can trade places (O(1), no allocation; the workspace's pair then
+        // serves the next knot).
         d.Fx.swap(kd.Fx);
         d.Fu.swap(kd.Fu);
         EulerStructure& e = d.euler;
@@ -82,13 +121,10 @@ bool KnotModel::dynamics(KnotActionData& d, Data& data, const Eigen::Ref<const E
           e.Jq = kd.Jq.topLeftCorner<6, 6>();
           e.Jv = kd.Jv.topLeftCorner<6, 6>();
         }
-        e.a_q = &kd.contact.ddq_dq;
-        e.a_v = &kd.contact.ddq_dv;
-        e.a_tau = &kd.contact.ddq_dtau;
       }
     }
+    d.forces_ = cd.lambda;
   } else {
-    ContactData& cd = kd.contact;
     s = derivatives
             ? impulseDynamicsDerivatives(model_, data, contacts_, cd, q, v, restitution, damping)
             : impulseDynamics(model_, data, contacts_, cd, q, v, restitution, damping);
@@ -111,7 +147,9 @@ bool KnotModel::dynamics(KnotActionData& d, Data& data, const Eigen::Ref<const E
         kd.Gu.topRows(nc).setZero();
       }
     }
+    d.forces_ = cd.impulses;
   }
+  d.nc_ = cd.nc;
   d.contact_status = s;
   if (s != ContactStatus::Ok) {
     d.status = knotStatus(s);
@@ -126,9 +164,9 @@ bool KnotModel::dynamics(KnotActionData& d, Data& data, const Eigen::Ref<const E
 void KnotModel::calc(ActionData& data, const Eigen::Ref<const Eigen::VectorXd>& x,
                      const Eigen::Ref<const Eigen::VectorXd>& u) const {
   auto& d = static_cast<KnotActionData&>(data);
-  Data& work = workspace(d);
-  if (!dynamics(d, work, x, u, false)) return;
-  d.cost = costs_.calc(d.costs, context(d, work), x, u);
+  KnotWorkspace& w = workspace(d);
+  if (!dynamics(d, w, x, u, false)) return;
+  d.cost = costs_.calc(w.costs, context(d, w), x, u);
   if (!std::isfinite(d.cost)) {
     d.status = KnotStatus::NonFinite;
     d.cost = kInfinity;
@@ -138,9 +176,9 @@ void KnotModel::calc(ActionData& data, const Eigen::Ref<const Eigen::VectorXd>& 
 void KnotModel::calcDiff(ActionData& data, const Eigen::Ref<const Eigen::VectorXd>& x,
                          const Eigen::Ref<const Eigen::VectorXd>& u) const {
   auto& d = static_cast<KnotActionData&>(data);
-  Data& work = workspace(d);
-  if (!dynamics(d, work, x, u, true)) return;
-  d.cost = costs_.calcDiff(d.costs, context(d, work), x, u, d.Lx, d.Lu, d.Lxx, d.Lxu, d.Luu);
+  KnotWorkspace& w = workspace(d);
+  if (!dynamics(d, w, x, u, true)) return;
+  d.cost = costs_.calcDiff(w.costs, context(d, w), x, u, d.Lx, d.Lu, d.Lxx, d.Lxu, d.Luu);
   if (!std::isfinite(d.cost) || !d.Lx.allFinite() || !d.Lu.allFinite()) {
     d.status = KnotStatus::NonFinite;
     d.cost = kInfinity;

@@ -10,6 +10,8 @@
 // touch-down from one knot to the previous one every tick, so a knot must change mode without
 // being rebuilt.
 
+#include <typeinfo>
+
 #include "solver/contact/knot_dynamics.hpp"
 #include "solver/ocp/action.hpp"
 #include "solver/ocp/cost.hpp"
@@ -18,28 +20,67 @@ namespace stride {
 
 enum class KnotMode : std::uint8_t { Contact, Impulse };
 
-// Multibody workspaces (Data) shared by the knots of a problem, one per thread. A knot's Data is
-// scratch within one calc / calcDiff (the knot keeps its results in its own KnotActionData), so the
-// knots a thread evaluates one after the other can reuse one Data that stays in cache, instead of
-// each streaming its own from memory: measured on solo, 13 against 24 µs per knot calcDiff over
-// 100 knots. Threads beyond the pool's size fall back to the knot's own Data.
+// The scratch of one knot's calc / calcDiff: the multibody workspace, the contact dynamics
+// workspaces (KKT factors, ∂v̇, ∂λ, Gx, Gu, the Euler step's Jacobians) and the cost's residual
+// workspaces. None of it is read after the call: what later stages need (x⁺, Fx, Fu, the cost
+// derivatives, λ) is copied into the knot's KnotActionData.
+struct KnotWorkspace {
+  KnotWorkspace(const Model& model, const ContactSet& contacts, const CostModel& costs);
+  Data data;
+  KnotData knot;
+  CostData costs;
+};
+
+// Knot workspaces shared by the knots of a problem, one per thread. Every byte a knot touches in
+// calc / calcDiff that it does not keep is scratch, so the knots a thread evaluates one after the
+// other reuse one workspace that stays in cache instead of each streaming its own from memory
+// (solo, 100 knots: 24 µs per knot calcDiff with a workspace per knot, 18 with only the Data
+// shared, 12 with the whole scratch shared: the same as in a 4-knot problem; see README.md).
+//
+// A workspace serves knots of the same model whose contact sets have the same size and whose
+// costs have the same terms (residual types and dimensions, in order): residual workspaces depend
+// on nothing else (residual.hpp). Knots that differ get a workspace of their own kind (a "slot"),
+// created at setup by KnotModel::createData.
 class SharedWorkspace {
  public:
   SharedWorkspace(const Model& model, int threads);
-  int threads() const { return static_cast<int>(data_.size()); }
+  int threads() const { return threads_; }
+  // The multibody workspace of a thread (shared by all slots).
   Data& forThread(int thread) { return *data_[thread]; }
+  // Setup: the slot serving a knot with these contacts and costs, created when none fits.
+  int reserve(const ContactSet& contacts, const CostModel& costs);
+  KnotWorkspace& scratch(int slot, int thread) { return *slots_[slot].scratch[thread]; }
 
  private:
+  struct Slot {
+    int max_nc;
+    std::vector<std::pair<const std::type_info*, int>> terms;  // residual type and dimension
+    std::vector<std::unique_ptr<KnotWorkspace>> scratch;       // one per thread
+  };
+  const Model& model_;
+  int threads_;
   std::vector<std::unique_ptr<Data>> data_;
+  std::vector<Slot> slots_;
 };
 
+// What a knot keeps between calls: the ActionData results, the contact forces and the status of
+// the contact solve. (The scratch lives in a KnotWorkspace: the problem's shared one, or `own` for
+// a knot built without one.)
 struct KnotActionData : ActionData {
-  KnotActionData(const Model& model, const ContactSet& contacts, const CostModel& costs);
-  Data data;  // multibody workspace of this knot when it has no shared one
-  KnotData knot;
-  CostData costs;
+  KnotActionData(const Model& model, const ContactSet& contacts, const CostModel& costs, int slot);
+  // The contact forces of the last calc / calcDiff, each contact's in its force frame, the active
+  // contacts stacked in the set's order (top nc() entries): λ in contact mode, the impulses Λ in
+  // impulse mode.
+  const Eigen::VectorXd& forces() const { return forces_; }
+  int nc() const { return nc_; }
   ContactStatus contact_status = ContactStatus::Ok;
-  Eigen::VectorXd v;  // scratch
+
+ private:
+  friend class KnotModel;
+  Eigen::VectorXd forces_;  // maxNc
+  int nc_ = 0;
+  int slot_;                            // of the shared workspace, -1 without one
+  std::unique_ptr<KnotWorkspace> own_;  // without a shared workspace only
 };
 
 class KnotModel : public ActionModel {
@@ -63,17 +104,20 @@ class KnotModel : public ActionModel {
   // Impulse knots: coefficient of restitution (0: perfectly inelastic touch-down).
   double restitution = 0.0;
 
+  // Also reserves the knot's slot in the shared workspace: call it after the costs are set up.
   std::unique_ptr<ActionData> createData() const override;
   void calc(ActionData& data, const Eigen::Ref<const Eigen::VectorXd>& x,
             const Eigen::Ref<const Eigen::VectorXd>& u) const override;
   void calcDiff(ActionData& data, const Eigen::Ref<const Eigen::VectorXd>& x,
                 const Eigen::Ref<const Eigen::VectorXd>& u) const override;
+  // The shared workspace's thread count (unlimited without one).
+  int maxThreads() const override;
 
  private:
-  bool dynamics(KnotActionData& d, Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
+  bool dynamics(KnotActionData& d, KnotWorkspace& w, const Eigen::Ref<const Eigen::VectorXd>& x,
                 const Eigen::Ref<const Eigen::VectorXd>& u, bool derivatives) const;
-  KnotContext context(KnotActionData& d, Data& data) const;
-  Data& workspace(KnotActionData& d) const;
+  KnotContext context(KnotActionData& d, KnotWorkspace& w) const;
+  KnotWorkspace& workspace(KnotActionData& d) const;
 
   const Model& model_;
   ContactSet contacts_;

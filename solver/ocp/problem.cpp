@@ -30,6 +30,8 @@ ShootingProblem::ShootingProblem(const Eigen::VectorXd& x0,
     running_data_.push_back(m->createData());
   }
   terminal_data_ = terminal_->createData();
+  max_threads_ = terminal_->maxThreads();
+  for (const auto& m : running_) max_threads_ = std::min(max_threads_, m->maxThreads());
 }
 
 bool ShootingProblem::setX0(const Eigen::Ref<const Eigen::VectorXd>& x0) {
@@ -64,7 +66,7 @@ double ShootingProblem::calcDiff(const std::vector<Eigen::VectorXd>& xs,
 double ShootingProblem::evaluate(const std::vector<Eigen::VectorXd>& xs,
                                  const std::vector<Eigen::VectorXd>& us, bool derivatives) {
   const int T = horizon();
-  forEachKnot(T + 1, threads_, [&](int k) {
+  forEachKnot(T + 1, std::min(threads_, max_threads_), [&](int k) {
     ActionModel& m = k < T ? *running_[k] : *terminal_;
     ActionData& d = k < T ? *running_data_[k] : *terminal_data_;
     const Eigen::VectorXd& u = k < T ? us[k] : empty_;

@@ -55,6 +55,8 @@ class ShootingProblem {
   // Moves knot k + n to k for all k (models with their data); the first n knots become the last n.
   void shift(int n);
 
+  // Threads for calc / calcDiff. Knots that share per-thread scratch (knot.hpp) bound it: the
+  // problem runs on at most the smallest ActionModel::maxThreads() of its knots.
   void setThreads(int threads) { threads_ = threads < 1 ? 1 : threads; }
   int threads() const { return threads_; }
 
@@ -70,6 +72,7 @@ class ShootingProblem {
   std::unique_ptr<ActionData> terminal_data_;
   int max_nu_ = 0;
   int threads_ = 1;
+  int max_threads_ = 1;  // the smallest maxThreads() of the knots
 };
 
 }  // namespace stride

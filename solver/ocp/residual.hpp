@@ -69,6 +69,10 @@ class Residual {
   int nu() const { return nu_; }
   Dependence dependence() const { return dependence_; }
 
+  // The data may depend on the residual's type and sizes only, not on its parameters or
+  // references, and calcDiff must rewrite every entry that addGaussNewton reads (constant entries
+  // set here, e.g. an identity, stay valid): the knots of a problem share one cost workspace per
+  // thread between residuals of the same type and dimension (knot.hpp, SharedWorkspace).
   virtual std::unique_ptr<ResidualData> createData() const {
     return std::make_unique<ResidualData>(dim_, 2 * nv_, nu_);
   }

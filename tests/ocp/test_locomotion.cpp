@@ -251,8 +251,7 @@ Measures measure(LocomotionProblem& loco, const Solver& solver) {
     if (k == T) break;
     const auto& knot = static_cast<const KnotModel&>(problem.knot(k));
     const auto& d = static_cast<const KnotActionData&>(problem.data(k));
-    const Eigen::VectorXd& f =
-        knot.mode() == KnotMode::Impulse ? d.knot.contact.impulses : d.knot.contact.lambda;
+    const Eigen::VectorXd& f = d.forces();  // λ, or the impulses Λ on an impulse knot
     int offset = 0;
     for (int c = 0; c < nc; ++c) {
       if (!knot.contacts().isActive(c)) continue;
