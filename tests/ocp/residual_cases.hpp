@@ -17,6 +17,7 @@
 #include "solver/ocp/action.hpp"
 #include "solver/ocp/residual_com.hpp"
 #include "solver/ocp/residual_contact.hpp"
+#include "solver/ocp/residual_cop.hpp"
 #include "solver/ocp/residual_frame.hpp"
 #include "solver/ocp/residual_state.hpp"
 
@@ -171,6 +172,12 @@ inline std::vector<Term> makeTerms(const RobotSetup& s, int nu, const Eigen::Vec
                  std::make_unique<FrictionConeResidual>(
                      m, nu, s.contacts, cm.name, 0.6, exp3(randomUniform(rng, 3, 0.3).eval()), 5.0),
                  FrictionConeResidual::activation(1e-2)});
+    if (cm.dim == 6)
+      t.push_back({"cop_" + cm.name,
+                   std::make_unique<CenterOfPressureResidual>(
+                       m, nu, s.contacts, cm.name, Eigen::Vector2d(0.1, 0.05),
+                       exp3(randomUniform(rng, 3, 0.3).eval())),
+                   CenterOfPressureResidual::activation(1e-2)});
   }
   return t;
 }

@@ -319,6 +319,52 @@ TEST(Residuals, FrictionConeZeroInsidePositiveOutside) {
   EXPECT_TRUE(d->r.isApprox(expected, 1e-14));
 }
 
+// The centre of pressure of a sole: zero cost while p = (−τ_y, τ_x) / f_z lies in the rectangle,
+// positive outside it; in a rotated surface frame, the same after rotating the wrench.
+TEST(Residuals, CenterOfPressureZeroInsidePositiveOutside) {
+  RobotSetup s = std::move(robotSetups()[1]);  // talos_reduced: two 6D soles
+  const Model& m = s.model;
+  const int nu = m.nv - 6;
+  const Eigen::Vector2d half(0.1, 0.05);
+  const Eigen::Matrix3d Rs = exp3(Eigen::Vector3d(0.1, -0.2, 0.7));
+  // The right sole (LOCAL forces) sits at rows 6..11 of λ.
+  CenterOfPressureResidual cop(m, nu, s.contacts, "right_sole_link", half, Rs);
+  const Activation act = CenterOfPressureResidual::activation(1.0);
+  auto d = cop.createData();
+  Data data(m);
+  Eigen::VectorXd lambda = Eigen::VectorXd::Zero(s.contacts.nc());
+  const Eigen::MatrixXd Gx = Eigen::MatrixXd::Zero(s.contacts.nc(), 2 * m.nv);
+  const Eigen::MatrixXd Gu = Eigen::MatrixXd::Zero(s.contacts.nc(), nu);
+  const KnotContext ctx{m, data, &s.contacts, &lambda, &Gx, &Gu};
+  const Eigen::VectorXd x = Eigen::VectorXd::Zero(m.nq + m.nv), u = Eigen::VectorXd::Zero(nu);
+  // The wrench of a normal force fz at the point p of the sole, plus a yaw moment (free).
+  auto cost = [&](double fz, const Eigen::Vector2d& p) {
+    const Eigen::Vector3d f(0.0, 0.0, fz), at(p.x(), p.y(), 0.0);
+    const Eigen::Vector3d tau = at.cross(f) + Eigen::Vector3d(0.0, 0.0, 3.0);
+    lambda.segment<3>(6) = Rs * f;
+    lambda.segment<3>(9) = Rs * tau;
+    cop.calc(*d, ctx, x, u);
+    return act.value(d->r);
+  };
+  std::mt19937 rng(18);
+  for (int k = 0; k < 100; ++k) {
+    const double fz = 1.0 + 300.0 * std::uniform_real_distribution<double>(0, 1)(rng);
+    const Eigen::Vector2d p = 0.99 * half.cwiseProduct(randomUniform(rng, 2, 1.0));
+    EXPECT_EQ(cost(fz, p), 0.0) << p.transpose();
+  }
+  EXPECT_GT(cost(100.0, Eigen::Vector2d(0.101, 0.0)), 0.0);
+  EXPECT_GT(cost(100.0, Eigen::Vector2d(-0.101, 0.0)), 0.0);
+  EXPECT_GT(cost(100.0, Eigen::Vector2d(0.0, 0.051)), 0.0);
+  EXPECT_GT(cost(100.0, Eigen::Vector2d(0.0, -0.051)), 0.0);
+  EXPECT_THROW(CenterOfPressureResidual(m, nu, s.contacts, "nope", half), std::invalid_argument);
+  EXPECT_THROW(CenterOfPressureResidual(m, nu, s.contacts, "left_sole_link", Eigen::Vector2d(0, 1)),
+               std::invalid_argument);
+  RobotSetup solo = std::move(robotSetups()[0]);
+  EXPECT_THROW(CenterOfPressureResidual(solo.model, 12, solo.contacts, "FL_FOOT", half),
+               std::invalid_argument)
+      << "a point contact has no centre of pressure";
+}
+
 // Lx and Lu of a cost mixing every residual and activation against finite differences of its
 // value; for residuals linear in the tangent (control, joint positions and rates) the
 // Gauss-Newton Hessian is exact and matches finite differences of the gradient.
