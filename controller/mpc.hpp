@@ -77,6 +77,7 @@ class Mpc {
 
   // After a tick: the solver and the problem, for tests and tools.
   const Solver* solver() const { return solver_.get(); }
+  Solver* solver() { return solver_.get(); }  // tools/bench times the solver's parts
   const LocomotionProblem* problem() const { return loco_.get(); }
   double planTime(std::int64_t utime) const { return (utime - plan_start_utime_) * 1e-6; }
 

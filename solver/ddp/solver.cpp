@@ -294,6 +294,7 @@ void Solver::eulerProducts(const ActionData& d, int nu) {
 }
 
 bool Solver::backwardPass() {
+  ++backward_passes_;
   backward_nonfinite_ = false;
   const bool box = kind_ == SolverKind::BoxFddp && has_bounds_;
   const ActionData& dT = problem_.terminalData();
@@ -414,6 +415,7 @@ void Solver::expectedChange() {
 }
 
 double Solver::forwardPass(double alpha) {
+  ++forward_passes_;
   const StateSpace& state = problem_.state();
   const bool box = kind_ == SolverKind::BoxFddp && has_bounds_;
   // x̂_0 = x_0 ⊕ α f_0, û = u + α k + K (x̂ ⊖ x), x̂⁺ = f(x̂, û) ⊕ (α - 1) f: the gaps shrink to
@@ -448,6 +450,7 @@ double Solver::forwardPass(double alpha) {
 
 SolveStatus Solver::solve(int max_iterations, Clock::time_point deadline) {
   iterations_ = 0;
+  backward_passes_ = forward_passes_ = 0;
   if (kind_ == SolverKind::Ddp && !rollout()) return fail(SolveStatus::NonFinite);
   if (!finiteTrajectory()) return fail(SolveStatus::NonFinite);
   for (int it = 0; it < max_iterations; ++it) {

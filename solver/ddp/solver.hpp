@@ -104,6 +104,10 @@ class Solver {
   double regularization() const { return reg_; }
   void setRegularization(double mu) { reg_ = mu; }
   int iterations() const { return iterations_; }
+  // Backward passes (regularization retries included) and nonlinear rollouts (line-search trials)
+  // of the last solve: what an iteration really cost.
+  int backwardPasses() const { return backward_passes_; }
+  int forwardPasses() const { return forward_passes_; }
   // Statistics of the iterations of the last solve (capacity fixed at construction).
   static constexpr int kMaxStats = 1000;
   const IterationStats* stats() const { return stats_.data(); }
@@ -161,6 +165,7 @@ class Solver {
   bool feasible_ = false;
   double cost_ = 0.0, gap_ = 0.0, d1_ = 0.0, d2_ = 0.0, reg_ = 0.0;
   int iterations_ = 0;
+  int backward_passes_ = 0, forward_passes_ = 0;
   std::vector<IterationStats> stats_;
 };
 

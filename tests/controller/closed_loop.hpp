@@ -18,7 +18,9 @@ struct Sample {
   int policy_status;
   double k_max;  // largest |K| entry of the policy's first knot
   double step, reg;
-  int feet_down;  // robot contacts carrying load (sim)
+  int feet_down;                                // robot contacts carrying load (sim)
+  int backward_passes = 0, forward_passes = 0;  // of the tick's solve
+  double solve_ms = 0.0;
 };
 
 struct Run {
@@ -70,6 +72,11 @@ inline Run run(const ControllerConfig& config, const sim::SimNodeOptions& sim_op
              0};
     for (int c = 0; c < static_cast<int>(robot.contacts.size()); ++c)
       s.feet_down += sim.simulator().normalForce(c) > 0.0;
+    if (const Solver* solver = mpc.mpc().solver()) {
+      s.backward_passes = solver->backwardPasses();
+      s.forward_passes = solver->forwardPasses();
+    }
+    s.solve_ms = mpc.mpc().status().solve_ms;
     if (each) each(s);
     r.samples.push_back(std::move(s));
     sim.advance(sim.stepsPerState());
