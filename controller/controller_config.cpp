@@ -109,7 +109,8 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
 
   const YAML::Node solver = root["solver"];
   r.onlyKeys(solver, "solver",
-             {"kind", "max_iterations", "initial_iterations", "deadline_fraction", "threads"});
+             {"kind", "max_iterations", "initial_iterations", "deadline_fraction", "threads",
+              "line_search_steps"});
   if (solver) {
     std::string kind = toString(c.solver);
     r.get(solver, "kind", "solver", kind);
@@ -125,7 +126,10 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(solver, "initial_iterations", "solver", c.initial_iterations);
     r.get(solver, "deadline_fraction", "solver", c.deadline_fraction);
     r.get(solver, "threads", "solver", c.threads);
+    r.get(solver, "line_search_steps", "solver", c.line_search_steps);
   }
+  if (c.line_search_steps < 1 || c.line_search_steps > 30)
+    r.fail("solver.line_search_steps", "must be in [1, 30]");
   if (c.max_iterations < 1) r.fail("solver.max_iterations", "must be at least 1");
   if (c.initial_iterations < 1) r.fail("solver.initial_iterations", "must be at least 1");
   if (!(c.deadline_fraction > 0.0 && c.deadline_fraction <= 1.0))

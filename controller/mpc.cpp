@@ -74,7 +74,9 @@ void Mpc::start(std::int64_t utime) {
   loco_ = std::make_unique<LocomotionProblem>(robot_.model, contacts_, plan_, x_nominal,
                                               config_.locomotion);
   loco_->problem().setThreads(config_.threads);
-  solver_ = std::make_unique<Solver>(loco_->problem(), config_.solver);
+  SolverOptions options;
+  options.line_search_steps = config_.line_search_steps;
+  solver_ = std::make_unique<Solver>(loco_->problem(), config_.solver, options);
   if (config_.solver == SolverKind::BoxFddp)
     solver_->setControlBounds(loco_->controlLower(), loco_->controlUpper());
   xs_warm_.assign(config_.locomotion.knots + 1, x_nominal);
@@ -118,6 +120,8 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, SolveStatus& result) {
   problem.setX0(x_);
   if (!loco_->update(t)) return false;
   startup_tick_ = first;
+  // The start-up solve may backtrack as far as it needs; the ticks' line search is bounded.
+  solver_->options.line_search_steps = first ? 10 : config_.line_search_steps;
   result = first ? solver_->solve(config_.initial_iterations)
                  : solver_->solve(config_.max_iterations, deadline);
   if (result == SolveStatus::NonFinite || result == SolveStatus::NoDescent) {
