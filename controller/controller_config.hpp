@@ -38,7 +38,7 @@ struct ControllerConfig {
   int initial_iterations = 100;    // the first solve, before the first policy
   double deadline_fraction = 0.8;  // of the tick period, for the solve
   int line_search_steps = 4;       // α = 1, 1/2, ...: with one iteration per tick, a step shorter
-                                   // than the last is not worth its rollouts (the next tick retries)
+                              // than the last is not worth its rollouts (the next tick retries)
   int threads = 1;
 
   std::string state_channel = "STRIDE_STATE", policy_channel = "STRIDE_POLICY",

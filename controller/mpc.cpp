@@ -38,6 +38,7 @@ Mpc::Mpc(const ControllerConfig& config) : config_(config), robot_(loadRobot(con
   status_.policy_status = kPolicyNone;
   status_.solver_status = -1;
   startup_tick_ = false;
+  deadline_cut_ = false;
 }
 
 Mpc::~Mpc() = default;
@@ -174,6 +175,7 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
     status_.step = n_stats > 0 ? solver_->stats()[n_stats - 1].step : 0.0;
     if (ok) {
       const bool cut = result == SolveStatus::Deadline;
+      deadline_cut_ = cut;
       if (cut) ++counters_.deadline_misses;
       writePolicy(state->utime, t, cut ? kPolicyDeadline : kPolicySolved);
       previous_ticks_ = 0;

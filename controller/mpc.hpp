@@ -70,8 +70,11 @@ class Mpc {
   const mpc_status_t& status() const { return status_; }
   mpc_status_t& status() { return status_; }
   const MpcCounters& counters() const { return counters_; }
-  // A tick that overran its period (counted by the loop that knows the period).
-  void countDeadlineMiss() { ++counters_.deadline_misses; }
+  // A tick that overran its period (counted by the loop that knows the period), unless its solve
+  // was already counted for reaching the deadline: one miss per tick at most.
+  void countOverrun() {
+    if (!deadline_cut_) ++counters_.deadline_misses;
+  }
   // The last tick made the first solve of a (re)built problem, which runs without deadline.
   bool startupTick() const { return startup_tick_; }
 
@@ -106,7 +109,8 @@ class Mpc {
   bool need_restart_ = false;  // the last solve failed: start again from standing
   bool have_solved_ = false;   // a solve of this problem succeeded (else the next is the first)
   bool startup_tick_ = false;
-  int previous_ticks_ = 0;  // consecutive ticks on the previous policy
+  bool deadline_cut_ = false;  // the last tick's solve stopped at its deadline
+  int previous_ticks_ = 0;     // consecutive ticks on the previous policy
 
   Eigen::VectorXd x_;  // the state as a solver vector
   policy_t policy_, previous_;

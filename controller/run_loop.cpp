@@ -80,7 +80,7 @@ void runRealTime(MpcNode& node, lcm::LCM& in, const RunOptions& options) {
     const timespec due = addNanos(next, period_ns);
     if (!before(now, due)) {
       // Overran into the next period: skip the ticks that are already late rather than bursting.
-      if (!node.mpc().startupTick()) node.mpc().countDeadlineMiss();
+      if (!node.mpc().startupTick()) node.mpc().countOverrun();
       while (!before(now, addNanos(next, period_ns))) next = addNanos(next, period_ns);
     }
     if (options.duration > 0.0 && secondsBetween(start, now) >= options.duration) return;

@@ -66,6 +66,25 @@ TEST(ClosedLoop, QuadrupedRecoversFromAPush) {
   EXPECT_LT(end.v.head<6>().norm(), 0.05) << "settled";
 }
 
+// Estimates as a real robot's: joint noise, a period of delay, 10% dropped. The robot still trots.
+TEST(ClosedLoop, QuadrupedTrotsWithNoiseDelayAndDrops) {
+  ControllerConfig config = loadControllerConfig(controller_cases::configPath("stride_quad"));
+  config.gait.stand = 0.5;
+  sim::SimNodeOptions o;
+  o.noise_q = 0.002;  // rad
+  o.noise_v = 0.02;   // rad/s, m/s
+  o.delay = 1;        // one controller period late
+  o.drop = 0.1;
+  o.seed = 7;
+  const closed_loop::Run r = closed_loop::run(config, o, 4.0);
+  ASSERT_FALSE(r.sim.fell);
+  EXPECT_GT(r.sim.states_dropped, 40);
+  double max_tilt = 0.0;
+  for (const closed_loop::Sample& s : r.samples) max_tilt = std::max(max_tilt, tiltDeg(s.q));
+  EXPECT_LT(max_tilt, 10.0);
+  EXPECT_EQ(r.sim.policies_rejected, 0);
+}
+
 }  // namespace
 }  // namespace stride
 
