@@ -94,10 +94,14 @@ int main(int argc, char** argv) {
       }
     }
   }
-  if (states == 0) {
-    std::fprintf(stderr, "stride-log-summary: no state on '%s' in '%s'\n", state_channel.c_str(),
-                 log_path.c_str());
+  if (states == 0 && statuses == 0) {
+    std::fprintf(stderr, "stride-log-summary: no state on '%s' and no status on '%s' in '%s'\n",
+                 state_channel.c_str(), status_channel.c_str(), log_path.c_str());
     return 1;
+  }
+  if (states == 0) {  // e.g. a replay's output: the controller's side only
+    z_min = z_max = 0.0;
+    std::printf("no state estimates in this log (a replay output?): controller side only\n");
   }
   const double distance = std::hypot(x1 - x0, y1 - y0);
   const double p50 = percentile(latency_ms, 0.5) * 1e3, p99 = percentile(latency_ms, 0.99) * 1e3;
