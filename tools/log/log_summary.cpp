@@ -107,11 +107,12 @@ int main(int argc, char** argv) {
   const double p50 = percentile(latency_ms, 0.5) * 1e3, p99 = percentile(latency_ms, 0.99) * 1e3;
   const double lmax =
       latency_ms.empty() ? 0.0 : *std::max_element(latency_ms.begin(), latency_ms.end()) * 1e3;
-  std::printf(
-      "session %.1f s: walked %.3f m (x %+.3f, y %+.3f), base height %.3f .. %.3f m, "
-      "max tilt %.1f deg, %s\n",
-      t_last - t_first, distance, x1 - x0, y1 - y0, z_min, z_max, max_tilt,
-      fell ? "FELL" : "did not fall");
+  if (states > 0)
+    std::printf(
+        "session %.1f s: walked %.3f m (x %+.3f, y %+.3f), base height %.3f .. %.3f m, "
+        "max tilt %.1f deg, %s\n",
+        t_last - t_first, distance, x1 - x0, y1 - y0, z_min, z_max, max_tilt,
+        fell ? "FELL" : "did not fall");
   std::printf(
       "controller: %ld ticks, tick latency p50 %.0f us, p99 %.0f us, max %.0f us, "
       "solve p50 %.0f us, %lld deadline misses, %lld fallbacks, %lld rejected messages\n",
