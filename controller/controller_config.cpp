@@ -154,7 +154,7 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   const YAML::Node weights = root["weights"];
   r.onlyKeys(weights, "weights",
              {"base_position", "base_orientation", "joint_position", "base_velocity",
-              "joint_velocity", "control", "swing", "friction", "cop", "terminal_state"});
+              "joint_velocity", "control", "swing", "friction", "cop", "com", "terminal_state"});
   LocomotionWeights& w = lo.weights;
   if (weights) {
     r.get(weights, "base_position", "weights", w.base_position);
@@ -166,14 +166,18 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(weights, "swing", "weights", w.swing);
     r.get(weights, "friction", "weights", w.friction);
     r.get(weights, "cop", "weights", w.cop);
+    r.get(weights, "com", "weights", w.com);
     r.get(weights, "terminal_state", "weights", w.terminal_state);
   }
-  for (double v : {w.base_position, w.base_orientation, w.joint_position, w.base_velocity,
-                   w.joint_velocity, w.control, w.swing, w.friction, w.cop, w.terminal_state})
+  for (double v :
+       {w.base_position, w.base_orientation, w.joint_position, w.base_velocity, w.joint_velocity,
+        w.control, w.swing, w.friction, w.cop, w.com, w.terminal_state})
     r.nonNegative(v, "weights");
 
   const YAML::Node gait = root["gait"];
-  r.onlyKeys(gait, "gait", {"type", "stand", "support", "swing", "duration", "step", "step_after"});
+  r.onlyKeys(gait, "gait",
+             {"type", "stand", "support", "swing", "duration", "step", "step_after", "footsteps",
+              "plan_file"});
   GaitConfig& g = c.gait;
   if (gait) {
     r.get(gait, "type", "gait", g.type);
@@ -188,6 +192,21 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
       if (s.size() != 3) r.fail("gait.step", "must be [x, y, z]");
       g.step = Eigen::Vector3d(s[0], s[1], s[2]);
     }
+    if (gait["footsteps"]) {
+      std::vector<std::vector<double>> list;
+      r.get(gait, "footsteps", "gait", list);
+      for (const auto& f : list) {
+        if (f.size() != 3 || !std::isfinite(f[0]) || !std::isfinite(f[1]) || !std::isfinite(f[2]))
+          r.fail("gait.footsteps", "each footstep must be [dx, dy, dz], finite");
+        g.footsteps.emplace_back(f[0], f[1], f[2]);
+      }
+    }
+    if (gait["plan_file"]) {
+      std::string file;
+      r.get(gait, "plan_file", "gait", file);
+      g.plan_file =
+          (std::filesystem::path(yaml_path).parent_path() / file).lexically_normal().string();
+    }
   }
   if (g.type != "stand" && g.type != "trot" && g.type != "walk")
     r.fail("gait.type", "'" + g.type + "' is not one of stand, trot, walk");
@@ -199,6 +218,7 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   if (!g.step.allFinite()) r.fail("gait.step", "must be finite");
   lo.step = g.step;
   lo.step_after = g.step_after;
+  lo.footsteps = g.footsteps;
 
   const YAML::Node lcm = root["lcm"];
   r.onlyKeys(lcm, "lcm", {"input", "output", "state", "policy", "status", "plan"});

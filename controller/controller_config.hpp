@@ -21,6 +21,8 @@ struct GaitConfig {
   double duration = 60.0;     // of the whole plan; then the robot stands
   Eigen::Vector3d step = Eigen::Vector3d::Zero();  // foot displacement per touch-down
   double step_after = 0.0;                         // steps in place until this plan time
+  std::vector<Eigen::Vector3d> footsteps;  // instead of `step`: successive touch-downs' moves
+  std::string plan_file;  // a contact plan file instead of the generated gait (resolved path)
 };
 
 enum class Fallback { Previous, Hold };

@@ -1,5 +1,7 @@
 #include "controller/gait.hpp"
 
+#include <yaml-cpp/yaml.h>
+
 #include <cmath>
 
 namespace stride {
@@ -53,6 +55,44 @@ ContactPlan makeGaitPlan(const GaitConfig& gait, const std::vector<ContactSpec>&
   }
   plan.phases.push_back({1.0, all});  // stand at the end (held past it)
   return plan;
+}
+
+ContactPlan loadContactPlan(const std::string& path) {
+  auto fail = [&](const std::string& what) -> ContactPlan {
+    throw ConfigError("contact plan '" + path + "': " + what);
+  };
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    return fail("file does not exist or cannot be read");
+  } catch (const YAML::Exception& e) {
+    return fail(std::string("malformed YAML: ") + e.what());
+  }
+  ContactPlan plan;
+  try {
+    if (!root.IsMap() || !root["phases"] || !root["phases"].IsSequence())
+      return fail("needs a 'phases' list");
+    plan.cyclic = root["cyclic"] ? root["cyclic"].as<bool>() : false;
+    int i = 0;
+    for (const auto& p : root["phases"]) {
+      if (!p["duration"] || !p["contacts"])
+        return fail("phase " + std::to_string(i) + " needs 'duration' and 'contacts'");
+      plan.phases.push_back(
+          {p["duration"].as<double>(), p["contacts"].as<std::vector<std::string>>()});
+      ++i;
+    }
+    plan.validateTiming();
+  } catch (const YAML::Exception& e) {
+    return fail(std::string("wrong type: ") + e.what());
+  } catch (const std::invalid_argument& e) {
+    return fail(e.what());
+  }
+  return plan;
+}
+
+ContactPlan makePlan(const GaitConfig& gait, const std::vector<ContactSpec>& contacts) {
+  return gait.plan_file.empty() ? makeGaitPlan(gait, contacts) : loadContactPlan(gait.plan_file);
 }
 
 }  // namespace stride

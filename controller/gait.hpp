@@ -18,4 +18,16 @@ namespace stride {
 // Throws ConfigError for a gait the robot's contacts cannot do (e.g. trot on two feet).
 ContactPlan makeGaitPlan(const GaitConfig& gait, const std::vector<ContactSpec>& contacts);
 
+// A contact plan from a YAML file (gait.plan_file):
+//   cyclic: false
+//   phases:
+//     - {duration: 1.0, contacts: [L_sole, R_sole]}
+//     - {duration: 0.6, contacts: [R_sole]}
+// Throws ConfigError naming the file and the phase. The contact names are checked against the
+// robot when the controller compiles the plan.
+ContactPlan loadContactPlan(const std::string& path);
+
+// The plan the configuration asks for: the file when gait.plan_file is set, else the gait.
+ContactPlan makePlan(const GaitConfig& gait, const std::vector<ContactSpec>& contacts);
+
 }  // namespace stride

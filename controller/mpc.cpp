@@ -30,8 +30,12 @@ Mpc::Mpc(const ControllerConfig& config) : config_(config), robot_(loadRobot(con
   for (const ContactSpec& c : robot_.contacts)
     contacts_.add(model, c.frame, c.dim, ReferenceFrame::LocalWorldAligned, 0.0, kContactDamping);
   config_.locomotion.sole_half_extents = kSoleMargin * robot_.sole_half_extents;
-  plan_ = makeGaitPlan(config_.gait, robot_.contacts);
-  plan_.validate(contacts_);
+  plan_ = makePlan(config_.gait, robot_.contacts);
+  try {
+    plan_.validate(contacts_);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(config_.path + ": the contact plan does not fit the robot: " + e.what());
+  }
   x_ = Eigen::VectorXd::Zero(nq_ + nv_);
   msg::shape(policy_, config_.policy_knots, nq_, nv_, nu_);
   msg::shape(previous_, config_.policy_knots, nq_, nv_, nu_);

@@ -9,8 +9,10 @@
 #include <stdexcept>
 
 #include "solver/contact/contact_dynamics.hpp"
+#include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/rnea.hpp"
+#include "solver/ocp/residual_com.hpp"
 #include "solver/ocp/residual_contact.hpp"
 #include "solver/ocp/residual_cop.hpp"
 #include "solver/ocp/residual_frame.hpp"
@@ -75,9 +77,30 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   Data data(model);
   framesForwardKinematics(model, data, q);
   for (int c = 0; c < nc; ++c) initial_feet_.push_back(data.oMf[contacts_[c].frame].p);
+  com_nominal_ = centerOfMass(model, data, q);
   const long g_fixed = schedule_.phaseAt(options.step_after);
   for (int c = 0; c < nc; ++c)
     fixed_steps_.push_back(options.step_after > 0.0 ? schedule_.touchdowns(c, g_fixed) : 0L);
+  if (!options.footsteps.empty()) {
+    // Hand out the footsteps to the touch-downs after step_after in plan order.
+    foot_offsets_.assign(nc, {Eigen::Vector3d::Zero()});
+    size_t next = 0;
+    const long last_phase = schedule_.cyclic() ? std::numeric_limits<long>::max()
+                                               : static_cast<long>(schedule_.phases()) - 1;
+    for (long g = 1; g <= last_phase && next < options.footsteps.size(); ++g) {
+      const bool moving = schedule_.phaseStart(g) > options.step_after + kPlanTimeEpsilon;
+      for (int c = 0; c < nc && next < options.footsteps.size(); ++c) {
+        if (!schedule_.closed(c, g) || schedule_.closed(c, g - 1)) continue;
+        const Eigen::Vector3d& before = foot_offsets_[c].back();
+        foot_offsets_[c].push_back(moving ? Eigen::Vector3d(before + options.footsteps[next++])
+                                          : before);
+      }
+      // Each pass of a cyclic plan takes at least one footstep, or never will.
+      if (g >
+          static_cast<long>(schedule_.phases()) * static_cast<long>(options.footsteps.size() + 1))
+        break;
+    }
+  }
 
   // Holding torques per phase: g(q) = Sᵀ u + Jcᵀ λ at rest; the base rows fix λ (minimum norm
   // among the forces that carry the weight), the joint rows then give u.
@@ -113,6 +136,9 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
                             Activation::weightedQuadratic(w_state));
     control_term_ = costs.add("control", std::make_unique<ControlResidual>(model, nu),
                               Activation::quadratic(nu), w.control);
+    if (w.com > 0.0)
+      com_term_ = costs.add("com", std::make_unique<ComPositionResidual>(model, nu, com_nominal_),
+                            Activation::quadratic(3), w.com);
     for (int c = 0; c < nc; ++c) {
       const std::string& name = contacts_[c].name;
       cone_term_[c] = costs.add("cone_" + name,
@@ -149,6 +175,15 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   update(0.0);
 }
 
+Eigen::Vector3d LocomotionProblem::foothold(int contact, long n) const {
+  if (foot_offsets_.empty())
+    return initial_feet_[contact] +
+           static_cast<double>(std::max(0L, n - fixed_steps_[contact])) * options_.step;
+  const auto& offsets = foot_offsets_[contact];
+  const size_t i = std::min(static_cast<size_t>(std::max(0L, n)), offsets.size() - 1);
+  return initial_feet_[contact] + offsets[i];
+}
+
 Eigen::Vector3d LocomotionProblem::footReference(int contact, double t) const {
   const long g = schedule_.phaseAt(t);
   if (schedule_.closed(contact, g)) return foothold(contact, schedule_.touchdowns(contact, g));
@@ -158,30 +193,37 @@ Eigen::Vector3d LocomotionProblem::footReference(int contact, double t) const {
   const double r = std::clamp((t - s.lift_off) / (s.touch_down - s.lift_off), 0.0, 1.0);
   // Forward on a cosine ramp (no horizontal speed at lift-off and touch-down, so landing needs no
   // tangential impulse), up and down on a sine arch.
-  if (s.footholds >= fixed_steps_[contact]) p += 0.5 * (1.0 - std::cos(kPi * r)) * options_.step;
+  p += 0.5 * (1.0 - std::cos(kPi * r)) * (foothold(contact, s.footholds + 1) - p);
   p.z() += options_.swing_height * std::sin(kPi * r);
   return p;
 }
 
-void LocomotionProblem::setStateReference(Eigen::VectorXd& x_ref, double t) const {
-  x_ref = x_nominal_;
+Eigen::Vector3d LocomotionProblem::bodyDisplacement(double t) const {
   const int nc = contacts_.size();
-  if (!model_.hasFreeFlyer() || nc == 0) return;
-  // The base follows the feet: its reference moves by their mean planned progress (in steps,
-  // fractional during a swing), so it is continuous through lift-offs and touch-downs.
+  Eigen::Vector3d d = Eigen::Vector3d::Zero();
+  if (nc == 0) return d;
+  // The mean planned progress of the feet, fractional during a swing (on the same ramp as the
+  // foot), so it is continuous through lift-offs and touch-downs.
   const long g = schedule_.phaseAt(t);
-  double steps = 0.0;
   for (int c = 0; c < nc; ++c) {
     if (schedule_.closed(c, g)) {
-      steps += static_cast<double>(movingSteps(c, schedule_.touchdowns(c, g)));
+      d += foothold(c, schedule_.touchdowns(c, g)) - initial_feet_[c];
       continue;
     }
     const ContactSchedule::Swing s = schedule_.swing(c, g);
-    steps += static_cast<double>(movingSteps(c, s.footholds));
-    if (std::isfinite(s.touch_down) && s.footholds >= fixed_steps_[c])
-      steps += std::clamp((t - s.lift_off) / (s.touch_down - s.lift_off), 0.0, 1.0);
+    const Eigen::Vector3d from = foothold(c, s.footholds);
+    d += from - initial_feet_[c];
+    if (std::isfinite(s.touch_down))
+      d += std::clamp((t - s.lift_off) / (s.touch_down - s.lift_off), 0.0, 1.0) *
+           (foothold(c, s.footholds + 1) - from);
   }
-  x_ref.head<3>() += (steps / nc) * options_.step;
+  return d / nc;
+}
+
+void LocomotionProblem::setStateReference(Eigen::VectorXd& x_ref, double t) const {
+  x_ref = x_nominal_;
+  // The base follows the feet.
+  if (model_.hasFreeFlyer()) x_ref.head<3>() += bodyDisplacement(t);
 }
 
 bool LocomotionProblem::update(double t0) {
@@ -228,8 +270,13 @@ bool LocomotionProblem::update(double t0) {
     }
     static_cast<ControlResidual&>(*costs[control_term_].residual)
         .setReference(u_hold_[schedule_.localPhase(g)]);
-    setStateReference(x_ref_, t);
+    const Eigen::Vector3d moved = bodyDisplacement(t);
+    x_ref_ = x_nominal_;
+    if (model_.hasFreeFlyer()) x_ref_.head<3>() += moved;
     static_cast<StateResidual&>(*costs[state_term_].residual).setReference(x_ref_);
+    if (com_term_ >= 0)
+      static_cast<ComPositionResidual&>(*costs[com_term_].residual)
+          .setReference(com_nominal_ + moved);
     after_impulse = impulse;
     if (!impulse) t += dt;
   }

@@ -10,6 +10,8 @@
 //   "cone_<c>"     friction cone of contact c, on while c is closed;
 //   "cop_<c>"      centre of pressure of surface contact c inside its sole (options.
 //                  sole_half_extents), on while c is closed;
+//   "com"          the centre of mass on its nominal position moved like the base (options.
+//                  weights.com > 0);
 //   "swing_<c>"    position of foot c on its swing arc, on while c is open and at its touch-down
 //                  knot (reference: the new foothold, so the foot lands where planned).
 // The terminal knot has "state" only. A touch-down inserts an impulse knot (options.impulses) with
@@ -44,6 +46,7 @@ struct LocomotionWeights {
   double swing = 1e4;            // per axis, on the foot position error [m]
   double friction = 1e2;         // on the cone rows' violation [N]
   double cop = 1e2;              // on the centre-of-pressure rows' violation [N m] (6D contacts)
+  double com = 0.0;              // per axis, on the CoM position error [m] (0: no such term)
   double terminal_state = 10.0;  // the terminal state weights are the running ones times this
 };
 
@@ -57,6 +60,10 @@ struct LocomotionOptions {
   // Touch-downs up to this plan time land where the foot lifted off (stepping in place); later
   // ones move the foot by `step`. So one plan can stand, trot in place, then walk.
   double step_after = 0.0;
+  // A footstep list instead of a constant step: the displacements of the successive touch-downs
+  // after step_after, in the plan's order (touch-downs at one instant in contact order); later
+  // touch-downs land in place. Empty: `step` for every touch-down.
+  std::vector<Eigen::Vector3d> footsteps;
   LocomotionWeights weights;
   bool impulses = true;  // impulse knots at touch-downs (else contact knots throughout)
   // Surface (6D) contacts: the centre of pressure stays in this rectangle around the contact
@@ -92,11 +99,7 @@ class LocomotionProblem {
   // Foot c's target at time t: its foothold while closed, its swing arc while open.
   Eigen::Vector3d footReference(int contact, double t) const;
   // Foot c's foothold after n touch-downs (those up to options.step_after do not move it).
-  Eigen::Vector3d foothold(int contact, long n) const {
-    return initial_feet_[contact] + static_cast<double>(movingSteps(contact, n)) * options_.step;
-  }
-  // How many of foot c's first n touch-downs moved it.
-  long movingSteps(int contact, long n) const { return std::max(0L, n - fixed_steps_[contact]); }
+  Eigen::Vector3d foothold(int contact, long n) const;
   // The gravity-compensating control of x_nominal in (local) phase i of the plan.
   const Eigen::VectorXd& holdingControl(int phase) const { return u_hold_[phase]; }
   // A standing warm start: x_nominal everywhere, each knot's holding control (after update).
@@ -115,7 +118,13 @@ class LocomotionProblem {
   LocomotionOptions options_;
   std::unique_ptr<ShootingProblem> problem_;
   std::vector<Eigen::Vector3d> initial_feet_;
-  std::vector<long> fixed_steps_;        // per contact: touch-downs up to options.step_after
+  std::vector<long> fixed_steps_;  // per contact: touch-downs up to options.step_after
+  // With a footstep list: foot c's displacement after n touch-downs, n = 0.. (held past the end).
+  std::vector<std::vector<Eigen::Vector3d>> foot_offsets_;
+  int com_term_ = -1;
+  Eigen::Vector3d com_nominal_ = Eigen::Vector3d::Zero();
+  // The base's (and CoM's) displacement at time t: the feet's mean planned progress.
+  Eigen::Vector3d bodyDisplacement(double t) const;
   std::vector<Eigen::VectorXd> u_hold_;  // per local phase
   Eigen::VectorXd u_lower_, u_upper_;
   // Term indices, the same in every running knot (all are built alike).

@@ -119,6 +119,71 @@ TEST(Gait, StepsInPlaceUntilStepAfter) {
   EXPECT_GT(loco.footReference(0, 1.3).z(), start.z() + 0.01);
 }
 
+// A footstep list: each touch-down after step_after takes the next displacement, in plan order;
+// the swing arc goes from one foothold to the next; after the list, the feet stay.
+TEST(Gait, FootstepList) {
+  const Robot biped =
+      loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml");
+  ContactSet contacts;
+  for (const auto& c : biped.contacts)
+    contacts.add(biped.model, c.frame, 6, ReferenceFrame::LocalWorldAligned);
+  GaitConfig g;
+  g.type = "walk";
+  g.stand = 1.0;
+  g.support = 0.2;
+  g.swing = 0.6;
+  g.duration = 10.0;
+  LocomotionOptions o;
+  o.knots = 10;
+  o.dt = 0.02;
+  o.step_after = 1.0;
+  o.footsteps = {Eigen::Vector3d(0.1, 0.0, 0.0), Eigen::Vector3d(0.2, 0.05, 0.0),
+                 Eigen::Vector3d(0.1, -0.05, 0.0)};
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(biped.model.nq + biped.model.nv);
+  x.head(biped.model.nq) = biped.default_q;
+  LocomotionProblem loco(biped.model, contacts, makeGaitPlan(g, biped.contacts), x, o);
+  const Eigen::Vector3d L0 = loco.footReference(0, 0.0), R0 = loco.footReference(1, 0.0);
+  // Left swings 1.2-1.8 s, right 2.0-2.6 s, left 2.8-3.4 s, right 3.6-4.2 s (in place).
+  EXPECT_TRUE((loco.footReference(0, 1.9) - L0).isApprox(Eigen::Vector3d(0.1, 0, 0), 1e-12));
+  EXPECT_TRUE((loco.footReference(1, 2.7) - R0).isApprox(Eigen::Vector3d(0.2, 0.05, 0), 1e-12));
+  EXPECT_TRUE((loco.footReference(0, 3.5) - L0).isApprox(Eigen::Vector3d(0.2, -0.05, 0), 1e-12));
+  EXPECT_TRUE((loco.footReference(1, 5.0) - R0).isApprox(Eigen::Vector3d(0.2, 0.05, 0), 1e-12));
+  // Mid-swing: half way on the ramp, at the arc's top.
+  const Eigen::Vector3d mid = loco.footReference(1, 2.3) - R0;
+  EXPECT_NEAR(mid.x(), 0.1, 1e-12);
+  EXPECT_NEAR(mid.y(), 0.025, 1e-12);
+  EXPECT_NEAR(mid.z(), o.swing_height, 1e-12);
+}
+
+TEST(Gait, PlanFile) {
+  const std::string path = std::string(STRIDE_CONFIG_DIR) + "/plans/quad_trot_then_stand.yaml";
+  const ContactPlan plan = loadContactPlan(path);
+  EXPECT_EQ(plan.phases.size(), 14u);
+  EXPECT_FALSE(plan.isClosed("FL_foot", 1.15));
+  EXPECT_TRUE(plan.isClosed("FL_foot", 10.0));
+  const std::string bad = testing::TempDir() + "/stride_bad_plan.yaml";
+  std::ofstream(bad) << "phases:\n  - {duration: -1, contacts: [FL_foot]}\n";
+  EXPECT_THROW(loadContactPlan(bad), ConfigError);
+  std::ofstream(bad) << "phases:\n  - {contacts: [FL_foot]}\n";
+  try {
+    loadContactPlan(bad);
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("phase 0"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(loadContactPlan("/nonexistent/plan.yaml"), ConfigError);
+  // The controller takes it from its YAML, and refuses one that names feet the robot lacks.
+  ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  config.gait.plan_file = path;
+  Mpc mpc(config);
+  robot_state_t s = standingState(mpc.robot(), 0);
+  ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+  EXPECT_EQ(mpc.problem()->schedule().phases(), 14);
+  std::ofstream(bad) << "phases:\n  - {duration: 1, contacts: [L_sole]}\n";
+  config.gait.plan_file = bad;
+  EXPECT_THROW(Mpc{config}, ConfigError);
+}
+
 // The controller around a robot that stands still: the first tick solves to convergence and
 // publishes; the next ones shift and re-solve within their budget.
 TEST(Mpc, StandingTicks) {
