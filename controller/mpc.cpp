@@ -41,8 +41,6 @@ Mpc::Mpc(const ControllerConfig& config) : config_(config), robot_(loadRobot(con
   msg::shape(previous_, config_.policy_knots, nq_, nv_, nu_);
   status_.policy_status = kPolicyNone;
   status_.solver_status = -1;
-  startup_tick_ = false;
-  deadline_cut_ = false;
 }
 
 Mpc::~Mpc() = default;
@@ -146,6 +144,7 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   status_.iterations = 0;
   status_.solver_status = -1;
   startup_tick_ = false;
+  deadline_cut_ = false;
 
   if (state == nullptr) {  // nothing to control yet: publish no policy
     ++counters_.ticks_without_state;

@@ -11,6 +11,7 @@ constexpr int kMaxContactFlags = 16;
 constexpr int kMaxPlanPhases = 100000;
 constexpr int kQueueCapacity = 1000;  // > 1 s of a 1 kHz estimator between two drains
 constexpr long kLatencyCapacity = 1L << 20;
+constexpr std::int64_t kMaxStampLeadUs = 1000000;  // stamps may run 1 s ahead of the arrivals
 }  // namespace
 
 MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time)
@@ -51,12 +52,18 @@ void MpcNode::onState(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   if (why == msg::Reject::None) why = msg::checkState(incoming_, floating_);
   if (why == msg::Reject::None && have_state_ && incoming_.utime <= newest_.utime)
     why = msg::Reject::OutOfOrder;
+  // A stamp far ahead of the time that really passed (a corrupt stamp, a clock jump) would make
+  // every later estimate "out of order": refuse it instead of locking the controller out.
+  const std::int64_t now_us = time_ == TimeSource::RealTime ? monotonicMicros() : 0;
+  if (why == msg::Reject::None && have_state_ && time_ == TimeSource::RealTime &&
+      incoming_.utime - newest_.utime > (now_us - newest_arrival_us_) + kMaxStampLeadUs)
+    why = msg::Reject::BadField;
   if (why != msg::Reject::None) {
     reject(why);
     return;
   }
   newest_ = incoming_;  // same shapes: element copies only
-  newest_arrival_us_ = time_ == TimeSource::RealTime ? monotonicMicros() : newest_.utime;
+  newest_arrival_us_ = time_ == TimeSource::RealTime ? now_us : newest_.utime;
   have_state_ = true;
   new_state_ = true;
   ++accepted_;

@@ -209,6 +209,27 @@ TEST_F(NodeInput, RejectsAndCountsMalformedStates) {
   EXPECT_EQ(out_.statuses, 1);
 }
 
+// Real time: a stamp that jumps far ahead of the time that passed is refused (else every later,
+// correct estimate would be "out of order" and the controller locked out).
+TEST(NodeRealTime, StampJumpingAheadIsRejected) {
+  const ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  Recorder out;
+  MpcNode node(config, out, TimeSource::RealTime);
+  auto feed = [&](std::int64_t utime) {
+    robot_state_t m = standingState(node.mpc().robot(), utime);
+    std::vector<unsigned char> b(m.getEncodedSize());
+    m.encode(b.data(), 0, static_cast<int>(b.size()));
+    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
+    node.onState(&rbuf, "STRIDE_STATE");
+  };
+  feed(1000000);
+  feed(1001000);
+  feed(1000000000000);  // 11 days later, a few microseconds after the last one arrived
+  EXPECT_EQ(node.rejected(msg::Reject::BadField), 1);
+  feed(1002000);
+  EXPECT_EQ(node.acceptedStates(), 3);
+}
+
 TEST_F(NodeInput, NoStateNoPolicy) {
   node_.tick(Mpc::Clock::time_point::max());
   node_.tick(Mpc::Clock::time_point::max());
