@@ -66,6 +66,9 @@ int main(int argc, char** argv) {
   app.add_option("--seed", node_options.seed, "noise and drop seed");
   app.add_option("--push", pushes, "a push on the base: start:duration:fx,fy,fz (repeatable)");
   app.add_option("--lockstep-timeout", timeout, "lock-step: wall seconds to wait for an answer");
+  app.add_option("--hold-kp", node_options.hold_kp,
+                 "joint PD holding the default posture until the first policy [Nm/rad]");
+  app.add_option("--hold-kd", node_options.hold_kd, "its damping [Nm s/rad]");
   app.add_option("--summary", summary, "write the run's summary as JSON here");
   CLI11_PARSE(app, argc, argv);
 

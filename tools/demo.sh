@@ -79,10 +79,12 @@ if [ "$robot" = quad ]; then
   config="$root/config/controller/stride_quad.yaml"
   robot_yaml="$root/config/robots/stride_quad/stride_quad.yaml"
   rate=200
+  hold=(--hold-kp 5 --hold-kd 0.1)  # the sim's PD until the first policy arrives
 else
   config="$root/config/controller/stride_humanoid.yaml"
   robot_yaml="$root/config/robots/stride_humanoid/stride_humanoid.yaml"
   rate=50
+  hold=(--hold-kp 300 --hold-kd 10)
 fi
 log="$out/session.lcmlog"
 rm -f "$log"
@@ -106,7 +108,7 @@ if [ "$spy" = 1 ]; then
   sleep 3  # the JVM starts slowly
 fi
 mpc_args=(--config "$config" --summary "$out/mpc.json")
-sim_args=(--robot "$robot_yaml" --duration "$duration" --summary "$out/sim.json")
+sim_args=(--robot "$robot_yaml" --duration "$duration" --summary "$out/sim.json" "${hold[@]}")
 if [ "$mode" = lockstep ]; then
   mpc_args+=(--lockstep)
   sim_args+=(--lockstep --rate "$rate")
@@ -120,7 +122,7 @@ pids+=($mpc_pid)
 sleep 0.5  # the controller subscribes before the first estimate
 echo "demo: $robot, $mode, ${duration} s of robot time; logging to $log"
 timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1
-sleep 0.2
+# Stop the controller at once: from now on its states go stale and it would (rightly) fall back.
 kill -TERM "$mpc_pid" 2>/dev/null || true
 wait "$mpc_pid" 2>/dev/null || true
 sleep 0.2
