@@ -148,21 +148,34 @@ AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::Vecto
   return m;
 }
 
-std::vector<Eigen::VectorXd> replayControls(const Model& model, const Eigen::VectorXd& x0,
-                                            const std::vector<Eigen::VectorXd>& us, double dt,
-                                            int substeps) {
+FineCheck checkWithFinerSteps(const Model& model, const std::vector<Eigen::VectorXd>& xs,
+                              const std::vector<Eigen::VectorXd>& us, double dt, int substeps,
+                              const std::string& base_frame) {
   const KnotModel knot(model, ContactSet(), dt / substeps);
-  auto data = knot.createData();
-  std::vector<Eigen::VectorXd> xs{x0};
-  Eigen::VectorXd x = x0;
-  for (const auto& u : us) {
+  auto kd = knot.createData();
+  Data data(model);
+  const int base = model.getFrameId(base_frame);
+  auto momentum = [&](const Eigen::VectorXd& x) {
+    return Eigen::Vector3d(
+        computeCentroidalMomentum(model, data, x.head(model.nq), x.tail(model.nv)).tail<3>());
+  };
+  auto rotation = [&](const Eigen::VectorXd& x) {
+    forwardKinematics(model, data, x.head(model.nq));
+    return Eigen::Matrix3d(updateFramePlacement(model, data, base).R);
+  };
+  FineCheck c;
+  for (std::size_t k = 0; k < us.size(); ++k) {
+    Eigen::VectorXd x = xs[k];
     for (int s = 0; s < substeps; ++s) {
-      knot.calc(*data, x, u);
-      x = data->x_next;
+      knot.calc(*kd, x, us[k]);
+      x = kd->x_next;
     }
-    xs.push_back(x);
+    const Eigen::Vector3d h0 = momentum(xs[k]);
+    c.max_dh_plan = std::max(c.max_dh_plan, (momentum(xs[k + 1]) - h0).norm());
+    c.max_dh_fine = std::max(c.max_dh_fine, (momentum(x) - h0).norm());
+    c.pitch += log3(rotation(x) * rotation(xs[k]).transpose()).y();
   }
-  return xs;
+  return c;
 }
 
 }  // namespace stride

@@ -86,10 +86,18 @@ struct AstronautMotion {
 AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::VectorXd>& xs, double dt,
                               const std::string& base_frame = "base_link");
 
-// The controls re-integrated from x0 with the knot dynamics at dt / substeps (torques held over
-// each knot): a finer semi-implicit Euler, to check the plan's pitch and its momentum drift.
-std::vector<Eigen::VectorXd> replayControls(const Model& model, const Eigen::VectorXd& x0,
-                                            const std::vector<Eigen::VectorXd>& us, double dt,
-                                            int substeps);
+// The plan checked against a finer integrator, knot by knot: each knot's torque applied from the
+// planned state xs[k] over dt in `substeps` semi-implicit Euler steps. An open-loop replay of the
+// whole horizon is not a fair check over tens of seconds (the free-floating chain is unstable
+// without feedback, and any integrator difference grows); the knot-wise one measures what the
+// discretization adds per knot: the pitch it would accumulate and the momentum it creates.
+struct FineCheck {
+  double pitch = 0.0;        // Σ pitch increments of the fine steps, rad
+  double max_dh_plan = 0.0;  // max over knots of |h(xs[k+1]) - h(xs[k])| (the knots' dynamics)
+  double max_dh_fine = 0.0;  // max over knots of |h(fine step from xs[k]) - h(xs[k])|
+};
+FineCheck checkWithFinerSteps(const Model& model, const std::vector<Eigen::VectorXd>& xs,
+                              const std::vector<Eigen::VectorXd>& us, double dt, int substeps,
+                              const std::string& base_frame = "base_link");
 
 }  // namespace stride

@@ -22,8 +22,14 @@ if [ ! -x "$bin" ]; then
 fi
 mkdir -p "$out"
 "$bin" --out "$out" "${args[@]}"
-if python3 -c "import matplotlib" 2>/dev/null; then
-  python3 "$root/tools/paper/plot_astronaut.py" "$out"
+# Debian's python3-matplotlib lives under /usr/bin/python3; a python3 earlier on PATH (pyenv,
+# a venv) may not see it.
+py=""
+for candidate in python3 /usr/bin/python3; do
+  if "$candidate" -c "import matplotlib" 2>/dev/null; then py="$candidate"; break; fi
+done
+if [ -n "$py" ]; then
+  "$py" "$root/tools/paper/plot_astronaut.py" "$out"
 else
   echo "astronaut.sh: python3-matplotlib missing (tools/install-deps.sh installs it): no plots" >&2
 fi

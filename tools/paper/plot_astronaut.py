@@ -51,12 +51,11 @@ def main(out):
     # Base pitch (unwrapped) with the waypoint goals, and the angular momentum.
     fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
     ax = axes[0]
-    ax.plot(t, traj["pitch_deg"], label="plan (knot dynamics)", lw=1.5)
-    ax.plot(t, traj["pitch_replay_deg"], "--", label=f"re-integrated at dt/{summary['replay_substeps']}", lw=1)
+    ax.plot(t, traj["pitch_deg"], label="plan", lw=1.5)
     ax.plot([w["t"] for w in summary["waypoints"]], [w["goal_deg"] for w in summary["waypoints"]],
             "kx", ms=8, label="orientation goals")
     ax.set_ylabel("base pitch [deg]")
-    ax.set_yticks(range(0, 361 + 90, 90))
+    ax.set_yticks(range(-90, 361 + 90, 90))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     ax = axes[1]
