@@ -24,9 +24,9 @@ namespace stride {
 
 struct AstronautOptions {
   double dt = 0.02;
-  int knots = 150;               // T running knots: a horizon of T·dt
+  int knots = 4500;              // T running knots: 90 s (a leg cycle turns the base ~10°: README)
   double turn_deg = 360.0;       // total rotation about +y
-  int waypoints = 4;             // orientation goals at t = i·T/n, i = 1..n (the n-th is terminal)
+  int waypoints = 36;            // orientation goals at t = i·T/n, i = 1..n (the n-th is terminal)
   int waypoint_width = 1;        // knots on each side of a waypoint where its goal is also on
   double w_orientation = 100.0;  // per waypoint knot
   double w_posture = 1e-2;       // joint angles towards the default posture

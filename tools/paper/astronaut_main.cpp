@@ -4,6 +4,7 @@
 // tools/paper/plot_astronaut.py.
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -49,7 +50,7 @@ int main(int argc, char** argv) {
       std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml";
   std::string out;
   std::string solver_name = "ddp";
-  int iterations = 500, substeps = 10;
+  int iterations = 500, substeps = 10;  // defaults: the README run
   bool verbose = false;
   app.add_option("--robot", robot_yaml, "robot YAML")->check(CLI::ExistingFile);
   app.add_option("--out", out, "output folder (CSV, JSON); nothing written without it");
@@ -91,6 +92,7 @@ int main(int argc, char** argv) {
                .transpose() *
            Eigen::Quaterniond(solver.xs().back().segment<4>(3)).toRotationMatrix())
           .norm();
+  const double max_pitch = *std::max_element(m.pitch.begin(), m.pitch.end());
   double max_tau = 0.0;
   for (const auto& u : solver.us()) max_tau = std::max(max_tau, u.cwiseAbs().maxCoeff());
 
@@ -99,6 +101,7 @@ int main(int argc, char** argv) {
       o.knots, o.dt, o.waypoints, o.turn_deg);
   std::printf("  %-44s %12s\n", "quantity", "value");
   std::printf("  %-44s %12.1f\n", "base pitch at the end (unwrapped), deg", m.pitch.back() * kDeg);
+  std::printf("  %-44s %12.1f\n", "largest base pitch reached, deg", max_pitch * kDeg);
   for (const auto& [k, goal] : astro.waypoints())
     std::printf("  %-44s %12.1f\n",
                 ("  pitch at t = " + std::to_string(k * o.dt).substr(0, 4) + " s (goal " +
@@ -189,6 +192,7 @@ int main(int argc, char** argv) {
   sum.precision(9);
   sum << "{\n"
       << "  \"base_pitch_deg\": " << m.pitch.back() * kDeg << ",\n"
+      << "  \"max_base_pitch_deg\": " << max_pitch * kDeg << ",\n"
       << "  \"max_angular_momentum_norm\": " << m.max_h << ",\n"
       << "  \"max_leg_angular_momentum_norm\": " << m.max_h_leg << ",\n"
       << "  \"iterations\": " << solver.iterations() << ",\n"
