@@ -1,0 +1,105 @@
+#!/usr/bin/env python3
+"""Plots of the astronaut reorientation (paper §V-B, Fig. 5-6) from stride-paper-astronaut's output.
+
+Usage: plot_astronaut.py DIR   (reads DIR/{trajectory,frames}.csv, summary.json, skeleton.json;
+writes DIR/astronaut_{torques,pitch,snapshots}.png). matplotlib only (Debian python3-matplotlib).
+"""
+import csv
+import json
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    cols = {}
+    for key in rows[0]:
+        cols[key] = [float(r[key]) if r[key] != "" else float("nan") for r in rows]
+    return cols
+
+
+def main(out):
+    traj = read_csv(f"{out}/trajectory.csv")
+    frames = read_csv(f"{out}/frames.csv")
+    with open(f"{out}/summary.json") as f:
+        summary = json.load(f)
+    with open(f"{out}/skeleton.json") as f:
+        segments = json.load(f)["segments"]
+    t = traj["t"]
+    taus = [k for k in traj if k.startswith("tau_")]
+
+    # Fig. 6: joint torques (a kick, small corrections, braking). Torques are held over a knot.
+    fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
+    for ax, kind in zip(axes, ("hip_pitch", "knee")):
+        for k in taus:
+            if k.endswith(kind):
+                ax.step(t, traj[k], where="post", label=k[4:], lw=1.2)
+        ax.set_ylabel(f"{kind} torque [Nm]")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("time [s]")
+    fig.suptitle("Astronaut reorientation: joint torques (paper Fig. 6)")
+    fig.tight_layout()
+    fig.savefig(f"{out}/astronaut_torques.png", dpi=90)
+    plt.close(fig)
+
+    # Base pitch (unwrapped) with the waypoint goals, and the angular momentum.
+    fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+    ax = axes[0]
+    ax.plot(t, traj["pitch_deg"], label="plan", lw=1.5)
+    ax.plot([w["t"] for w in summary["waypoints"]], [w["goal_deg"] for w in summary["waypoints"]],
+            "kx", ms=8, label="orientation goals")
+    ax.set_ylabel("base pitch [deg]")
+    ax.set_yticks(range(-90, 361 + 90, 90))
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax = axes[1]
+    ax.plot(t, traj["h_left_y"], label="left leg, y", lw=1)
+    ax.plot(t, traj["h_right_y"], label="right leg, y", lw=1)
+    ax.plot(t, traj["h_norm"], "k", label="whole body |h|", lw=1.5)
+    ax.set_ylabel("angular momentum\nabout the CoM [kg m²/s]")
+    ax.set_xlabel("time [s]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.suptitle(f"Base pitch {summary['base_pitch_deg']:.0f}°, max |h| {summary['max_angular_momentum_norm']:.1e}")
+    fig.tight_layout()
+    fig.savefig(f"{out}/astronaut_pitch.png", dpi=90)
+    plt.close(fig)
+
+    # Fig. 5: stick figures in the sagittal plane (x forward, z up), side by side in time.
+    n = 12
+    count = len(frames["t"])
+    picks = [round(i * (count - 1) / (n - 1)) for i in range(n)]
+    spacing = 1.4
+    fig, ax = plt.subplots(figsize=(13, 2.6))
+    for i, k in enumerate(picks):
+        dx = i * spacing
+        for a, b in segments:
+            color = "tab:red" if a.startswith("R_") or b.startswith("R_") else "tab:blue"
+            if a in ("head", "chest") or b == "chest":
+                color = "k"
+            ax.plot([frames[f"{a}_x"][k] + dx, frames[f"{b}_x"][k] + dx],
+                    [frames[f"{a}_z"][k], frames[f"{b}_z"][k]], color=color, lw=2,
+                    solid_capstyle="round")
+        ax.plot(frames["head_x"][k] + dx, frames["head_z"][k], "ko", ms=5)
+        ax.text(dx, -1.05, f"{frames['t'][k]:.2f} s\n{traj['pitch_deg'][k]:.0f}°", ha="center",
+                fontsize=7)
+    ax.set_aspect("equal")
+    ax.set_ylim(-1.2, 1.0)
+    ax.axis("off")
+    ax.set_title("Astronaut reorientation, sagittal view (blue: left leg, red: right leg)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(f"{out}/astronaut_snapshots.png", dpi=80)
+    plt.close(fig)
+    print(f"  plots: {out}/astronaut_torques.png, astronaut_pitch.png, astronaut_snapshots.png")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    main(sys.argv[1])
