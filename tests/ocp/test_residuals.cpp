@@ -198,9 +198,10 @@ TEST(Residuals, GaussNewtonOverridesMatchDenseDefault) {
       EXPECT_LT(relErr(a.Lxx, b.Lxx), 1e-12) << what;
       EXPECT_LT(relErr(a.Lxu, b.Lxu), 1e-12) << what;
       EXPECT_LT(relErr(a.Luu, b.Luu), 1e-12) << what;
-      if (t.name == "state" || t.name == "control" || t.name == "limits") ++overrides;
+      if (t.name == "state" || t.name == "control" || t.name == "limits" || t.name == "translation")
+        ++overrides;
     }
-    EXPECT_EQ(overrides, 3);
+    EXPECT_EQ(overrides, 4);
   }
 }
 
