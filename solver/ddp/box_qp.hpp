@@ -28,6 +28,9 @@ class BoxQP {
     L.solveInPlace(X);
     L.adjoint().solveInPlace(X);
   }
+  // The Cholesky factor of H restricted to the free set (lower triangle of the top-left
+  // nfree() x nfree() block), e.g. to form its inverse for many right-hand sides.
+  const Eigen::MatrixXd& freeFactor() const { return Hff_; }
   int iterations() const { return iterations_; }
 
  private:

@@ -149,7 +149,7 @@ class Solver {
   Eigen::MatrixXd Vxx_next_, Vxx_;
   // Riccati workspaces of the current knot (the pass is serial: one set for all knots).
   Eigen::VectorXd Qx_, Qu_;
-  Eigen::MatrixXd Qxx_, Qxu_, Quu_, Quu_inv_, VFx_, VFu_, W_;
+  Eigen::MatrixXd Qxx_, Qxu_, Quu_, Quu_inv_, VFx_, VFu_, W_, Wf_;
   Eigen::VectorXd w_;
   Eigen::MatrixXd VB_, BtY_, EtY_;  // Euler-structure products
   Eigen::Matrix<double, Eigen::Dynamic, 6> colwork_;

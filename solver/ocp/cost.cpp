@@ -78,10 +78,15 @@ double CostModel::calcDiff(CostData& d, const KnotContext& ctx,
     ResidualData& rd = *d.residuals[i];
     const int m = t.residual->dim();
     t.residual->calc(rd, ctx, x, u);
-    t.residual->calcDiff(rd, ctx, x, u);
     auto g = d.g.head(m);
     auto h = d.h.head(m);
     d.value += t.weight * t.activation.derivatives(rd.r, g, h);
+    // A term whose activation has zero gradient and curvature adds nothing to the derivatives:
+    // a bounds activation inside its bounds (a friction cone with its force well inside, on most
+    // stance knots). Its Jacobians are then not even computed (for a cone, two products with the
+    // force derivatives), and no product runs.
+    if (g.isZero(0.0) && h.isZero(0.0)) continue;
+    t.residual->calcDiff(rd, ctx, x, u);
     g *= t.weight;
     h *= t.weight;
     t.residual->addGaussNewton(rd, g, h, out);

@@ -58,7 +58,10 @@ void FramePlacementResidual::calcDiff(ResidualData& d, const KnotContext& ctx,
 FrameTranslationResidual::FrameTranslationResidual(const Model& model, int nu,
                                                    const std::string& frame,
                                                    const Eigen::Vector3d& reference)
-    : FrameResidual(model, nu, frame, 3, Dependence::Configuration), reference_(reference) {}
+    : FrameResidual(model, nu, frame, 3, Dependence::Configuration), reference_(reference) {
+  const Joint& jt = model.joints[model.frames[this->frame()].parentJoint];
+  for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) dofs_.push_back(k);
+}
 
 void FrameTranslationResidual::calc(ResidualData& d, const KnotContext& ctx,
                                     const Eigen::Ref<const Eigen::VectorXd>&,
@@ -71,8 +74,30 @@ void FrameTranslationResidual::calc(ResidualData& d, const KnotContext& ctx,
 void FrameTranslationResidual::calcDiff(ResidualData& d, const KnotContext& ctx,
                                         const Eigen::Ref<const Eigen::VectorXd>&,
                                         const Eigen::Ref<const Eigen::VectorXd>&) const {
-  getFrameJacobian(ctx.model, ctx.data, frame_, ReferenceFrame::LocalWorldAligned, d.J6);
-  d.Rx.leftCols(nv()) = d.J6.topRows<3>();
+  // The translation rows of the LOCAL_WORLD_ALIGNED frame Jacobian, on the supporting columns
+  // only: the velocity at the frame origin p of the world joint motion S_k is S_lin + S_ang x p.
+  // (getFrameJacobian fills all six rows of every column.)
+  auto& fd = static_cast<FrameResidualData&>(d);
+  const Eigen::Vector3d p = fd.oMf.p;
+  auto Rx = fd.Rx.leftCols(nv());
+  Rx.setZero();
+  for (const int k : dofs_) {
+    const Eigen::Vector3d S_lin = ctx.data.J.col(k).head<3>(), S_ang = ctx.data.J.col(k).tail<3>();
+    Rx.col(k).head<3>() = S_lin - p.cross(S_ang);
+  }
+}
+
+void FrameTranslationResidual::addGaussNewton(const ResidualData& d,
+                                              const Eigen::Ref<const Eigen::VectorXd>& g,
+                                              const Eigen::Ref<const Eigen::VectorXd>& h,
+                                              CostDerivatives& out) const {
+  // Lx_k += R_kᵀ g and Lxx_kl += R_kᵀ diag(h) R_l on the supporting columns k, l (3-vectors).
+  for (const int l : dofs_) {
+    const Eigen::Vector3d Rl = d.Rx.col(l);
+    out.Lx[l] += Rl.dot(g.head<3>());
+    const Eigen::Vector3d hRl = h.head<3>().cwiseProduct(Rl);
+    for (const int k : dofs_) out.Lxx(k, l) += d.Rx.col(k).head<3>().dot(hRl);
+  }
 }
 
 // ---------------------------------------------------------------- rotation

@@ -5,6 +5,7 @@
 // not assumed current), Jacobians from data.J.
 
 #include <string>
+#include <vector>
 
 #include "solver/ocp/residual.hpp"
 
@@ -60,9 +61,15 @@ class FrameTranslationResidual : public FrameResidual {
             const Eigen::Ref<const Eigen::VectorXd>& u) const override;
   void calcDiff(ResidualData& d, const KnotContext& ctx, const Eigen::Ref<const Eigen::VectorXd>& x,
                 const Eigen::Ref<const Eigen::VectorXd>& u) const override;
+  // Rx is nonzero only on the dofs supporting the frame (a foot: the base's 6 and its leg's 3 of
+  // a quadruped's 18): the products run on those columns only.
+  void addGaussNewton(const ResidualData& d, const Eigen::Ref<const Eigen::VectorXd>& g,
+                      const Eigen::Ref<const Eigen::VectorXd>& h,
+                      CostDerivatives& out) const override;
 
  private:
   Eigen::Vector3d reference_;
+  std::vector<int> dofs_;  // the supporting dofs, set at construction
 };
 
 // r = log3(R_ref^T R) (dim 3), Rx = [Jlog3(R_ref^T R) (angular rows of J_local), 0].

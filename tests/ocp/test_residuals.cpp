@@ -198,9 +198,61 @@ TEST(Residuals, GaussNewtonOverridesMatchDenseDefault) {
       EXPECT_LT(relErr(a.Lxx, b.Lxx), 1e-12) << what;
       EXPECT_LT(relErr(a.Lxu, b.Lxu), 1e-12) << what;
       EXPECT_LT(relErr(a.Luu, b.Luu), 1e-12) << what;
-      if (t.name == "state" || t.name == "control" || t.name == "limits") ++overrides;
+      if (t.name == "state" || t.name == "control" || t.name == "limits" || t.name == "translation")
+        ++overrides;
     }
-    EXPECT_EQ(overrides, 3);
+    EXPECT_EQ(overrides, 4);
+  }
+}
+
+// The default addGaussNewton itself against the products written out densely (Rᵀ g, Rᵀ diag(h) R
+// over all columns), for every residual and for curvature patterns that take each of its routes:
+// no row curved (gradient only), one or two rows curved (rank-1 updates), all rows curved (dense
+// products); g is zero on some rows, as a bounds activation's inside its bounds.
+TEST(Residuals, GaussNewtonDefaultMatchesDenseProducts) {
+  std::mt19937 rng(17);
+  for (RobotSetup& s : robotSetups()) {
+    const Eigen::VectorXd x = randomState(s.model, rng);
+    Knot knot(s.model, s.contacts);
+    const int nu = knot.kd.nu, ndx = 2 * s.model.nv;
+    const Eigen::VectorXd u = randomUniform(rng, nu, 5.0);
+    const KnotContext ctx = knot.at(x, u);
+    const std::vector<Term> terms = makeTerms(s, nu, x, rng);
+    for (const Term& t : terms) {
+      const Residual& res = *t.residual;
+      auto d = res.createData();
+      res.calc(*d, ctx, x, u);
+      res.calcDiff(*d, ctx, x, u);
+      const int m = res.dim();
+      // Only the columns dependence() names are read: the reference uses those alone.
+      const int nx = stateColumns(res);
+      Eigen::MatrixXd Rx = Eigen::MatrixXd::Zero(m, ndx), Ru = Eigen::MatrixXd::Zero(m, nu);
+      Rx.leftCols(nx) = d->Rx.leftCols(nx);
+      if (hasControl(res)) Ru = d->Ru;
+      for (int curved : {0, 1, 2, m}) {
+        if (curved > m) continue;
+        Eigen::VectorXd g = randomUniform(rng, m, 2.0), h = Eigen::VectorXd::Zero(m);
+        for (int i = 0; i < curved; ++i) h[(3 * i + 1) % m] = 0.5 + std::abs(g[i]);
+        if (m > 1) g[m / 2] = 0.0;
+        Eigen::VectorXd Lx = randomUniform(rng, ndx, 1.0), Lu = randomUniform(rng, nu, 1.0);
+        Eigen::MatrixXd Lxx = Eigen::MatrixXd::Random(ndx, ndx);
+        Eigen::MatrixXd Lxu = Eigen::MatrixXd::Random(ndx, nu);
+        Eigen::MatrixXd Luu = Eigen::MatrixXd::Random(nu, nu);
+        const Eigen::VectorXd Lx_ref = Lx + Rx.transpose() * g, Lu_ref = Lu + Ru.transpose() * g;
+        const Eigen::MatrixXd Lxx_ref = Lxx + Rx.transpose() * h.asDiagonal() * Rx;
+        const Eigen::MatrixXd Lxu_ref = Lxu + Rx.transpose() * h.asDiagonal() * Ru;
+        const Eigen::MatrixXd Luu_ref = Luu + Ru.transpose() * h.asDiagonal() * Ru;
+        Eigen::MatrixXd HRx = Eigen::MatrixXd::Zero(m, ndx), HRu = Eigen::MatrixXd::Zero(m, nu);
+        CostDerivatives out{Lx, Lu, Lxx, Lxu, Luu, HRx, HRu};
+        res.Residual::addGaussNewton(*d, g, h, out);
+        const std::string what = s.name + " " + t.name + " curved rows " + std::to_string(curved);
+        EXPECT_LT(relErr(Lx, Lx_ref), 1e-12) << what;
+        EXPECT_LT(relErr(Lu, Lu_ref), 1e-12) << what;
+        EXPECT_LT(relErr(Lxx, Lxx_ref), 1e-12) << what;
+        EXPECT_LT(relErr(Lxu, Lxu_ref), 1e-12) << what;
+        EXPECT_LT(relErr(Luu, Luu_ref), 1e-12) << what;
+      }
+    }
   }
 }
 
@@ -439,6 +491,73 @@ TEST(Cost, GradientMatchesFiniteDifferencesOfValue) {
     }
     EXPECT_LT(relErr(Lxx, Lxx_fd), kTol) << s.name;
     EXPECT_LT(relErr(Luu, Luu_fd), kTol) << s.name;
+  }
+}
+
+// CostModel::calcDiff skips the Jacobians and products of a term whose activation is flat there
+// (zero gradient and curvature: a bounds activation inside its bounds). Its derivatives must be
+// those of every term's calcDiff and dense Gauss-Newton products summed, with flat terms present:
+// a friction cone so wide that it holds any force, joint limits no state reaches.
+TEST(Cost, FlatTermsSkippedGiveTheSameDerivatives) {
+  std::mt19937 rng(19);
+  for (RobotSetup& s : robotSetups()) {
+    const Model& m = s.model;
+    const Eigen::VectorXd x = randomState(m, rng);
+    Knot knot(m, s.contacts);
+    const int nu = knot.kd.nu, ndx = 2 * m.nv;
+    const Eigen::VectorXd u = randomUniform(rng, nu, 5.0);
+    CostModel cost(m.nv, nu);
+    for (Term& t : makeTerms(s, nu, x, rng))
+      cost.add(t.name, std::move(t.residual), std::move(t.activation), 0.5 + cost.size() * 0.1);
+    const std::string c0 = s.contacts[0].name;
+    cost.add("flat_cone",
+             std::make_unique<FrictionConeResidual>(m, nu, s.contacts, c0, 1e6,
+                                                    Eigen::Matrix3d::Identity(), 0.0),
+             Activation::bounds(Eigen::VectorXd::Constant(5, -1e12),
+                                Eigen::VectorXd::Constant(5, 1e12), 3.0));
+    cost.add("flat_limits", std::make_unique<JointLimitResidual>(m, nu),
+             Activation::bounds(Eigen::VectorXd::Constant(2 * (m.nv - 6), -1e9),
+                                Eigen::VectorXd::Constant(2 * (m.nv - 6), 1e9), 2.0));
+    CostData cd = cost.createData();
+    const KnotContext ctx = knot.at(x, u);
+    Eigen::VectorXd Lx(ndx), Lu(nu);
+    Eigen::MatrixXd Lxx(ndx, ndx), Lxu(ndx, nu), Luu(nu, nu);
+    const double value = cost.calcDiff(cd, ctx, x, u, Lx, Lu, Lxx, Lxu, Luu);
+    // The reference: every term, its Jacobians, the dense default products.
+    Eigen::VectorXd Lx_ref = Eigen::VectorXd::Zero(ndx), Lu_ref = Eigen::VectorXd::Zero(nu);
+    Eigen::MatrixXd Lxx_ref = Eigen::MatrixXd::Zero(ndx, ndx),
+                    Lxu_ref = Eigen::MatrixXd::Zero(ndx, nu),
+                    Luu_ref = Eigen::MatrixXd::Zero(nu, nu);
+    double value_ref = 0.0;
+    int flat = 0;
+    for (int i = 0; i < cost.size(); ++i) {
+      const CostTerm& t = cost[i];
+      auto d = t.residual->createData();
+      t.residual->calc(*d, ctx, x, u);
+      t.residual->calcDiff(*d, ctx, x, u);
+      const int dim = t.residual->dim();
+      Eigen::VectorXd g(dim), h(dim);
+      value_ref += t.weight * t.activation.derivatives(d->r, g, h);
+      if (g.isZero(0.0) && h.isZero(0.0)) ++flat;
+      const int nx = stateColumns(*t.residual);
+      Eigen::MatrixXd Rx = Eigen::MatrixXd::Zero(dim, ndx), Ru = Eigen::MatrixXd::Zero(dim, nu);
+      Rx.leftCols(nx) = d->Rx.leftCols(nx);
+      if (hasControl(*t.residual)) Ru = d->Ru;
+      g *= t.weight;
+      h *= t.weight;
+      Lx_ref += Rx.transpose() * g;
+      Lu_ref += Ru.transpose() * g;
+      Lxx_ref += Rx.transpose() * h.asDiagonal() * Rx;
+      Lxu_ref += Rx.transpose() * h.asDiagonal() * Ru;
+      Luu_ref += Ru.transpose() * h.asDiagonal() * Ru;
+    }
+    EXPECT_GE(flat, 2) << s.name << ": the flat terms must be flat";
+    EXPECT_NEAR(value, value_ref, 1e-12 * std::max(1.0, std::abs(value_ref))) << s.name;
+    EXPECT_LT(relErr(Lx, Lx_ref), 1e-12) << s.name;
+    EXPECT_LT(relErr(Lu, Lu_ref), 1e-12) << s.name;
+    EXPECT_LT(relErr(Lxx, Lxx_ref), 1e-12) << s.name;
+    EXPECT_LT(relErr(Lxu, Lxu_ref), 1e-12) << s.name;
+    EXPECT_LT(relErr(Luu, Luu_ref), 1e-12) << s.name;
   }
 }
 

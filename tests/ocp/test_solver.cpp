@@ -145,6 +145,63 @@ TEST(Fddp, ExpectedChangeMatchesActualForEveryStep) {
   }
 }
 
+// The box QP on random strictly convex problems: the KKT conditions of its solution (zero
+// gradient on the free variables, the gradient pushing outwards on the clamped ones), for boxes
+// that hold the unconstrained minimizer (its fast path: x = -H^-1 g, all free) and boxes that cut
+// it; and its factor of the free block, which the solver inverts for the gains.
+TEST(BoxQP, SolutionSatisfiesKktConditions) {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const int n = 7;
+  BoxQP qp(n);
+  int inside = 0, cut = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    Eigen::MatrixXd A(n, n);
+    for (int i = 0; i < A.size(); ++i) A.data()[i] = U(rng);
+    const Eigen::MatrixXd H = A * A.transpose() + 0.1 * Eigen::MatrixXd::Identity(n, n);
+    Eigen::VectorXd g(n), lb(n), ub(n), x = Eigen::VectorXd::Zero(n);
+    for (int i = 0; i < n; ++i) g[i] = 3.0 * U(rng);
+    const Eigen::VectorXd x_free = -H.llt().solve(g);
+    const double width = trial % 2 ? 2.0 * x_free.cwiseAbs().maxCoeff() : 0.5;
+    for (int i = 0; i < n; ++i) {
+      lb[i] = -width * (1.0 + 0.5 * U(rng));
+      ub[i] = width * (1.0 + 0.5 * U(rng));
+    }
+    const bool holds = (x_free.array() >= lb.array()).all() && (x_free.array() <= ub.array()).all();
+    ASSERT_TRUE(qp.solve(H, g, lb, ub, x));
+    const Eigen::VectorXd grad = H * x + g;
+    EXPECT_TRUE((x.array() >= lb.array()).all() && (x.array() <= ub.array()).all());
+    const Eigen::VectorXi& F = qp.freeIndices();
+    std::vector<bool> is_free(n, false);
+    for (int a = 0; a < qp.nfree(); ++a) is_free[F[a]] = true;
+    for (int i = 0; i < n; ++i) {
+      if (is_free[i]) {
+        EXPECT_NEAR(grad[i], 0.0, 1e-8) << "trial " << trial << " free " << i;
+      } else {
+        EXPECT_TRUE((x[i] == lb[i] && grad[i] > 0.0) || (x[i] == ub[i] && grad[i] < 0.0))
+            << "trial " << trial << " clamped " << i;
+      }
+    }
+    if (holds) {
+      ++inside;
+      EXPECT_EQ(qp.nfree(), n);
+      EXPECT_LT((x - x_free).cwiseAbs().maxCoeff(), 1e-10 * std::max(1.0, x_free.norm()));
+    } else {
+      ++cut;
+    }
+    // The factor of the free block: L Lᵀ = H_FF.
+    const int nf = qp.nfree();
+    if (nf == 0) continue;
+    Eigen::MatrixXd Hff(nf, nf);
+    for (int a = 0; a < nf; ++a)
+      for (int b = 0; b < nf; ++b) Hff(a, b) = H(F[a], F[b]);
+    const Eigen::MatrixXd L = qp.freeFactor().topLeftCorner(nf, nf).triangularView<Eigen::Lower>();
+    EXPECT_LT((L * L.transpose() - Hff).cwiseAbs().maxCoeff(), 1e-10 * std::max(1.0, Hff.norm()));
+  }
+  EXPECT_GT(inside, 50);
+  EXPECT_GT(cut, 50);
+}
+
 // Box-FDDP keeps every control within its bounds and, with bounds that are never reached, gives
 // the unconstrained solution.
 TEST(BoxFddp, RespectsBoundsAndMatchesFddpWhenInactive) {
