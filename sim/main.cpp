@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
             }
           }
         }
-        node.advance(per_state);
+        if (!node.advance(per_state)) break;  // fell or diverged: the run is over
       }
     } else {
       const long step_ns = std::lround(sim.dt * 1e9);
@@ -137,7 +137,7 @@ int main(int argc, char** argv) {
         if (steps % per_state == 0) node.publishState();
         while (lcm.handleTimeout(0) > 0) {
         }
-        node.advance(1);
+        if (!node.advance(1)) break;
         ++steps;
         next.tv_nsec += step_ns;
         while (next.tv_nsec >= 1000000000L) {
@@ -148,6 +148,12 @@ int main(int argc, char** argv) {
       }
     }
     node.writeSummary(summary);
+    if (node.stats().diverged) {
+      std::fprintf(stderr, "stride-sim: the simulation diverged at t = %.3f s (stopped)\n",
+                   node.simulator().time());
+      return 3;
+    }
+    if (node.stats().fell) std::printf("stride-sim: the robot fell: run stopped\n");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "stride-sim: %s\n", e.what());
     return 1;

@@ -100,7 +100,7 @@ std::int64_t SimNode::publishState() {
   return state_msg_.utime;
 }
 
-void SimNode::advance(int steps) {
+bool SimNode::advance(int steps) {
   for (int i = 0; i < steps; ++i) {
     const double t = sim_.time();
     const Vector6d push = options_.pushes.wrenchAt(t);
@@ -112,10 +112,16 @@ void SimNode::advance(int steps) {
       hold_.torque(robot_.model, sim_.q(), sim_.v(), tau_);
       ++stats_.hold_steps;
     }
-    sim_.step(tau_);
+    const StepStatus step = sim_.step(tau_);
     ++stats_.steps;
+    if (step == StepStatus::NonFiniteState || step == StepStatus::SingularMassMatrix) {
+      stats_.diverged = true;
+      return false;
+    }
     track();
+    if (stats_.fell) return false;
   }
+  return true;
 }
 
 void SimNode::track() {
@@ -140,16 +146,18 @@ void SimNode::writeSummary(const std::string& path) const {
       "tilt %.1f deg, %s; %lld states published (%lld dropped), %lld policies (%lld rejected), "
       "%lld steps on the hold PD, %lld past a policy's end, %lld lock-step timeouts\n",
       sim_.time(), distance, q[0] - s.x0, s.z_min, s.z_max, s.max_tilt_deg,
-      s.fell ? "FELL" : "did not fall", static_cast<long long>(s.states_published),
-      static_cast<long long>(s.states_dropped), static_cast<long long>(s.policies),
-      static_cast<long long>(s.policies_rejected), static_cast<long long>(s.hold_steps),
-      static_cast<long long>(s.exhausted_steps), static_cast<long long>(s.lockstep_timeouts));
+      s.diverged ? "DIVERGED" : (s.fell ? "FELL" : "did not fall"),
+      static_cast<long long>(s.states_published), static_cast<long long>(s.states_dropped),
+      static_cast<long long>(s.policies), static_cast<long long>(s.policies_rejected),
+      static_cast<long long>(s.hold_steps), static_cast<long long>(s.exhausted_steps),
+      static_cast<long long>(s.lockstep_timeouts));
   if (path.empty()) return;
   std::ofstream f(path);
   f << "{\n  \"sim_time_s\": " << sim_.time() << ",\n  \"distance_m\": " << distance
     << ",\n  \"base_height_min_m\": " << s.z_min << ",\n  \"base_height_max_m\": " << s.z_max
     << ",\n  \"max_tilt_deg\": " << s.max_tilt_deg
-    << ",\n  \"fell\": " << (s.fell ? "true" : "false")
+    << ",\n  \"fell\": " << (s.fell || s.diverged ? "true" : "false")
+    << ",\n  \"diverged\": " << (s.diverged ? "true" : "false")
     << ",\n  \"peak_normal_force_N\": " << s.peak_normal_force
     << ",\n  \"states_published\": " << s.states_published << ",\n  \"policies\": " << s.policies
     << ",\n  \"policies_rejected\": " << s.policies_rejected

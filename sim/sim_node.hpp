@@ -43,6 +43,7 @@ struct SimNodeStats {
   double x0 = 0, y0 = 0, z0 = 0, z_min = 1e300, z_max = -1e300, max_tilt_deg = 0.0;
   double peak_normal_force = 0.0;
   bool fell = false;
+  bool diverged = false;  // the physics could not go on (singular M, non-finite state)
 };
 
 class SimNode {
@@ -59,8 +60,9 @@ class SimNode {
   std::int64_t publishState();
   // True once a policy answering a state stamped `utime` (or later) has arrived.
   bool answered(std::int64_t utime) const { return have_policy_ && last_answer_ >= utime; }
-  // Advances `steps` physics steps, each with the policy evaluated at its start.
-  void advance(int steps);
+  // Advances `steps` physics steps, each with the policy evaluated at its start. False when the
+  // run cannot go on: the robot fell, or the physics diverged (stats() says which).
+  bool advance(int steps);
 
   Simulator& simulator() { return sim_; }
   const Simulator& simulator() const { return sim_; }

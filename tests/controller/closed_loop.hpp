@@ -79,8 +79,7 @@ inline Run run(const ControllerConfig& config, const sim::SimNodeOptions& sim_op
     s.solve_ms = mpc.mpc().status().solve_ms;
     if (each) each(s);
     r.samples.push_back(std::move(s));
-    sim.advance(sim.stepsPerState());
-    if (sim.stats().fell) break;
+    if (!sim.advance(sim.stepsPerState())) break;  // fell or diverged
   }
   r.sim = sim.stats();
   r.mpc = mpc.mpc().counters();
