@@ -13,71 +13,81 @@
 namespace stride::bench {
 namespace {
 
-void controllerTick(benchmark::State& state, const char* robot, double warmup) {
-  ControllerConfig config =
-      loadControllerConfig(std::string(STRIDE_CONFIG_DIR) + "/controller/" + robot + ".yaml");
-  config.gait.stand = 0.5;  // into the gait quickly: the hard ticks are the stepping ones
-  config.gait.step_after = 1.0;
-  config.locomotion.step_after = 1.0;
-  lcm::LCM lcm("memq://");
-  LcmPublisher publisher(lcm);
-  MpcNode mpc(config, publisher, TimeSource::Stamps);
-  mpc.subscribe(lcm);
-  const Robot& r = mpc.mpc().robot();
-  sim::SimNodeOptions o;
-  o.state_rate_hz = config.rate_hz;
-  sim::SimNode sim(r, sim::SimOptions{}, o, publisher);
-  sim.subscribe(lcm);
-  sim.reset(r.default_q, Eigen::VectorXd::Zero(r.model.nv));
-  auto one = [&](bool timed) {
+// stride-mpc's node and stride-sim's node on one in-process bus, the robot into its gait quickly
+// (the hard ticks are the stepping ones).
+struct ClosedLoop {
+  explicit ClosedLoop(const char* robot)
+      : config(configFor(robot)),
+        lcm("memq://"),
+        publisher(lcm),
+        mpc(config, publisher, TimeSource::Stamps),
+        sim(mpc.mpc().robot(), sim::SimOptions{}, simOptions(config), publisher) {
+    mpc.subscribe(lcm);
+    sim.subscribe(lcm);
+    reset();
+  }
+  static ControllerConfig configFor(const char* robot) {
+    ControllerConfig c =
+        loadControllerConfig(std::string(STRIDE_CONFIG_DIR) + "/controller/" + robot + ".yaml");
+    c.gait.stand = 0.5;
+    c.gait.step_after = 1.0;
+    c.locomotion.step_after = 1.0;
+    return c;
+  }
+  static sim::SimNodeOptions simOptions(const ControllerConfig& c) {
+    sim::SimNodeOptions o;
+    o.state_rate_hz = c.rate_hz;
+    return o;
+  }
+  void reset() {
+    const Robot& r = mpc.mpc().robot();
+    sim.reset(r.default_q, Eigen::VectorXd::Zero(r.model.nv));
+  }
+  // One period: a state out, the tick (its duration returned), the answer applied. False when the
+  // robot fell.
+  bool period(double& tick_seconds) {
     sim.publishState();
     while (lcm.handleTimeout(0) > 0) {
     }
     const auto t0 = std::chrono::steady_clock::now();
     mpc.tick(Mpc::Clock::time_point::max());
-    const auto t1 = std::chrono::steady_clock::now();
+    tick_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     while (lcm.handleTimeout(0) > 0) {
     }
-    if (!sim.advance(sim.stepsPerState()))  // fell: start again, the timing is what matters here
-      sim.reset(r.default_q, Eigen::VectorXd::Zero(r.model.nv));
-    if (timed) state.SetIterationTime(std::chrono::duration<double>(t1 - t0).count());
-  };
-  while (sim.simulator().time() < warmup) one(false);
-  for (auto _ : state) one(true);
-  state.counters["fell"] = sim.stats().fell;
+    return sim.advance(sim.stepsPerState());
+  }
+
+  ControllerConfig config;
+  lcm::LCM lcm;
+  LcmPublisher publisher;
+  MpcNode mpc;
+  sim::SimNode sim;
+};
+
+void controllerTick(benchmark::State& state, const char* robot, double warmup) {
+  ClosedLoop loop(robot);
+  double seconds = 0.0;
+  while (loop.sim.simulator().time() < warmup)
+    if (!loop.period(seconds)) loop.reset();
+  for (auto _ : state) {
+    if (!loop.period(seconds)) loop.reset();  // fell: start again, the timing is what matters
+    state.SetIterationTime(seconds);
+  }
+  state.counters["fell"] = loop.sim.stats().fell;
 }
 
 // The parts of one tick's FDDP iteration on the problem the controller has 3 s into the gait
 // (stepping): derivatives of all knots, the backward pass, one rollout of the line search.
 void tickParts(benchmark::State& state, const char* robot, int part) {
-  ControllerConfig config =
-      loadControllerConfig(std::string(STRIDE_CONFIG_DIR) + "/controller/" + robot + ".yaml");
-  config.gait.stand = 0.5;
-  config.gait.step_after = 1.0;
-  config.locomotion.step_after = 1.0;
-  lcm::LCM lcm("memq://");
-  LcmPublisher publisher(lcm);
-  MpcNode mpc(config, publisher, TimeSource::Stamps);
-  mpc.subscribe(lcm);
-  const Robot& r = mpc.mpc().robot();
-  sim::SimNodeOptions o;
-  o.state_rate_hz = config.rate_hz;
-  sim::SimNode sim(r, sim::SimOptions{}, o, publisher);
-  sim.subscribe(lcm);
-  sim.reset(r.default_q, Eigen::VectorXd::Zero(r.model.nv));
-  while (sim.simulator().time() < 3.0) {
-    sim.publishState();
-    while (lcm.handleTimeout(0) > 0) {
-    }
-    mpc.tick(Mpc::Clock::time_point::max());
-    while (lcm.handleTimeout(0) > 0) {
-    }
-    if (!sim.advance(sim.stepsPerState())) {
+  ClosedLoop loop(robot);
+  double seconds = 0.0;
+  while (loop.sim.simulator().time() < 3.0) {
+    if (!loop.period(seconds)) {
       state.SkipWithError("the robot fell during the warm-up");
       return;
     }
   }
-  Solver& solver = *mpc.mpc().solver();
+  Solver& solver = *loop.mpc.mpc().solver();
   solver.computeDerivatives();
   solver.backwardPass();
   for (auto _ : state) {
