@@ -48,7 +48,8 @@ TEST(Astronaut, LegsAloneTurnTheBaseWithoutMomentum) {
   EXPECT_GT(m.pitch.back() * kDeg, kPastDeg);
   double previous = 0.0;
   for (const auto& [k, goal] : astro.waypoints()) {
-    EXPECT_GT(m.pitch[k] * kDeg, previous * kDeg - 5.0) << "at knot " << k << " (goal " << goal * kDeg << " deg)";
+    EXPECT_GT(m.pitch[k] * kDeg, previous * kDeg - 5.0)
+        << "at knot " << k << " (goal " << goal * kDeg << " deg)";
     previous = m.pitch[k];
   }
 
