@@ -145,27 +145,14 @@ void FrictionConeResidual::updateRows() {
 void FrictionConeResidual::calc(ResidualData& d, const KnotContext& ctx,
                                 const Eigen::Ref<const Eigen::VectorXd>&,
                                 const Eigen::Ref<const Eigen::VectorXd>&) const {
-  const int off = offset(ctx);
-  if (off < 0) {
-    d.r.setZero();
-    return;
-  }
   // The linear part leads a 6D contact's wrench [force; moment].
-  d.r.noalias() = A_ * ctx.forces->segment<3>(off);
-  d.r[4] += min_force_;
+  if (linearRows(d, ctx, A_)) d.r[4] += min_force_;
 }
 
 void FrictionConeResidual::calcDiff(ResidualData& d, const KnotContext& ctx,
                                     const Eigen::Ref<const Eigen::VectorXd>&,
                                     const Eigen::Ref<const Eigen::VectorXd>&) const {
-  const int off = offset(ctx);
-  if (off < 0 || !ctx.Gx || !ctx.Gu) {
-    d.Rx.setZero();
-    d.Ru.setZero();
-    return;
-  }
-  d.Rx.noalias() = A_ * ctx.Gx->middleRows<3>(off);
-  d.Ru.noalias() = A_ * ctx.Gu->middleRows<3>(off);
+  linearRowsDiff(d, ctx, A_);
 }
 
 }  // namespace stride

@@ -31,6 +31,33 @@ class ContactResidual : public Residual {
   // of that name has another dimension than the one the residual was built for.
   int offset(const KnotContext& ctx) const;
 
+  // Residuals that are fixed rows A on the leading C entries of the contact's force (the friction
+  // cone on f, the centre of pressure on [f; τ]): r = A λ_c, Rx = A Gx_c, Ru = A Gu_c, all zero
+  // where the contact is off. linearRows returns false (r zeroed) when it is off.
+  template <int R, int C>
+  bool linearRows(ResidualData& d, const KnotContext& ctx,
+                  const Eigen::Matrix<double, R, C>& A) const {
+    const int off = offset(ctx);
+    if (off < 0) {
+      d.r.setZero();
+      return false;
+    }
+    d.r.noalias() = A * ctx.forces->template segment<C>(off);
+    return true;
+  }
+  template <int R, int C>
+  void linearRowsDiff(ResidualData& d, const KnotContext& ctx,
+                      const Eigen::Matrix<double, R, C>& A) const {
+    const int off = offset(ctx);
+    if (off < 0 || !ctx.Gx || !ctx.Gu) {
+      d.Rx.setZero();
+      d.Ru.setZero();
+      return;
+    }
+    d.Rx.noalias() = A * ctx.Gx->template middleRows<C>(off);
+    d.Ru.noalias() = A * ctx.Gu->template middleRows<C>(off);
+  }
+
  private:
   std::string contact_;
   int contact_dim_;

@@ -42,25 +42,13 @@ Activation CenterOfPressureResidual::activation(double weight) {
 void CenterOfPressureResidual::calc(ResidualData& d, const KnotContext& ctx,
                                     const Eigen::Ref<const Eigen::VectorXd>&,
                                     const Eigen::Ref<const Eigen::VectorXd>&) const {
-  const int off = offset(ctx);
-  if (off < 0) {
-    d.r.setZero();
-    return;
-  }
-  d.r.noalias() = A_ * ctx.forces->segment<6>(off);
+  linearRows(d, ctx, A_);
 }
 
 void CenterOfPressureResidual::calcDiff(ResidualData& d, const KnotContext& ctx,
                                         const Eigen::Ref<const Eigen::VectorXd>&,
                                         const Eigen::Ref<const Eigen::VectorXd>&) const {
-  const int off = offset(ctx);
-  if (off < 0 || !ctx.Gx || !ctx.Gu) {
-    d.Rx.setZero();
-    d.Ru.setZero();
-    return;
-  }
-  d.Rx.noalias() = A_ * ctx.Gx->middleRows<6>(off);
-  d.Ru.noalias() = A_ * ctx.Gu->middleRows<6>(off);
+  linearRowsDiff(d, ctx, A_);
 }
 
 }  // namespace stride
