@@ -110,7 +110,7 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   const YAML::Node solver = root["solver"];
   r.onlyKeys(solver, "solver",
              {"kind", "max_iterations", "initial_iterations", "deadline_fraction", "threads",
-              "line_search_steps"});
+              "line_search_steps", "min_regularization"});
   if (solver) {
     std::string kind = toString(c.solver);
     r.get(solver, "kind", "solver", kind);
@@ -127,7 +127,10 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(solver, "deadline_fraction", "solver", c.deadline_fraction);
     r.get(solver, "threads", "solver", c.threads);
     r.get(solver, "line_search_steps", "solver", c.line_search_steps);
+    r.get(solver, "min_regularization", "solver", c.min_regularization);
   }
+  if (!(c.min_regularization >= 1e-12 && c.min_regularization <= 1e6))
+    r.fail("solver.min_regularization", "must be in [1e-12, 1e6]");
   if (c.line_search_steps < 1 || c.line_search_steps > 30)
     r.fail("solver.line_search_steps", "must be in [1, 30]");
   if (c.max_iterations < 1) r.fail("solver.max_iterations", "must be at least 1");

@@ -41,6 +41,10 @@ struct ControllerConfig {
   double deadline_fraction = 0.8;  // of the tick period, for the solve
   int line_search_steps = 4;       // α = 1, 1/2, ...: with one iteration per tick, a step shorter
                               // than the last is not worth its rollouts (the next tick retries)
+  // μ never drops below this during ticks (the start-up solve goes down to 1e-9): a trust region
+  // that keeps one iteration's step within what the linearization predicts, so the first rollout
+  // is usually accepted. Each rejected rollout costs a rollout's time in the tick's latency.
+  double min_regularization = 1e-9;
   int threads = 1;
 
   std::string state_channel = "STRIDE_STATE", policy_channel = "STRIDE_POLICY",

@@ -105,26 +105,43 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, SolveStatus& result) {
   // The first solve, before any policy went out, runs to convergence (no deadline); a restart
   // after a failure gets the normal budget and converges over the following ticks.
   const bool first = !have_solved_;
-  if (need_restart_) {
-    restartWarmStart(t);
+  // A preparation for a time within half a knot of t is this tick's linearization: only x0
+  // changes (the rest of the half knot stays a gap at x0, as after a shift).
+  const bool use_prepared =
+      !need_restart_ && solver_->prepared() && std::abs(t - t_prepared_) < 0.5 * dt;
+  status_.prepared = use_prepared ? 1 : 0;
+  status_.prepare_ms = use_prepared ? prepare_ms_ : 0.0;
+  if (use_prepared) {
+    problem.setX0(x_);
   } else {
-    // Whole knots elapsed since the warm start's knot 0; the remainder (under half a knot) is left
-    // to FDDP as a gap at x0.
-    const double shift = std::floor((t - t_warm_) / dt + 0.5);
-    if (shift >= problem.horizon()) {
+    solver_->discardPreparation();  // made for another time, or left over from before a restart
+    if (!first) ++counters_.unprepared_solves;
+    if (need_restart_) {
       restartWarmStart(t);
-    } else if (shift >= 1.0) {
-      const int n = static_cast<int>(shift);
-      problem.shift(n);
-      solver_->shiftWarmStart(n);
-      t_warm_ += n * dt;
+    } else {
+      // Whole knots elapsed since the warm start's knot 0; the remainder (under half a knot) is
+      // left to FDDP as a gap at x0.
+      const double shift = std::floor((t - t_warm_) / dt + 0.5);
+      if (shift >= problem.horizon()) {
+        restartWarmStart(t);
+      } else if (shift >= 1.0) {
+        const int n = static_cast<int>(shift);
+        problem.shift(n);
+        solver_->shiftWarmStart(n);
+        t_warm_ += n * dt;
+      }
     }
+    problem.setX0(x_);
+    // The knots' phases and references on the warm start's own time grid: its knot 0 is at
+    // t_warm_. Updated for t instead, a touch-down half a knot away would land on the next knot
+    // while the shifted trajectory has its velocity jump on this one: a gap of tens of rad/s at
+    // every impulse knot after each shift, and line searches that stall.
+    if (!loco_->update(t_warm_)) return false;
   }
-  problem.setX0(x_);
-  if (!loco_->update(t)) return false;
   startup_tick_ = first;
   // The start-up solve may backtrack as far as it needs; the ticks' line search is bounded.
   solver_->options.line_search_steps = first ? 10 : config_.line_search_steps;
+  solver_->options.reg_min = first ? SolverOptions().reg_min : config_.min_regularization;
   result = first ? solver_->solve(config_.initial_iterations)
                  : solver_->solve(config_.max_iterations, deadline);
   if (result == SolveStatus::NonFinite || result == SolveStatus::NoDescent) {
@@ -145,6 +162,9 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   status_.solver_status = -1;
   startup_tick_ = false;
   deadline_cut_ = false;
+  solved_ = false;
+  status_.prepared = 0;
+  status_.prepare_ms = 0.0;
 
   if (state == nullptr) {  // nothing to control yet: publish no policy
     ++counters_.ticks_without_state;
@@ -177,6 +197,8 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
     const int n_stats = solver_->statsCount();
     status_.step = n_stats > 0 ? solver_->stats()[n_stats - 1].step : 0.0;
     if (ok) {
+      solved_ = true;
+      t_last_ = t;
       const bool cut = result == SolveStatus::Deadline;
       deadline_cut_ = cut;
       if (cut) ++counters_.deadline_misses;
@@ -196,6 +218,34 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   }
   finishStatus(tick_start, policy_.status);
   return true;
+}
+
+void Mpc::prepare(Clock::time_point deadline) {
+  if (!solved_ || need_restart_) return;
+  solved_ = false;  // one preparation per solved tick
+  ShootingProblem& problem = loco_->problem();
+  const double dt = config_.locomotion.dt;
+  const double t = t_last_ + 1.0 / config_.rate_hz;  // when the next state is expected
+  const double shift = std::floor((t - t_warm_) / dt + 0.5);
+  if (shift >= problem.horizon()) return;  // the next tick restarts anyway
+  if (shift >= 1.0) {
+    const int n = static_cast<int>(shift);
+    problem.shift(n);
+    solver_->shiftWarmStart(n);
+    t_warm_ += n * dt;
+  }
+  if (!loco_->update(t_warm_)) return;  // on the trajectory's grid, as in solveTick
+  const Clock::time_point start = Clock::now();
+  SolveStatus why = SolveStatus::MaxIterations;
+  if (solver_->prepare(deadline, why)) {
+    t_prepared_ = t;
+    prepare_ms_ = millisSince(start);
+  } else if (why == SolveStatus::NonFinite || why == SolveStatus::NoDescent) {
+    // The trajectory cannot be linearized: the next tick starts again from standing.
+    ++counters_.failed_solves;
+    need_restart_ = true;
+  }
+  // At the deadline: nothing prepared; the next tick linearizes after its state came in.
 }
 
 void Mpc::writePolicy(std::int64_t utime, double t, std::int8_t status) {
@@ -287,6 +337,7 @@ void Mpc::finishStatus(Clock::time_point tick_start, std::int8_t policy_status) 
   status_.fallbacks = counters_.fallbacks;
   status_.stale_states = counters_.stale_states;
   status_.ticks_without_state = counters_.ticks_without_state;
+  status_.unprepared_solves = counters_.unprepared_solves;
   status_.tick_ms = millisSince(tick_start);
 }
 

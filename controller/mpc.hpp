@@ -13,6 +13,11 @@
 //      no control, so they are skipped);
 //   6. on a stale state or a failed solve, a fallback (the previous policy advanced in time, or a
 //      joint hold policy), flagged in both messages and counted.
+// Steps 2-3 and the first half of step 4 do not need the state (Solver::prepare: derivatives and
+// backward pass never read x0), so prepare() runs them after the policy went out, for the time
+// the next state is expected at; the next tick, when its state is within half a knot of that
+// time, only sets x0 and runs the line search. The state-to-policy latency is then one or a few
+// rollouts instead of a whole iteration (controller/README.md, "Real-time iteration").
 // After start-up nothing here allocates or throws (tested). Start-up (the first valid state) builds
 // the problem around the robot's measured position and solves it to convergence before the first
 // policy goes out.
@@ -42,6 +47,7 @@ struct MpcCounters {
   std::int64_t stale_states = 0;
   std::int64_t ticks_without_state = 0;
   std::int64_t failed_solves = 0;
+  std::int64_t unprepared_solves = 0;  // ticks after start-up that solved without a preparation
 };
 
 class Mpc {
@@ -65,6 +71,9 @@ class Mpc {
   // deadline: for the solve (Clock::time_point::max() when replaying a log). Fills policy() and
   // status(); true when policy() is to be published.
   bool tick(const robot_state_t* state, double age, Clock::time_point deadline);
+  // After a tick that solved: shift, update and linearize for the next state, expected one tick
+  // period after this one's, stopping at the deadline (the next tick's start). Allocation-free.
+  void prepare(Clock::time_point deadline);
 
   const policy_t& policy() const { return policy_; }
   const mpc_status_t& status() const { return status_; }
@@ -110,6 +119,10 @@ class Mpc {
   bool have_solved_ = false;   // a solve of this problem succeeded (else the next is the first)
   bool startup_tick_ = false;
   bool deadline_cut_ = false;  // the last tick's solve stopped at its deadline
+  bool solved_ = false;        // the last tick solved (prepare() may follow)
+  double t_last_ = 0.0;        // plan time of the last tick's state
+  double t_prepared_ = 0.0;    // plan time the pending preparation is for
+  double prepare_ms_ = 0.0;    // its duration
   int previous_ticks_ = 0;     // consecutive ticks on the previous policy
 
   Eigen::VectorXd x_;  // the state as a solver vector

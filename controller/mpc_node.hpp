@@ -40,6 +40,8 @@ class MpcNode {
   // One tick: the newest state (if any) through the controller, then publish. Allocation-free
   // after start-up. deadline: for the solve (Clock::time_point::max() in stamps mode).
   void tick(Clock::time_point deadline);
+  // After tick(): the first half of the next tick's solve (Mpc::prepare), until the deadline.
+  void prepare(Clock::time_point deadline) { mpc_.prepare(deadline); }
   // Applies a plan received since the last call (allocates: call between ticks).
   void applyPendingPlan();
 

@@ -75,9 +75,13 @@ void runRealTime(MpcNode& node, lcm::LCM& in, const RunOptions& options) {
     node.applyPendingPlan();
     const auto tick_start = Mpc::Clock::now();
     node.tick(tick_start + std::chrono::duration_cast<Mpc::Clock::duration>(period * fraction));
+    // The policy is out: linearize for the next state until the next tick is due (steady_clock
+    // is CLOCK_MONOTONIC on Linux, so the two clocks' time points compare).
+    const timespec due = addNanos(next, period_ns);
+    node.prepare(Mpc::Clock::time_point(std::chrono::duration_cast<Mpc::Clock::duration>(
+        std::chrono::seconds(due.tv_sec) + std::chrono::nanoseconds(due.tv_nsec))));
     timespec now;
     clock_gettime(CLOCK_MONOTONIC, &now);
-    const timespec due = addNanos(next, period_ns);
     if (!before(now, due)) {
       // Overran into the next period: skip the ticks that are already late rather than bursting.
       if (!node.mpc().startupTick()) node.mpc().countOverrun();
@@ -94,7 +98,10 @@ void runOnStamps(MpcNode& node, lcm::LCM& in, const RunOptions& options) {
     const int handled = in.handleTimeout(100);
     if (handled < 0) return;  // end of the log (file provider) or a broken input
     node.applyPendingPlan();
-    if (node.tickDue()) node.tick(Mpc::Clock::time_point::max());
+    if (node.tickDue()) {
+      node.tick(Mpc::Clock::time_point::max());
+      node.prepare(Mpc::Clock::time_point::max());
+    }
     if (options.duration > 0.0) {
       timespec now;
       clock_gettime(CLOCK_MONOTONIC, &now);
@@ -125,12 +132,12 @@ void writeSummary(const MpcNode& node, const std::string& path) {
   std::printf(
       "stride-mpc: %lld ticks, %lld states accepted, %lld rejected, tick latency p50 %.3f ms "
       "p99 %.3f ms max %.3f ms (%ld ticks), %lld deadline misses, %lld fallbacks, %lld stale "
-      "states, %lld failed solves, %lld plan updates\n",
+      "states, %lld failed solves, %lld unprepared solves, %lld plan updates\n",
       static_cast<long long>(c.ticks), static_cast<long long>(node.acceptedStates()),
       static_cast<long long>(node.rejected()), lat.p50, lat.p99, lat.max, lat.count,
       static_cast<long long>(c.deadline_misses), static_cast<long long>(c.fallbacks),
       static_cast<long long>(c.stale_states), static_cast<long long>(c.failed_solves),
-      static_cast<long long>(node.planUpdates()));
+      static_cast<long long>(c.unprepared_solves), static_cast<long long>(node.planUpdates()));
   if (node.rejected() > 0) {
     std::printf("stride-mpc: rejected messages by reason:");
     for (int r = 1; r <= static_cast<int>(msg::Reject::Stale); ++r)
@@ -147,6 +154,7 @@ void writeSummary(const MpcNode& node, const std::string& path) {
     << ", \"max\": " << lat.max << ", \"count\": " << lat.count
     << "},\n  \"deadline_misses\": " << c.deadline_misses << ",\n  \"fallbacks\": " << c.fallbacks
     << ",\n  \"stale_states\": " << c.stale_states << ",\n  \"failed_solves\": " << c.failed_solves
+    << ",\n  \"unprepared_solves\": " << c.unprepared_solves
     << ",\n  \"ticks_without_state\": " << c.ticks_without_state << "\n}\n";
   if (!f) std::fprintf(stderr, "stride-mpc: cannot write the summary to '%s'\n", path.c_str());
 }

@@ -130,6 +130,7 @@ bool Solver::setWarmStart(const std::vector<Eigen::VectorXd>& xs,
   for (int k = 0; k <= T_; ++k) xs_[k] = xs[k];
   for (int k = 0; k < T_; ++k) us_[k] = us[k];
   feasible_ = false;
+  prepared_ = false;
   return true;
 }
 
@@ -156,6 +157,7 @@ void Solver::shiftWarmStart(int n) {
       K_[k] = K_last_;
     }
   feasible_ = false;
+  prepared_ = false;
 }
 
 bool Solver::finiteTrajectory() const {
@@ -190,7 +192,7 @@ bool Solver::rollout() {
   us_.swap(us_try_);
   cost_ = cost + dT.cost;
   for (auto& f : fs_) f.setZero();
-  gap_ = 0.0;
+  gap_ = tail_gap_ = 0.0;
   feasible_ = true;
   return true;
 }
@@ -198,12 +200,12 @@ bool Solver::rollout() {
 double Solver::computeGaps() {
   const StateSpace& state = problem_.state();
   state.difference(xs_[0], problem_.x0(), fs_[0]);
-  double gap = fs_[0].lpNorm<1>();
+  tail_gap_ = 0.0;
   for (int k = 0; k < T_; ++k) {
     state.difference(xs_[k + 1], problem_.data(k).x_next, fs_[k + 1]);
-    gap += fs_[k + 1].lpNorm<1>();
+    tail_gap_ += fs_[k + 1].lpNorm<1>();
   }
-  return gap;
+  return fs_[0].lpNorm<1>() + tail_gap_;
 }
 
 bool Solver::computeDerivatives() {
@@ -306,7 +308,7 @@ bool Solver::backwardPass() {
     // The value of the next knot seen from this one: V'x = Vx + Vxx f (the gap, FDDP), and Vxx
     // regularized by μ I (Tassa et al.: a trust region on the state).
     Vx_gap_ = Vx_next_;
-    if (!feasible_) Vx_gap_.noalias() += Vxx_next_ * fs_[k + 1];
+    if (tail_gap_ >= options.gap_tolerance) Vx_gap_.noalias() += Vxx_next_ * fs_[k + 1];
     Vxx_next_.diagonal().array() += reg_;
     // Gauss-Newton Q terms (eq. 12): the knot's cost Hessian plus the value propagated through
     // the dynamics' Jacobians.
@@ -391,11 +393,10 @@ bool Solver::backwardPass() {
     backward_nonfinite_ = true;
     return false;
   }
-  expectedChange();
   return true;
 }
 
-void Solver::expectedChange() {
+void Solver::predictChange() {
   // The step's first- and second-order cost change, d1 and d2, along the linearized rollout at
   // α = 1 (δx_0 = f_0, δu = k + K δx, δx⁺ = Fx δx + Fu δu + f): the cost's quadratic model at
   // step α then predicts α d1 + ½ α² d2, exact for linear dynamics and quadratic costs.
@@ -458,25 +459,64 @@ double Solver::forwardPass(double alpha) {
   return std::isfinite(cost) ? cost : kInfinity;
 }
 
+bool Solver::prepare(Clock::time_point deadline, SolveStatus& status) {
+  prepared_ = false;
+  backward_passes_ = 0;
+  const Clock::time_point start = Clock::now();
+  if (start >= deadline) {
+    status = SolveStatus::Deadline;
+    return false;
+  }
+  if (!finiteTrajectory() || !computeDerivatives()) {
+    status = fail(SolveStatus::NonFinite);
+    return false;
+  }
+  // A Quu that is not positive definite: more regularization, until the limit or the deadline.
+  // From μ = 0 the first raise goes to kRegFloor, so the retries are bounded.
+  while (!backwardPass()) {
+    if (backward_nonfinite_) {
+      status = fail(SolveStatus::NonFinite);
+      return false;
+    }
+    reg_ = std::max(reg_ * options.reg_factor, kRegFloor);
+    if (reg_ > options.reg_max) {
+      status = fail(SolveStatus::NoDescent);
+      return false;
+    }
+    if (Clock::now() >= deadline) {
+      status = SolveStatus::Deadline;
+      return false;
+    }
+  }
+  prepare_ms_ = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  prepared_ = true;
+  return true;
+}
+
 SolveStatus Solver::solve(int max_iterations, Clock::time_point deadline) {
   iterations_ = 0;
-  backward_passes_ = forward_passes_ = 0;
-  if (kind_ == SolverKind::Ddp && !rollout()) return fail(SolveStatus::NonFinite);
+  forward_passes_ = 0;
+  if (!prepared_) backward_passes_ = 0;  // else they count the preparation's
+  if (kind_ == SolverKind::Ddp) {
+    prepared_ = false;  // the rollout from x0 moves the trajectory the preparation linearized
+    if (!rollout()) return fail(SolveStatus::NonFinite);
+  }
   if (!finiteTrajectory()) return fail(SolveStatus::NonFinite);
   for (int it = 0; it < max_iterations; ++it) {
+    SolveStatus status = SolveStatus::MaxIterations;
+    if (!prepared_ && !prepare(deadline, status)) return status;
+    // The preparation is used once: the step below moves the trajectory it linearized.
+    prepared_ = false;
     const Clock::time_point start = Clock::now();
     if (start >= deadline) return SolveStatus::Deadline;
     IterationStats s;
     s.iteration = it;
-    if (!computeDerivatives()) return fail(SolveStatus::NonFinite);
-    // A Quu that is not positive definite: more regularization, until the limit or the deadline.
-    // From μ = 0 the first raise goes to kRegFloor, so the retries are bounded.
-    while (!backwardPass()) {
-      if (backward_nonfinite_) return fail(SolveStatus::NonFinite);
-      reg_ = std::max(reg_ * options.reg_factor, kRegFloor);
-      if (reg_ > options.reg_max) return fail(SolveStatus::NoDescent);
-      if (Clock::now() >= deadline) return SolveStatus::Deadline;
-    }
+    // x0 enters here and only here: the gap f_0 (the backward pass reads f_1 ... f_T), and with
+    // it the feasibility and the predicted change of the step.
+    problem_.state().difference(xs_[0], problem_.x0(), fs_[0]);
+    gap_ = fs_[0].lpNorm<1>() + tail_gap_;
+    feasible_ = gap_ < options.gap_tolerance;
+    predictChange();
     s.stop = std::abs(d1_);
     const bool converged = s.stop < options.stop_tolerance && feasible_;
     double alpha = 1.0;
@@ -523,7 +563,8 @@ SolveStatus Solver::solve(int max_iterations, Clock::time_point deadline) {
     s.cost = cost_;
     s.gap = gap_;
     s.regularization = reg_;
-    s.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    s.time_ms =
+        prepare_ms_ + std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     if (iterations_ < kMaxStats) stats_[iterations_] = s;
     ++iterations_;
     if (callback) callback(s);

@@ -16,6 +16,12 @@
 // α = 1 on the nonlinear rollout → μ adapted (down after long steps, up after short or failed
 // ones).
 //
+// The iteration splits where the initial state x0 enters (real-time iteration, Diehl et al.
+// 2005): the derivatives and the backward pass read the trajectory and the gaps f_1 ... f_T, never
+// x0, which only sets the gap f_0 the step starts with. prepare() does the first half ahead of
+// time; the next solve() sets f_0 from the x0 of that moment and goes straight to the line search.
+// A controller prepares after publishing and so answers a new state with a rollout only.
+//
 // After construction nothing allocates: solve() works in preallocated trajectories and
 // workspaces and never throws; a non-finite value stops it with a status, keeping the last good
 // iterate.
@@ -89,8 +95,19 @@ class Solver {
   // u_k <- u_{k+n}, the tail repeating the last state and control. (Call problem.shift(n) too.)
   void shiftWarmStart(int n);
 
-  // Iterates from the current trajectory until converged, max_iterations, or the deadline.
+  // Iterates from the current trajectory until converged, max_iterations, or the deadline. The
+  // first iteration uses a pending preparation (Fddp and BoxFddp; Ddp's rollout from x0 moves the
+  // trajectory, so it discards it).
   SolveStatus solve(int max_iterations, Clock::time_point deadline = Clock::time_point::max());
+
+  // The first half of the next iteration: derivatives and backward pass at the current trajectory
+  // and μ. True when done; false, with the reason in status (Deadline, NonFinite, NoDescent),
+  // when not. Until the next solve() only x0 may change: anything else that changes the problem
+  // (shift, references, phases) must be followed by discardPreparation(); setWarmStart and
+  // shiftWarmStart discard it themselves.
+  bool prepare(Clock::time_point deadline, SolveStatus& status);
+  bool prepared() const { return prepared_; }
+  void discardPreparation() { prepared_ = false; }
 
   const std::vector<Eigen::VectorXd>& xs() const { return xs_; }
   const std::vector<Eigen::VectorXd>& us() const { return us_; }
@@ -105,7 +122,8 @@ class Solver {
   void setRegularization(double mu) { reg_ = mu; }
   int iterations() const { return iterations_; }
   // Backward passes (regularization retries included) and nonlinear rollouts (line-search trials)
-  // of the last solve: what an iteration really cost.
+  // of the last solve, the backward passes of a preparation it used included: what an iteration
+  // really cost.
   int backwardPasses() const { return backward_passes_; }
   int forwardPasses() const { return forward_passes_; }
   // Statistics of the iterations of the last solve (capacity fixed at construction).
@@ -122,17 +140,18 @@ class Solver {
   // calcDiff of all knots and the gaps (false, and the iterate's cost kept, when a value is not
   // finite); the backward pass at regularization μ (false when a Quu is not positive definite or
   // a value is not finite); the nonlinear rollout at step α into the trial trajectory (returns its
-  // cost); the cost change the quadratic model of the last backward pass predicts for step α.
+  // cost); the cost change the quadratic model of the last backward pass predicts for step α,
+  // once predictChange() has run the linearized rollout from the current gap f_0.
   bool computeDerivatives();
   bool backwardPass();
   double forwardPass(double alpha);
+  void predictChange();  // d1, d2 from the linearized rollout of the step
   double expectedCostChange(double alpha) const { return alpha * (d1_ + 0.5 * alpha * d2_); }
 
  private:
   bool rollout();  // xs from x0 and us (Ddp's feasible start); false (iterate kept) on failure
   SolveStatus fail(SolveStatus status);
-  double computeGaps();   // f_k of the current trajectory from the knots' x_next; Σ |f|₁
-  void expectedChange();  // d1, d2 from the linearized rollout of the step
+  double computeGaps();  // f_k of the current trajectory from the knots' x_next; Σ |f|₁
   bool finiteTrajectory() const;
   void eulerProducts(const ActionData& d, int nu);  // Qxx, Qxu, Quu of an Euler knot
 
@@ -163,7 +182,10 @@ class Solver {
   bool has_bounds_ = false;
   bool backward_nonfinite_ = false;
   bool feasible_ = false;
+  bool prepared_ = false;  // derivatives and backward pass done for the next iteration
+  double prepare_ms_ = 0.0;
   double cost_ = 0.0, gap_ = 0.0, d1_ = 0.0, d2_ = 0.0, reg_ = 0.0;
+  double tail_gap_ = 0.0;  // Σ_{k ≥ 1} |f_k|₁: the gaps the backward pass reads
   int iterations_ = 0;
   int backward_passes_ = 0, forward_passes_ = 0;
   std::vector<IterationStats> stats_;

@@ -54,7 +54,10 @@ inline Run run(const ControllerConfig& config, const sim::SimNodeOptions& sim_op
     const std::int64_t stamp = sim.publishState();
     while (lcm.handleTimeout(0) > 0) {
     }
-    if (mpc.tickDue()) mpc.tick(Mpc::Clock::time_point::max());
+    if (mpc.tickDue()) {
+      mpc.tick(Mpc::Clock::time_point::max());
+      mpc.prepare(Mpc::Clock::time_point::max());
+    }
     while (lcm.handleTimeout(0) > 0) {
     }
     if (stamp >= 0 && !sim.answered(stamp)) sim.countLockstepTimeout();

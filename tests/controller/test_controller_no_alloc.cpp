@@ -46,13 +46,19 @@ void tickNoAllocation(const std::string& robot, int ticks) {
   std::int64_t t = 1000;
   for (int i = 0; i < ticks; ++i) {
     t += period;
+    // Every other tick without a preparation (a deadline already passed), so that both paths
+    // run: the line search on a prepared iteration, and a whole iteration after the state.
+    const bool prepare = i % 2 == 0;
     const long n = allocations([&] {
+      node.prepare(prepare ? Mpc::Clock::time_point::max() : Mpc::Clock::now());
       feed(t);
       node.tick(Mpc::Clock::time_point::max());
     });
     EXPECT_EQ(n, 0) << robot << " tick " << i;
+    EXPECT_EQ(node.mpc().status().prepared, prepare ? 1 : 0) << robot << " tick " << i;
   }
   EXPECT_EQ(node.mpc().counters().fallbacks, 0);
+  EXPECT_EQ(node.mpc().counters().unprepared_solves, ticks / 2);
   // A deadline already passed: the best iterate, flagged.
   t += period;
   EXPECT_EQ(allocations([&] {

@@ -470,5 +470,58 @@ TEST(LocomotionSolvers, ThreadCountDoesNotChangeTheSolution) {
   for (size_t k = 0; k < us[0].size(); ++k) EXPECT_TRUE(us[0][k] == us[1][k]) << k;
 }
 
+// Real-time iteration: the derivatives and the backward pass do not read x0, so an iteration
+// prepared before x0 changed gives the same bits as one done entirely after.
+TEST(LocomotionSolvers, PreparedIterationMatchesAFullOneAtTheNewState) {
+  Case c = loco_cases::make(Problem::SoloTrot, kShared);
+  ShootingProblem& problem = c.loco->problem();
+  Solver solver(problem, SolverKind::BoxFddp);
+  solver.setControlBounds(c.loco->controlLower(), c.loco->controlUpper());
+  solveFromStanding(*c.loco, solver, 3);  // a trajectory with gaps and a policy, mid-way
+  const std::vector<Eigen::VectorXd> xs0 = solver.xs(), us0 = solver.us();
+  const double mu = solver.regularization();
+  const Eigen::VectorXd x0_old = problem.x0();
+  Eigen::VectorXd x0_new = x0_old;
+  x0_new[0] += 0.01;                     // base 1 cm forward
+  x0_new[c.robot->model.nq + 5] += 0.3;  // base yaw rate
+  x0_new[10] += 0.05;                    // a joint
+
+  std::vector<Eigen::VectorXd> xs[2], us[2];
+  std::vector<Eigen::MatrixXd> K[2];
+  int passes[2] = {0, 0};
+  for (int prepared : {0, 1}) {
+    ASSERT_TRUE(solver.setWarmStart(xs0, us0));
+    EXPECT_FALSE(solver.prepared());
+    solver.setRegularization(mu);
+    if (prepared) {
+      problem.setX0(x0_old);
+      SolveStatus why = SolveStatus::MaxIterations;
+      ASSERT_TRUE(solver.prepare(Solver::Clock::time_point::max(), why)) << toString(why);
+      EXPECT_TRUE(solver.prepared());
+    }
+    problem.setX0(x0_new);
+    solver.solve(1);
+    EXPECT_EQ(solver.iterations(), 1);
+    EXPECT_FALSE(solver.prepared());
+    passes[prepared] = solver.backwardPasses();  // the preparation's count, not one more
+    xs[prepared] = solver.xs();
+    us[prepared] = solver.us();
+    K[prepared] = solver.K();
+  }
+  EXPECT_GT(solver.stats()[0].step, 0.0);
+  EXPECT_GE(passes[0], 1);
+  EXPECT_EQ(passes[0], passes[1]);
+  for (size_t k = 0; k < xs[0].size(); ++k) EXPECT_TRUE(xs[0][k] == xs[1][k]) << k;
+  for (size_t k = 0; k < us[0].size(); ++k) EXPECT_TRUE(us[0][k] == us[1][k]) << k;
+  for (size_t k = 0; k < K[0].size(); ++k) EXPECT_TRUE(K[0][k] == K[1][k]) << k;
+  // The step started from the new state, not the old one.
+  Eigen::VectorXd d(problem.state().ndx());
+  problem.state().difference(x0_new, xs[1][0], d);
+  const double step = solver.stats()[0].step;
+  Eigen::VectorXd d_old(problem.state().ndx());
+  problem.state().difference(x0_new, x0_old, d_old);
+  EXPECT_LE(d.norm(), (1.0 - step) * d_old.norm() + 1e-9);
+}
+
 }  // namespace
 }  // namespace stride

@@ -139,6 +139,7 @@ TEST(Fddp, ExpectedChangeMatchesActualForEveryStep) {
   const double cost = solver.cost();
   ASSERT_GT(solver.gap(), 1.0);
   ASSERT_TRUE(solver.backwardPass());
+  solver.predictChange();
   for (double alpha : {1.0, 0.5, 0.25, 0.125, 0.01}) {
     const double change = solver.forwardPass(alpha) - cost;
     EXPECT_NEAR(solver.expectedCostChange(alpha), change, 1e-9 * std::abs(cost)) << alpha;
@@ -280,6 +281,7 @@ TEST(Solver, EulerStructureMatchesDenseProducts) {
       s->setRegularization(1e-6);
       ASSERT_TRUE(s->computeDerivatives());
       ASSERT_TRUE(s->backwardPass());
+      s->predictChange();
     }
     for (int k = 0; k < T; ++k) {
       const double scale = 1.0 + dense.K()[k].cwiseAbs().maxCoeff();

@@ -1,7 +1,10 @@
 // controller_tick/<robot>: one stride-mpc tick (newest state in → policy and status encoded and
 // handed to the publisher), measured inside the closed loop with the mock robot in lock-step over
 // an in-process bus, so every tick sees a real state of a robot that stands, then trots or walks.
-// Only the tick is timed (manual time); the simulation between ticks is not.
+// Only the tick is timed (manual time): the latency. The preparation that follows it (the
+// derivatives and backward pass of the next tick's iteration, Mpc::prepare) is reported as the
+// counter prepare_ms; tick + prepare_ms is the controller's work per period. The simulation
+// between ticks is not timed.
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -43,18 +46,26 @@ struct ClosedLoop {
     const Robot& r = mpc.mpc().robot();
     sim.reset(r.default_q, Eigen::VectorXd::Zero(r.model.nv));
   }
-  // One period: a state out, the tick (its duration returned), the answer applied. False when the
-  // robot fell.
-  bool period(double& tick_seconds) {
+  // One period: a state out, the tick (state in → policy out: its duration returned), the
+  // preparation for the next state (its duration in prepare_seconds), the answer applied. False
+  // when the robot fell.
+  bool period(double& tick_seconds, double& prepare_seconds) {
     sim.publishState();
     while (lcm.handleTimeout(0) > 0) {
     }
     const auto t0 = std::chrono::steady_clock::now();
     mpc.tick(Mpc::Clock::time_point::max());
-    tick_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const auto t1 = std::chrono::steady_clock::now();
+    mpc.prepare(Mpc::Clock::time_point::max());
+    tick_seconds = std::chrono::duration<double>(t1 - t0).count();
+    prepare_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
     while (lcm.handleTimeout(0) > 0) {
     }
     return sim.advance(sim.stepsPerState());
+  }
+  bool period() {
+    double a = 0.0, b = 0.0;
+    return period(a, b);
   }
 
   ControllerConfig config;
@@ -66,30 +77,43 @@ struct ClosedLoop {
 
 void controllerTick(benchmark::State& state, const char* robot, double warmup) {
   ClosedLoop loop(robot);
-  double seconds = 0.0;
   while (loop.sim.simulator().time() < warmup)
-    if (!loop.period(seconds)) loop.reset();
+    if (!loop.period()) loop.reset();
+  double seconds = 0.0, prepare = 0.0, prepare_total = 0.0;
+  long backward = 0, forward = 0;
+  const Solver& solver = *loop.mpc.mpc().solver();
   for (auto _ : state) {
-    if (!loop.period(seconds)) loop.reset();  // fell: start again, the timing is what matters
+    if (!loop.period(seconds, prepare))
+      loop.reset();  // fell: start again, the timing is what matters
     state.SetIterationTime(seconds);
+    prepare_total += prepare;
+    forward += solver.forwardPasses();
+    backward += solver.backwardPasses();
   }
+  const auto per_tick = [&](double x) { return x / static_cast<double>(state.iterations()); };
+  state.counters["rollouts"] = per_tick(static_cast<double>(forward));
+  state.counters["backward"] = per_tick(static_cast<double>(backward));
   state.counters["fell"] = loop.sim.stats().fell;
+  // The other half of each iteration, run after the policy went out (ms per tick).
+  state.counters["prepare_ms"] = 1e3 * per_tick(prepare_total);
+  state.counters["unprepared"] = static_cast<double>(loop.mpc.mpc().counters().unprepared_solves);
 }
 
 // The parts of one tick's FDDP iteration on the problem the controller has 3 s into the gait
 // (stepping): derivatives of all knots, the backward pass, one rollout of the line search.
 void tickParts(benchmark::State& state, const char* robot, int part) {
   ClosedLoop loop(robot);
-  double seconds = 0.0;
   while (loop.sim.simulator().time() < 3.0) {
-    if (!loop.period(seconds)) {
+    if (!loop.period()) {
       state.SkipWithError("the robot fell during the warm-up");
       return;
     }
   }
   Solver& solver = *loop.mpc.mpc().solver();
+  solver.discardPreparation();  // the parts below change what it linearized
   solver.computeDerivatives();
   solver.backwardPass();
+  solver.predictChange();
   for (auto _ : state) {
     if (part == 0) benchmark::DoNotOptimize(solver.computeDerivatives());
     if (part == 1) benchmark::DoNotOptimize(solver.backwardPass());

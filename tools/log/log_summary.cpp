@@ -48,7 +48,8 @@ int main(int argc, char** argv) {
   bool fell = false, policy_seen = false;
   double x0 = 0, y0 = 0, x1 = 0, y1 = 0, z_first = 0, z_min = INFINITY, z_max = -INFINITY;
   double max_tilt = 0.0, t_first = 0.0, t_last = 0.0;
-  std::vector<double> latency_ms, solve_ms;
+  std::vector<double> latency_ms, solve_ms, prepare_ms;
+  long prepared = 0, full_steps = 0, short_steps = 0, no_steps = 0;
   stride::mpc_status_t last_status{};
   for (const lcm::LogEvent* e = log.readNextEvent(); e != nullptr; e = log.readNextEvent()) {
     if (e->channel == state_channel) {
@@ -89,6 +90,12 @@ int main(int argc, char** argv) {
         if (policy_seen) {
           latency_ms.push_back(st.tick_ms);
           solve_ms.push_back(st.solve_ms);
+          if (st.prepared) {
+            ++prepared;
+            prepare_ms.push_back(st.prepare_ms);
+          }
+          if (st.solver_status >= 0)
+            (st.step >= 1.0 ? full_steps : st.step > 0.0 ? short_steps : no_steps)++;
         }
         policy_seen = true;
       }
@@ -120,6 +127,15 @@ int main(int argc, char** argv) {
       static_cast<long long>(last_status.deadline_misses),
       static_cast<long long>(last_status.fallbacks),
       static_cast<long long>(last_status.rejected_messages));
+  // The other half of each iteration (run after the policy went out) and how the line search
+  // went: a tick's latency is one rollout per step length tried.
+  const long solved = full_steps + short_steps + no_steps;
+  const auto pct = [&](long n) { return solved > 0 ? 100.0 * n / solved : 0.0; };
+  std::printf(
+      "solver: %ld of %zu ticks answered a prepared iteration (preparation p50 %.0f us, p99 %.0f "
+      "us); steps: full %.0f%%, shorter %.0f%%, none %.0f%%\n",
+      prepared, latency_ms.size(), percentile(prepare_ms, 0.5) * 1e3,
+      percentile(prepare_ms, 0.99) * 1e3, pct(full_steps), pct(short_steps), pct(no_steps));
   if (bad > 0) std::printf("log: %ld undecodable events skipped\n", bad);
   if (!summary_path.empty()) {
     std::ofstream f(summary_path);
@@ -130,7 +146,12 @@ int main(int argc, char** argv) {
       << ", \"max\": " << lmax << "},\n  \"solve_time_us_p50\": " << percentile(solve_ms, 0.5) * 1e3
       << ",\n  \"deadline_misses\": " << last_status.deadline_misses
       << ",\n  \"fallbacks\": " << last_status.fallbacks << ",\n  \"ticks\": " << statuses
-      << ",\n  \"rejected_messages\": " << last_status.rejected_messages << "\n}\n";
+      << ",\n  \"rejected_messages\": " << last_status.rejected_messages
+      << ",\n  \"prepared_ticks\": " << prepared
+      << ",\n  \"prepare_time_us\": {\"p50\": " << percentile(prepare_ms, 0.5) * 1e3
+      << ", \"p99\": " << percentile(prepare_ms, 0.99) * 1e3 << "}"
+      << ",\n  \"line_search\": {\"full\": " << full_steps << ", \"shorter\": " << short_steps
+      << ", \"none\": " << no_steps << "}\n}\n";
     if (!f) {
       std::fprintf(stderr, "stride-log-summary: cannot write '%s'\n", summary_path.c_str());
       return 1;
