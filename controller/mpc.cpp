@@ -105,10 +105,10 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, SolveStatus& result) {
   // The first solve, before any policy went out, runs to convergence (no deadline); a restart
   // after a failure gets the normal budget and converges over the following ticks.
   const bool first = !have_solved_;
-  // A preparation for a time within half a knot of t is this tick's linearization: only x0
-  // changes (the rest of the half knot stays a gap at x0, as after a shift).
-  const bool use_prepared =
-      !need_restart_ && solver_->prepared() && std::abs(t - t_prepared_) < 0.5 * dt;
+  // The preparation serves while the state is less than a knot from the prepared knot 0: only
+  // x0 changes, and the time between them stays a gap at x0 as after a shift. (Within half a knot
+  // when ticks come on time; up to a period more after a late tick, when the loop skipped one.)
+  const bool use_prepared = !need_restart_ && solver_->prepared() && std::abs(t - t_warm_) < dt;
   status_.prepared = use_prepared ? 1 : 0;
   status_.prepare_ms = use_prepared ? prepare_ms_ : 0.0;
   if (use_prepared) {
@@ -238,7 +238,6 @@ void Mpc::prepare(Clock::time_point deadline) {
   const Clock::time_point start = Clock::now();
   SolveStatus why = SolveStatus::MaxIterations;
   if (solver_->prepare(deadline, why)) {
-    t_prepared_ = t;
     prepare_ms_ = millisSince(start);
   } else if (why == SolveStatus::NonFinite || why == SolveStatus::NoDescent) {
     // The trajectory cannot be linearized: the next tick starts again from standing.

@@ -15,9 +15,9 @@
 //      joint hold policy), flagged in both messages and counted.
 // Steps 2-3 and the first half of step 4 do not need the state (Solver::prepare: derivatives and
 // backward pass never read x0), so prepare() runs them after the policy went out, for the time
-// the next state is expected at; the next tick, when its state is within half a knot of that
-// time, only sets x0 and runs the line search. The state-to-policy latency is then one or a few
-// rollouts instead of a whole iteration (controller/README.md, "Real-time iteration").
+// the next state is expected at; the next tick, when its state is less than a knot from the
+// prepared knot 0, only sets x0 and runs the line search. The state-to-policy latency is then one
+// or a few rollouts instead of a whole iteration (controller/README.md, "Real-time iteration").
 // After start-up nothing here allocates or throws (tested). Start-up (the first valid state) builds
 // the problem around the robot's measured position and solves it to convergence before the first
 // policy goes out.
@@ -121,7 +121,6 @@ class Mpc {
   bool deadline_cut_ = false;  // the last tick's solve stopped at its deadline
   bool solved_ = false;        // the last tick solved (prepare() may follow)
   double t_last_ = 0.0;        // plan time of the last tick's state
-  double t_prepared_ = 0.0;    // plan time the pending preparation is for
   double prepare_ms_ = 0.0;    // its duration
   int previous_ticks_ = 0;     // consecutive ticks on the previous policy
 
