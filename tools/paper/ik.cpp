@@ -2,8 +2,6 @@
 
 #include <Eigen/Dense>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 #include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/data.hpp"
@@ -64,6 +62,7 @@ IkTrajectory trackIk(const Model& model, const StridePlan& plan, const Eigen::Ve
   Data data(model);
   const std::array<int, 2> frames = {model.getFrameId(plan.feet[0]),
                                      model.getFrameId(plan.feet[1])};
+  const int chest = model.getFrameId("chest");
   IkTrajectory out;
   out.q.assign(N + 1, q_nominal);
   Eigen::VectorXd q = q_nominal;
@@ -92,10 +91,16 @@ IkTrajectory trackIk(const Model& model, const StridePlan& plan, const Eigen::Ve
         H += o.w_foot * J.transpose() * J;
         g += o.w_foot * J.transpose() * e;
       }
-      // Base upright (the free-flyer's local angular velocity is v[3:6]).
+      // Base and chest upright (the free-flyer's local angular velocity is v[3:6]): without the
+      // chest, the torso pitch is the cheapest way to move the CoM and the solution flips
+      // between leaning back and forward.
       const Eigen::Vector3d e_base = log3(data.oMi[1].R.transpose());
       H.block<3, 3>(3, 3) += o.w_base * Eigen::Matrix3d::Identity();
       g.segment<3>(3) += o.w_base * e_base;
+      getFrameJacobian(model, data, chest, ReferenceFrame::Local, J);
+      const Eigen::Vector3d e_chest = log3(data.oMf[chest].R.transpose());
+      H += o.w_base * J.bottomRows<3>().transpose() * J.bottomRows<3>();
+      g += o.w_base * J.bottomRows<3>().transpose() * e_chest;
       // Posture.
       const Eigen::VectorXd e_post = difference(model, q, q_nominal);
       H.diagonal().tail(nv - 6).array() += o.w_posture;
@@ -125,17 +130,6 @@ IkTrajectory trackIk(const Model& model, const StridePlan& plan, const Eigen::Ve
       if (dq.norm() < o.tolerance) break;
     }
     out.q[k] = q;
-    if (std::getenv("IK_DEBUG")) {
-      const Eigen::VectorXd lo = q.tail(nq - 7) - model.lowerPositionLimit.tail(nq - 7);
-      const Eigen::VectorXd hi = model.upperPositionLimit.tail(nq - 7) - q.tail(nq - 7);
-      int at = -1;
-      for (int i = 0; i < nq - 7; ++i)
-        if (lo[i] < 1e-6 || hi[i] < 1e-6) at = i;
-      const Eigen::Vector3d ec = plan.com[k] - data.com;
-      std::printf("e_com %.4f %.4f %.4f ", ec.x(), ec.y(), ec.z());
-      std::printf("k %d com_err %.4f |dq| %.2e limit %d q_base %.3f %.3f %.3f\n", k,
-                  (plan.com[k] - data.com).norm(), dq.norm(), at, q[0], q[1], q[2]);
-    }
     framesForwardKinematics(model, data, q);
     out.max_com_error =
         std::max(out.max_com_error, (centerOfMass(model, data, q) - plan.com[k]).norm());

@@ -5,6 +5,7 @@
 //
 // Kinematics: at each sample k, Gauss-Newton iterations from q_{k-1} on the stacked tasks
 //   w_com |com(q) - c_k|² + w_foot Σ_c |log6(M_c(q)⁻¹ M_c,k)|² + w_base |log3(R_base(q)ᵀ)|²
+//   + w_base |log3(R_chest(q)ᵀ)|² (base and torso upright)
 //   + w_posture |q_joints - q_nominal|²,
 // each step the damped least-squares solution (Σ wᵢ Jᵢᵀ Jᵢ + λ I) dq = Σ wᵢ Jᵢᵀ eᵢ, then the
 // joint limits by projection.
@@ -26,7 +27,7 @@
 namespace stride {
 
 struct IkOptions {
-  double w_com = 1e3, w_foot = 1e3, w_base = 10.0, w_posture = 1e-2;
+  double w_com = 1e3, w_foot = 1e4, w_base = 10.0, w_posture = 1e-2;
   double damping = 1e-6;        // λ of the least-squares step
   int iterations = 30;          // Gauss-Newton iterations per sample (stops earlier when converged)
   double tolerance = 1e-10;     // on |dq|
