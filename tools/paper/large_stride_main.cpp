@@ -65,6 +65,7 @@ int main(int argc, char** argv) {
   std::string out;
   std::vector<double> lengths = {0.8, 1.0};
   StridePlanOptions po;
+  po.dt = 0.04;  // at 20 ms the 100 cm IK trajectory has a kink that stalls DDP (README)
   StrideDdpOptions dop;
   IkOptions iko;
   int iterations = 100;
@@ -156,7 +157,7 @@ int main(int argc, char** argv) {
       f << "t,closed_L,closed_R,com_ref_x,com_ref_y,com_ref_z,zmp_x,zmp_y,zmp_ref_x,zmp_ref_y,"
            "foot_L_x,foot_L_z,foot_R_x,foot_R_z,fref_L_z,fref_R_z,ik_fz_L,ik_fz_R,ddp_fz_L,"
            "ddp_fz_R,ik_knee_L,ik_knee_R,ddp_knee_L,ddp_knee_R,ik_base_x,ik_base_z,ddp_base_x,"
-           "ddp_base_z,ik_cop_L,ik_cop_R,ddp_cop_L,ddp_cop_R,sim_fz_L,sim_fz_R,sim_base_x,sim_base_"
+           "ddp_base_z,sim_fz_L,sim_fz_R,sim_base_x,sim_base_"
            "z\n";
       const int kl = model.joints[model.getJointId("L_knee")].idx_v - 6;
       const int kr = model.joints[model.getJointId("R_knee")].idx_v - 6;
