@@ -1,0 +1,146 @@
+#pragma once
+// The paper's large-stride experiment (§V-A, Fig. 2-4): a walk of large strides on flat ground,
+// planned from the same contact sequence and centroidal reference (centroidal_planner.hpp) by
+//   - the IK baseline (ik.hpp): instant-by-instant whole-body IK, forces and torques by contact
+//     inverse dynamics;
+//   - KKT-DDP (this file): box-FDDP over rigid contact knots (impulse knots at touch-downs)
+//     with the paper's costs, warm-started from the IK trajectory;
+// then compared on the same measures (peak normal force per foot, peak knee torque, torque cost)
+// and the DDP motion played on the mock robot (sim/) with its feedback policy.
+//
+// DDP costs per contact knot (weights in StrideDdpOptions):
+//   "com"      w_com |com - c_ref|²                        CoM tracking
+//   "foot_<c>" w_foot |log6(M_c,ref⁻¹ M_c)|²               foot placement (swing arc; footholds)
+//   "force_<c>" w_force |λ_c - λ_c,ref|²                   contact force tracking, closed feet
+//   "torque"   w_torque |τ|²                               torque minimization
+//   "posture"  Σ w (x ⊖ x_ref)²: base orientation upright, joints to the nominal posture
+//              (w_posture), all velocities to zero (w_velocity)
+//   "cone_<c>", "cop_<c>": friction pyramid and centre of pressure in the sole (bounds, so the
+//              motion is one a real foot can make; both are zero for the IK warm start's forces
+//              when they are feasible)
+// and the torque limits as the box of box-FDDP. Impulse knots carry posture, torque (u has no
+// effect there) and feet; the terminal knot the posture (at rest) and the CoM.
+
+#include <array>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "config/robot_config.hpp"
+#include "solver/ddp/solver.hpp"
+#include "solver/ocp/problem.hpp"
+#include "tools/paper/centroidal_planner.hpp"
+#include "tools/paper/ik.hpp"
+
+namespace stride {
+
+struct StrideDdpOptions {
+  double w_com = 1e4;
+  double w_foot = 1e5;
+  double w_force = 1e-3;
+  double w_torque = 1e-4;
+  double w_posture = 1e-1;
+  double w_base_orientation = 10.0;
+  double w_velocity = 1e-2;
+  double w_cone = 1e2, w_cop = 1e2;
+  double w_terminal = 10.0;  // the terminal posture weights are the running ones times this
+  double mu = 0.7;
+  double sole_margin = 0.8;  // the centre of pressure stays in this fraction of the sole
+  double contact_kd = 50.0;  // Baumgarte velocity gain of the rigid contacts
+  bool torque_limits = true;
+};
+
+// The cost groups of the breakdown (Fig. 2), in this order.
+const std::vector<std::string>& strideCostGroups();
+
+class StrideProblem {
+ public:
+  // q_nominal: the posture the regularization pulls to (robot.default_q).
+  StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& options);
+  StrideProblem(const StrideProblem&) = delete;
+  StrideProblem& operator=(const StrideProblem&) = delete;
+
+  ShootingProblem& problem() { return *problem_; }
+  const StridePlan& plan() const { return plan_; }
+  const Model& model() const { return robot_.model; }
+  // The plan sample a knot stands for; impulse knots share the sample of the contact knot after
+  // them. contactKnot(k): the contact knot of sample k (k < N).
+  int sampleOfKnot(int knot) const { return sample_[knot]; }
+  bool isImpulse(int knot) const { return impulse_[knot] != 0; }
+  int contactKnot(int sample) const { return contact_knot_[sample]; }
+  const Eigen::VectorXd& controlLower() const { return u_lower_; }
+  const Eigen::VectorXd& controlUpper() const { return u_upper_; }
+
+  // The warm start from an IK trajectory (its x0 becomes the problem's x0).
+  void warmStart(const IkTrajectory& ik, std::vector<Eigen::VectorXd>& xs,
+                 std::vector<Eigen::VectorXd>& us);
+  // The cost of each group (strideCostGroups) at (xs, us): the problem evaluated with only that
+  // group's terms on. Leaves the problem's data at the full cost of (xs, us).
+  std::vector<double> costBreakdown(const std::vector<Eigen::VectorXd>& xs,
+                                    const std::vector<Eigen::VectorXd>& us);
+  // The contact forces of every sample k < N at (xs, us) ([f; τ], world axes, per foot).
+  std::vector<std::array<Vector6d, 2>> forces(const std::vector<Eigen::VectorXd>& xs,
+                                              const std::vector<Eigen::VectorXd>& us);
+
+ private:
+  void setGroup(int group);  // -1: every term as built
+
+  const Robot& robot_;
+  StridePlan plan_;
+  StrideDdpOptions options_;
+  std::unique_ptr<ShootingProblem> problem_;
+  std::vector<int> sample_, contact_knot_;
+  std::vector<char> impulse_;
+  // Per knot (the terminal last): each term's group and its activity as built.
+  std::vector<std::vector<int>> term_group_;
+  std::vector<std::vector<char>> term_active_;
+  Eigen::VectorXd u_lower_, u_upper_;
+};
+
+// The measures of one motion over samples k < N.
+struct StrideMetrics {
+  std::array<double, 2> peak_normal_force{0.0, 0.0};  // per foot [N]
+  double peak_normal_force_N = 0.0;                   // max of both
+  double peak_knee_torque_Nm = 0.0;                   // |τ| of either knee
+  double torque_cost = 0.0;                           // Σ dt |τ|² [N² m² s]
+  double peak_total_normal_force_N = 0.0;
+};
+StrideMetrics strideMetrics(const Model& model, const StridePlan& plan,
+                            const std::vector<Eigen::VectorXd>& tau,
+                            const std::vector<std::array<Vector6d, 2>>& force);
+
+// The DDP solve, iteration by iteration, with the cost breakdown after each.
+struct StrideSolve {
+  std::vector<Eigen::VectorXd> xs, us;
+  std::vector<Eigen::MatrixXd> K;
+  std::vector<std::vector<double>> breakdown;  // [iteration 0 = warm start, 1..]
+  std::vector<double> cost, gap;
+  int iterations = 0;
+  double solve_time_s = 0.0;
+  std::string status;
+};
+StrideSolve solveStrides(StrideProblem& sp, const IkTrajectory& ik, int iterations,
+                         bool verbose = false);
+
+// The DDP motion played on the mock robot: the simulator (1 ms steps, sole corners on flat
+// ground) driven by the policy τ = u_k + K_k (x_k ⊖ x) of the contact knots, evaluated every
+// step (sim::PolicyEvaluator), then holding the last knot for `hold_s`.
+struct StrideSimResult {
+  bool fell = false;
+  double fall_time = -1.0;
+  bool completed = false;  // no fall, both feet down at the end, base within 10 cm of the plan's
+  std::array<double, 2> peak_normal_force{0.0, 0.0};  // raw, per 1 ms step
+  // Peak of each foot's normal force averaged over the knot period (the plan's resolution).
+  std::array<double, 2> peak_normal_force_knot{0.0, 0.0};
+  double max_base_error = 0.0;  // |base position - plan| [m]
+  double final_base_error = 0.0;
+  double max_tilt_deg = 0.0;
+  int clamped_steps = 0;
+  // Per knot period: time, mean normal force per foot, base x, base z.
+  std::vector<std::array<double, 5>> trace;
+};
+StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,
+                                double hold_s = 1.0);
+
+}  // namespace stride

@@ -1,0 +1,250 @@
+// stride-paper-large-stride: the paper's large strides on flat ground (§V-A, Fig. 2-4). For each
+// stride length: plans the contact sequence and the centroidal reference, tracks it with the IK
+// baseline and with KKT-DDP (warm-started from the IK), plays the DDP policy on the mock robot,
+// prints the table and writes the trajectories for tools/paper/plot_large_stride.py.
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "solver/multibody/frames.hpp"
+#include "solver/multibody/kinematics.hpp"
+#include "tools/paper/large_stride.hpp"
+
+using namespace stride;
+
+namespace {
+// The points of the sagittal stick figure, and the segments between them.
+const std::vector<std::string> kFigureFrames = {
+    "head",         "chest",  "base_link", "L_shoulder_pitch_link",
+    "L_forearm",    "L_hand", "L_thigh",   "L_shank",
+    "L_ankle_link", "L_sole", "R_thigh",   "R_shank",
+    "R_ankle_link", "R_sole"};
+const std::vector<std::pair<int, int>> kFigureSegments = {{0, 1},  {1, 2},   {3, 4},   {4, 5},
+                                                          {2, 6},  {6, 7},   {7, 8},   {8, 9},
+                                                          {2, 10}, {10, 11}, {11, 12}, {12, 13}};
+
+std::string json(const StrideMetrics& m) {
+  std::ostringstream s;
+  s << "{\"peak_normal_force_N\": " << m.peak_normal_force_N
+    << ", \"peak_normal_force_left_N\": " << m.peak_normal_force[0]
+    << ", \"peak_normal_force_right_N\": " << m.peak_normal_force[1]
+    << ", \"peak_knee_torque_Nm\": " << m.peak_knee_torque_Nm
+    << ", \"torque_cost\": " << m.torque_cost << "}";
+  return s.str();
+}
+
+void writeFrames(const Model& model, const std::string& path, const std::vector<double>& t,
+                 const std::vector<Eigen::VectorXd>& q) {
+  std::ofstream f(path);
+  f << "t";
+  for (const auto& n : kFigureFrames) f << "," << n << "_x," << n << "_z";
+  f << "\n";
+  Data data(model);
+  std::vector<int> ids;
+  for (const auto& n : kFigureFrames) ids.push_back(model.getFrameId(n));
+  for (size_t k = 0; k < q.size(); ++k) {
+    framesForwardKinematics(model, data, q[k]);
+    f << t[k];
+    for (int id : ids) f << "," << data.oMf[id].p.x() << "," << data.oMf[id].p.z();
+    f << "\n";
+  }
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "The paper's large strides (§V-A): IK baseline vs KKT-DDP, checked on the mock robot"};
+  std::string robot_yaml =
+      std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml";
+  std::string out;
+  std::vector<double> lengths = {0.8, 1.0};
+  StridePlanOptions po;
+  po.dt = 0.04;  // at 20 ms the 100 cm IK trajectory has a kink that stalls DDP (README)
+  StrideDdpOptions dop;
+  IkOptions iko;
+  int iterations = 100;
+  bool verbose = false, no_sim = false;
+  app.add_option("--robot", robot_yaml, "robot YAML")->check(CLI::ExistingFile);
+  app.add_option("--out", out, "output folder (CSV, JSON); nothing written without it");
+  app.add_option("--lengths", lengths, "stride lengths [m] (foot displacement per step)");
+  app.add_option("--strides", po.strides, "full strides (plus a half step at each end)");
+  app.add_option("--dt", po.dt, "knot period [s]")->check(CLI::PositiveNumber);
+  app.add_option("--t-single", po.t_single, "single support [s]")->check(CLI::PositiveNumber);
+  app.add_option("--t-double", po.t_double, "double support [s]")->check(CLI::PositiveNumber);
+  app.add_option("--swing-height", po.swing_height, "swing apex [m]");
+  app.add_option("--iterations", iterations, "DDP iterations (the paper stops at 100)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--w-com", dop.w_com, "CoM weight");
+  app.add_option("--w-foot", dop.w_foot, "foot placement weight");
+  app.add_option("--w-force", dop.w_force, "contact force tracking weight");
+  app.add_option("--w-torque", dop.w_torque, "torque weight");
+  app.add_option("--w-posture", dop.w_posture, "joint posture weight");
+  app.add_option("--w-velocity", dop.w_velocity, "velocity weight");
+  app.add_flag("--no-sim", no_sim, "skip the mock-robot check");
+  app.add_flag("-v,--verbose", verbose, "print the iteration table");
+  CLI11_PARSE(app, argc, argv);
+
+  const Robot robot = loadRobot(robot_yaml);
+  const Model& model = robot.model;
+  const std::array<std::string, 2> feet = {robot.contacts[0].frame, robot.contacts[1].frame};
+  if (!out.empty()) std::filesystem::create_directories(out);
+
+  std::ostringstream summary;
+  summary << "{\n  \"robot\": \"" << robot.name << "\",\n  \"dt\": " << po.dt
+          << ",\n  \"iterations\": " << iterations << ",\n  \"strides\": [";
+  struct Row {
+    double length;
+    StrideMetrics ik, ddp;
+    StrideSimResult sim;
+    bool sim_run;
+    double weight;
+  };
+  std::vector<Row> rows;
+  for (size_t li = 0; li < lengths.size(); ++li) {
+    StridePlanOptions o = po;
+    o.stride = lengths[li];
+    const StridePlan plan = planStrides(model, robot.default_q, feet, o);
+    std::printf("stride %.2f m: %d samples (%.2f s), CoM lowered %.1f cm to %.3f m, leg %.2f m\n",
+                o.stride, plan.N, plan.N * o.dt, 100.0 * plan.com_drop, plan.com_height,
+                plan.leg_length);
+    const auto t_ik = std::chrono::steady_clock::now();
+    const IkTrajectory ik = trackIk(model, plan, robot.default_q, iko);
+    std::printf(
+        "  IK: %.2f s, max CoM error %.2g m, max foot error %.2g m, max base-row residual %.2g\n",
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_ik).count(),
+        ik.max_com_error, ik.max_foot_error, ik.max_base_residual);
+    StrideProblem sp(robot, plan, dop);
+    const StrideSolve solve = solveStrides(sp, ik, iterations, verbose);
+    std::printf("  DDP: %d iterations (%s), %.1f s, cost %.4g -> %.4g, gap %.2g\n",
+                solve.iterations, solve.status.c_str(), solve.solve_time_s, solve.cost.front(),
+                solve.cost.back(), solve.gap.back());
+    const auto ddp_force = sp.forces(solve.xs, solve.us);
+    std::vector<Eigen::VectorXd> ddp_tau(plan.N);
+    for (int k = 0; k < plan.N; ++k) ddp_tau[k] = solve.us[sp.contactKnot(k)];
+    Row row{o.stride,
+            strideMetrics(model, plan, ik.tau, ik.force),
+            strideMetrics(model, plan, ddp_tau, ddp_force),
+            {},
+            !no_sim,
+            plan.mass * 9.81};
+    if (!no_sim) {
+      row.sim = simulateStrides(robot, sp, solve);
+      std::printf(
+          "  sim: %s%s, peak normal force L/R %.0f / %.0f N (1 ms), %.0f / %.0f N (knot mean), "
+          "max base error %.3f m, final %.3f m, max tilt %.1f deg\n",
+          row.sim.completed ? "completed" : "NOT completed",
+          row.sim.fell ? (" (fell at " + std::to_string(row.sim.fall_time) + " s)").c_str() : "",
+          row.sim.peak_normal_force[0], row.sim.peak_normal_force[1],
+          row.sim.peak_normal_force_knot[0], row.sim.peak_normal_force_knot[1],
+          row.sim.max_base_error, row.sim.final_base_error, row.sim.max_tilt_deg);
+    }
+    rows.push_back(row);
+
+    if (!out.empty()) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "stride_%03d",
+                    static_cast<int>(std::lround(o.stride * 100)));
+      const std::string dir = out + "/" + name;
+      std::filesystem::create_directories(dir);
+      // Per sample: the plan, then IK and DDP forces, knee torques and CoM.
+      std::ofstream f(dir + "/trajectory.csv");
+      f << "t,closed_L,closed_R,com_ref_x,com_ref_y,com_ref_z,zmp_x,zmp_y,zmp_ref_x,zmp_ref_y,"
+           "foot_L_x,foot_L_z,foot_R_x,foot_R_z,fref_L_z,fref_R_z,ik_fz_L,ik_fz_R,ddp_fz_L,"
+           "ddp_fz_R,ik_knee_L,ik_knee_R,ddp_knee_L,ddp_knee_R,ik_base_x,ik_base_z,ddp_base_x,"
+           "ddp_base_z,sim_fz_L,sim_fz_R,sim_base_x,sim_base_"
+           "z\n";
+      const int kl = model.joints[model.getJointId("L_knee")].idx_v - 6;
+      const int kr = model.joints[model.getJointId("R_knee")].idx_v - 6;
+      for (int k = 0; k < plan.N; ++k) {
+        const Eigen::VectorXd& xd = solve.xs[sp.contactKnot(k)];
+        f << plan.t[k] << "," << plan.closed[k][0] << "," << plan.closed[k][1] << ","
+          << plan.com[k].x() << "," << plan.com[k].y() << "," << plan.com[k].z() << ","
+          << plan.zmp[k].x() << "," << plan.zmp[k].y() << "," << plan.zmp_ref[k].x() << ","
+          << plan.zmp_ref[k].y() << "," << plan.foot[k][0].x() << "," << plan.foot[k][0].z() << ","
+          << plan.foot[k][1].x() << "," << plan.foot[k][1].z() << "," << plan.force[k][0][2] << ","
+          << plan.force[k][1][2] << "," << ik.force[k][0][2] << "," << ik.force[k][1][2] << ","
+          << ddp_force[k][0][2] << "," << ddp_force[k][1][2] << "," << ik.tau[k][kl] << ","
+          << ik.tau[k][kr] << "," << ddp_tau[k][kl] << "," << ddp_tau[k][kr] << "," << ik.q[k][0]
+          << "," << ik.q[k][2] << "," << xd[0] << "," << xd[2];
+        if (row.sim_run && k < static_cast<int>(row.sim.trace.size())) {
+          const auto& s = row.sim.trace[k];
+          f << "," << s[1] << "," << s[2] << "," << s[3] << "," << s[4];
+        } else {
+          f << ",,,,";
+        }
+        f << "\n";
+      }
+      std::ofstream it(dir + "/iterations.csv");
+      it << "iteration,cost,gap";
+      for (const auto& g : strideCostGroups()) it << "," << g;
+      it << "\n";
+      for (size_t i = 0; i < solve.breakdown.size(); ++i) {
+        it << i << "," << solve.cost[i] << "," << solve.gap[i];
+        for (double v : solve.breakdown[i]) it << "," << v;
+        it << "\n";
+      }
+      std::vector<Eigen::VectorXd> qd(plan.N), qi(plan.N);
+      std::vector<double> t(plan.t.begin(), plan.t.begin() + plan.N);
+      for (int k = 0; k < plan.N; ++k) {
+        qd[k] = solve.xs[sp.contactKnot(k)].head(model.nq);
+        qi[k] = ik.q[k];
+      }
+      writeFrames(model, dir + "/frames_ddp.csv", t, qd);
+      writeFrames(model, dir + "/frames_ik.csv", t, qi);
+    }
+  }
+
+  std::printf("\n%-8s | %-21s | %-21s | %-23s | %s\n", "stride", "peak normal force [N]",
+              "peak knee torque [Nm]", "torque cost [N²m²s]", "mock robot (DDP policy)");
+  std::printf("%-8s | %10s %10s | %10s %10s | %11s %11s |\n", "", "IK", "DDP", "IK", "DDP", "IK",
+              "DDP");
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const Row& r = rows[i];
+    std::string sim = "not run";
+    if (r.sim_run) {
+      char b[160];
+      std::snprintf(b, sizeof(b), "%s, peak %.0f N (knot mean %.0f N)",
+                    r.sim.completed ? "completed" : (r.sim.fell ? "FELL" : "not completed"),
+                    std::max(r.sim.peak_normal_force[0], r.sim.peak_normal_force[1]),
+                    std::max(r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1]));
+      sim = b;
+    }
+    std::printf("%5.0f cm | %10.0f %10.0f | %10.1f %10.1f | %11.4g %11.4g | %s\n", 100 * r.length,
+                r.ik.peak_normal_force_N, r.ddp.peak_normal_force_N, r.ik.peak_knee_torque_Nm,
+                r.ddp.peak_knee_torque_Nm, r.ik.torque_cost, r.ddp.torque_cost, sim.c_str());
+    summary << (i ? "," : "") << "\n    {\"length_m\": " << r.length
+            << ", \"weight_N\": " << r.weight << ", \"ik\": " << json(r.ik)
+            << ", \"ddp\": " << json(r.ddp);
+    if (r.sim_run)
+      summary << ", \"sim\": {\"completed\": " << (r.sim.completed ? "true" : "false")
+              << ", \"fell\": " << (r.sim.fell ? "true" : "false")
+              << ", \"fall_time_s\": " << r.sim.fall_time << ", \"peak_normal_force_N\": "
+              << std::max(r.sim.peak_normal_force[0], r.sim.peak_normal_force[1])
+              << ", \"peak_normal_force_knot_mean_N\": "
+              << std::max(r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1])
+              << ", \"max_base_error_m\": " << r.sim.max_base_error
+              << ", \"final_base_error_m\": " << r.sim.final_base_error
+              << ", \"max_tilt_deg\": " << r.sim.max_tilt_deg << "}";
+    summary << "}";
+  }
+  summary << "\n  ]\n}\n";
+  if (!out.empty()) {
+    std::ofstream(out + "/summary.json") << summary.str();
+    std::ofstream sk(out + "/skeleton.json");
+    sk << "{\"frames\": [";
+    for (size_t i = 0; i < kFigureFrames.size(); ++i)
+      sk << (i ? ", " : "") << "\"" << kFigureFrames[i] << "\"";
+    sk << "], \"segments\": [";
+    for (size_t i = 0; i < kFigureSegments.size(); ++i)
+      sk << (i ? ", " : "") << "[" << kFigureSegments[i].first << ", " << kFigureSegments[i].second
+         << "]";
+    sk << "]}\n";
+  }
+  return 0;
+}
