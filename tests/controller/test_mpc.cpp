@@ -211,6 +211,53 @@ TEST(Mpc, StandingTicks) {
   EXPECT_EQ(mpc.counters().fallbacks, 0);
 }
 
+// The tick answers with the iteration prepared after the last one when the state comes near the
+// expected time, and linearizes again after the state when it does not (counted).
+TEST(Mpc, PreparedTicksAndTheirFallback) {
+  ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  Mpc mpc(config);
+  const auto never = Mpc::Clock::time_point::max();
+  robot_state_t s = standingState(mpc.robot(), 0);
+  ASSERT_TRUE(mpc.tick(&s, 0.0, never));  // start-up: nothing prepared yet, not counted
+  EXPECT_EQ(mpc.status().prepared, 0);
+  for (int i = 0; i < 4; ++i) {  // on time: every tick prepared (200 Hz, knots of 10 ms)
+    mpc.prepare(never);
+    s.utime += 5000;
+    ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+    EXPECT_EQ(mpc.status().prepared, 1) << i;
+    EXPECT_GT(mpc.status().prepare_ms, 0.0);
+    EXPECT_EQ(mpc.policy().status, kPolicySolved);
+  }
+  EXPECT_EQ(mpc.counters().unprepared_solves, 0);
+  // One period late (a skipped tick): less than a knot from the prepared knot 0, still used.
+  mpc.prepare(never);
+  s.utime += 10000;
+  ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+  EXPECT_EQ(mpc.status().prepared, 1);
+  // Three knots late: the preparation is dropped and the tick shifts and solves after the state.
+  mpc.prepare(never);
+  s.utime += 30000;
+  ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+  EXPECT_EQ(mpc.status().prepared, 0);
+  EXPECT_EQ(mpc.counters().unprepared_solves, 1);
+  EXPECT_EQ(mpc.status().unprepared_solves, 1);
+  EXPECT_EQ(mpc.policy().status, kPolicySolved);
+  // No preparation at all (the loop had no time for it): the same.
+  s.utime += 5000;
+  ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+  EXPECT_EQ(mpc.status().prepared, 0);
+  EXPECT_EQ(mpc.counters().unprepared_solves, 2);
+  // A preparation after a fallback tick does nothing (there is no solved iterate to go on from).
+  s.utime += 5000;
+  ASSERT_TRUE(mpc.tick(&s, 1.0, never));  // stale
+  EXPECT_EQ(mpc.policy().status, kPolicyPrevious);
+  mpc.prepare(never);
+  s.utime += 5000;
+  ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+  EXPECT_EQ(mpc.status().prepared, 0);
+  EXPECT_EQ(mpc.counters().unprepared_solves, 3);
+}
+
 TEST(Mpc, FallbacksOnStaleStates) {
   ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
   config.max_previous_ticks = 3;
