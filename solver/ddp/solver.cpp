@@ -505,10 +505,10 @@ SolveStatus Solver::solve(int max_iterations, Clock::time_point deadline) {
   for (int it = 0; it < max_iterations; ++it) {
     SolveStatus status = SolveStatus::MaxIterations;
     if (!prepared_ && !prepare(deadline, status)) return status;
+    const Clock::time_point start = Clock::now();
+    if (start >= deadline) return SolveStatus::Deadline;  // the preparation stays for the next
     // The preparation is used once: the step below moves the trajectory it linearized.
     prepared_ = false;
-    const Clock::time_point start = Clock::now();
-    if (start >= deadline) return SolveStatus::Deadline;
     IterationStats s;
     s.iteration = it;
     // x0 enters here and only here: the gap f_0 (the backward pass reads f_1 ... f_T), and with
