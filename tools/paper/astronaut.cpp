@@ -2,7 +2,10 @@
 
 #include <omp.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <stdexcept>
 
 #include "solver/multibody/centroidal.hpp"
 #include "solver/multibody/frames.hpp"
@@ -30,12 +33,14 @@ Eigen::VectorXd postureWeights(const Model& model, double w_q, double w_v) {
 }
 }  // namespace
 
-AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& options)
+AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& options, int first,
+                                   int last, const Eigen::VectorXd& start,
+                                   const std::vector<double>& goals)
     : options_(options), locked_(lockJoints(robot, options.free_joints)) {
   Model& model = locked_.model;
   // Floating in space (§V-B): no gravity; an empty contact set gives the free-floating dynamics.
   model.gravity.setZero();
-  const int nv = model.nv, nu = nv - 6, T = options.knots;
+  const int nv = model.nv, nu = nv - 6;
   x0_ = Eigen::VectorXd::Zero(model.nq + nv);
   x0_.head(model.nq) = locked_.default_q;
   x0_.head(3).setZero();
@@ -43,8 +48,45 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
   // Waypoint i at knot round(i T / n) asks for Ry(i·turn/n).
   const double turn = options.turn_deg * M_PI / 180.0;
   for (int i = 1; i <= options.waypoints; ++i)
-    waypoints_.emplace_back(static_cast<int>(std::lround(double(i) * T / options.waypoints)),
-                            turn * i / options.waypoints);
+    waypoints_.emplace_back(
+        static_cast<int>(std::lround(double(i) * options.knots / options.waypoints)),
+        turn * i / options.waypoints);
+  const int n = static_cast<int>(waypoints_.size());
+  if (last < 0 || last > n) last = n;
+  if (first < 0 || first >= last)
+    throw std::invalid_argument("AstronautProblem: need 0 <= first < last <= waypoints");
+  const bool at_end = last == n;
+  auto goal = [&](int i) {
+    return goals.size() == static_cast<std::size_t>(last - first) ? goals[i - first - 1]
+                                                                  : waypoints_[i - 1].second;
+  };
+  const int k0 = waypointKnot(first), T = waypointKnot(last) - k0;
+  // Is global knot k within the width of an intermediate waypoint of the window? (its index)
+  auto waypointAt = [&](int k) {
+    for (int i = first + 1; i < last; ++i)
+      if (std::abs(k - waypointKnot(i)) <= options.waypoint_width) return i;
+    return 0;
+  };
+
+  // The shape-cycle prior at global knot k: the default posture faded into the loop.
+  auto gaitReference = [&](int k) {
+    Eigen::VectorXd x = x0_;
+    const double t = k * options.dt, P = options.gait_period, T_all = options.knots * options.dt;
+    const double fade = std::clamp(std::min(t, T_all - t) / P, 0.0, 1.0);
+    const double phase = 2.0 * M_PI * t / P;
+    for (std::size_t j = 0; j < locked_.free.size(); ++j) {
+      const std::string& name = locked_.free[j];
+      const int iq = 7 + static_cast<int>(j);
+      double target = x[iq];
+      if (name.find("hip_pitch") != std::string::npos)
+        target = options.gait_hip_center + options.gait_hip_amplitude * std::sin(phase);
+      else if (name.find("knee") != std::string::npos)
+        target = options.gait_knee_center +
+                 options.gait_sign * options.gait_knee_amplitude * std::cos(phase);
+      x[iq] += fade * (target - x[iq]);
+    }
+    return x;
+  };
 
   const ContactSet none;
   auto workspace = std::make_shared<SharedWorkspace>(model, std::max(omp_get_max_threads(), 2));
@@ -52,13 +94,28 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
   for (int k = 0; k < T; ++k) {
     auto knot = std::make_unique<KnotModel>(model, none, options.dt, workspace);
     CostModel& costs = knot->costs();
+    const int wp = waypointAt(k0 + k);
     costs.add("posture", std::make_unique<StateResidual>(model, nu, x0_),
-              Activation::weightedQuadratic(
-                  postureWeights(model, options.w_posture, options.w_joint_velocity)));
+              Activation::weightedQuadratic(postureWeights(
+                  model, options.w_posture + (wp > 0 ? options.w_waypoint_posture : 0.0),
+                  options.w_joint_velocity)));
+    if (options.w_gait > 0.0)
+      costs.add("gait", std::make_unique<StateResidual>(model, nu, gaitReference(k0 + k)),
+                Activation::weightedQuadratic(postureWeights(model, options.w_gait, 0.0)));
     costs.add("control", std::make_unique<ControlResidual>(model, nu), Activation::quadratic(nu),
               options.w_control);
     costs.add("momentum", std::make_unique<CentroidalMomentumResidual>(model, nu),
               Activation::quadratic(6), options.w_momentum);
+    if (options.w_rate > 0.0) {
+      Vector6d ref = Vector6d::Zero();
+      ref[4] = turn / (options.knots * options.dt);
+      Vector6d w = Vector6d::Zero();
+      w.tail<3>() << options.w_rate_off_axis, options.w_rate, options.w_rate_off_axis;
+      costs.add("rate",
+                std::make_unique<FrameVelocityResidual>(model, nu, options.base_frame,
+                                                        ReferenceFrame::LocalWorldAligned, ref),
+                Activation::weightedQuadratic(w));
+    }
     costs.add("limits", std::make_unique<JointLimitResidual>(model, nu),
               JointLimitResidual::activation(model, 1.0, options.limit_margin), options.w_limits);
     // Every knot carries the orientation term (one workspace slot for all); it is on only near
@@ -67,29 +124,100 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
                                std::make_unique<FrameRotationResidual>(
                                    model, nu, options.base_frame, Eigen::Matrix3d::Identity()),
                                Activation::quadratic(3), options.w_orientation);
-    costs[term].active = false;
-    for (std::size_t i = 0; i + 1 < waypoints_.size(); ++i) {
-      if (std::abs(k - waypoints_[i].first) > options.waypoint_width) continue;
-      costs.residual<FrameRotationResidual>("orientation")
-          ->setReference(rotY(waypoints_[i].second));
-      costs[term].active = true;
-    }
+    costs[term].active = wp > 0;
+    if (wp > 0) costs.residual<FrameRotationResidual>("orientation")->setReference(rotY(goal(wp)));
     running.push_back(std::move(knot));
   }
+  // The last waypoint ends the motion at rest; a window ending earlier only reaches its goal.
   auto terminal = std::make_unique<TerminalModel>(model);
-  Eigen::VectorXd wT = postureWeights(model, options.w_posture, options.w_terminal_velocity);
-  wT.segment(nv + 3, 3).setConstant(options.w_terminal_velocity);  // base angular velocity
+  Eigen::VectorXd wT =
+      postureWeights(model, options.w_posture + options.w_waypoint_posture,
+                     at_end ? options.w_terminal_velocity : options.w_joint_velocity);
+  if (at_end) wT.segment(nv + 3, 3).setConstant(options.w_terminal_velocity);  // base ang. velocity
   terminal->costs().add("posture", std::make_unique<StateResidual>(model, 0, x0_),
                         Activation::weightedQuadratic(wT));
   terminal->costs().add("limits", std::make_unique<JointLimitResidual>(model, 0),
                         JointLimitResidual::activation(model, 1.0, options.limit_margin),
                         options.w_limits);
-  terminal->costs().add("orientation",
-                        std::make_unique<FrameRotationResidual>(model, 0, options.base_frame,
-                                                                rotY(waypoints_.back().second)),
-                        Activation::quadratic(3), options.w_orientation);
-  problem_ = std::make_unique<ShootingProblem>(x0_, std::move(running), std::move(terminal));
+  terminal->costs().add(
+      "orientation",
+      std::make_unique<FrameRotationResidual>(model, 0, options.base_frame, rotY(goal(last))),
+      Activation::quadratic(3), options.w_orientation);
+  problem_ = std::make_unique<ShootingProblem>(start.size() ? start : x0_, std::move(running),
+                                               std::move(terminal));
   problem_->setThreads(workspace->threads());
+}
+
+AstronautSolution solveAstronaut(const Robot& robot, const AstronautOptions& options,
+                                 const std::function<void(const AstronautWindow&)>& progress,
+                                 const std::function<void(const IterationStats&)>& callback) {
+  using Clock = std::chrono::steady_clock;
+  const auto t_start = Clock::now();
+  AstronautSolution s;
+  s.problem = std::make_unique<AstronautProblem>(robot, options);
+  const AstronautProblem& full = *s.problem;
+  const int n = static_cast<int>(full.waypoints().size());
+  const int width = options.window < 1 ? n : options.window;
+  s.xs.push_back(full.x0());
+  double pitch = 0.0;
+  const double step = options.turn_deg * M_PI / 180.0 / n;
+  // The warm start of the next window: what the last one planned beyond its committed part, then
+  // zero torques. The first window starts from zero torques (paper). Ddp rolls the torques out
+  // from the window's start, so the states only matter for Fddp.
+  std::vector<Eigen::VectorXd> xs, us;
+  for (int first = 0; first < n;) {
+    const int last = std::min(first + width, n);
+    // The window's goals: the schedule's step per segment from the pitch reached so far (a
+    // motion behind schedule is not asked to catch up by more than it can, which would bring
+    // the goals past 180° ahead again); the final goal is the absolute one when it is less
+    // than 180° - step ahead.
+    std::vector<double> goals;
+    for (int i = first + 1; i <= last; ++i) goals.push_back(pitch + (i - first) * step);
+    if (last == n && std::abs(full.waypoints().back().second - pitch) < M_PI - step)
+      goals.back() = full.waypoints().back().second;
+    AstronautProblem window(robot, options, first, last, s.xs.back(), goals);
+    const int T = window.horizon(), nu = window.model().nv - 6;
+    us.resize(static_cast<std::size_t>(T), Eigen::VectorXd::Zero(nu));
+    xs.resize(static_cast<std::size_t>(T) + 1, xs.empty() ? s.xs.back() : xs.back());
+    xs.front() = s.xs.back();
+    Solver solver(window.problem(), options.solver);
+    if (callback) solver.callback = callback;
+    solver.setWarmStart(xs, us);
+    const auto t0 = Clock::now();
+    const SolveStatus status =
+        solver.solve(last == n ? options.final_iterations : options.window_iterations);
+    AstronautWindow w;
+    w.solve_s = std::chrono::duration<double>(Clock::now() - t0).count();
+    w.first = first;
+    w.last = last;
+    w.committed = last == n ? last - first : std::clamp(options.window_commit, 1, last - first);
+    w.knots = T;
+    w.goal = goals[w.committed - 1];
+    w.iterations = solver.iterations();
+    w.status = status;
+    // Commit: the states after the window's start and their torques.
+    const int kc = full.waypointKnot(first + w.committed) - full.waypointKnot(first);
+    const std::vector<Eigen::VectorXd> piece(solver.xs().begin(), solver.xs().begin() + kc + 1);
+    pitch += analyzeMotion(window.model(), piece, options.dt, options.base_frame).pitch.back();
+    w.pitch = pitch;
+    s.xs.insert(s.xs.end(), solver.xs().begin() + 1, solver.xs().begin() + kc + 1);
+    s.us.insert(s.us.end(), solver.us().begin(), solver.us().begin() + kc);
+    xs.assign(solver.xs().begin() + kc, solver.xs().end());
+    us.assign(solver.us().begin() + kc, solver.us().end());
+    for (int i = 0; i < solver.statsCount(); ++i) {
+      s.stats.push_back(solver.stats()[i]);
+      s.stats_window.push_back(static_cast<int>(s.windows.size()));
+    }
+    s.iterations += w.iterations;
+    s.solve_s += w.solve_s;
+    s.finite = s.finite && status != SolveStatus::NonFinite;
+    s.windows.push_back(w);
+    if (progress) progress(w);
+    first += w.committed;
+  }
+  s.cost = s.problem->problem().calc(s.xs, s.us);
+  s.wall_s = std::chrono::duration<double>(Clock::now() - t_start).count();
+  return s;
 }
 
 AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::VectorXd>& xs, double dt,

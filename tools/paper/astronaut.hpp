@@ -11,7 +11,19 @@
 // one the terminal cost. A running posture cost regularizes, and quadratic barriers keep the
 // joints inside (a margin of) their limits, standing in for self-collision avoidance as in the
 // paper.
+//
+// The waypoints alone do not remove the ambiguity: log3 measures an orientation error the short
+// way round, so once the motion lags a goal by more than 180° that goal pulls backwards (a single
+// solve over the whole horizon turned to 114° and back to 0°). solveAstronaut therefore plans in
+// receding windows over the waypoints: a window covers the next `window` waypoint segments from
+// the state reached so far, is solved with DDP (the first from zero torques, each later one from
+// the previous window's torques shifted by a segment and zero torques on its new segment), and
+// its first segment is committed. Every goal a window sees is at most window·360°/n ahead of its
+// start, never 180°, and a later window cannot undo the rotation already committed. The last
+// window (reaching the terminal goal, at rest) is committed whole. The plan is one trajectory,
+// the rollout of its torques from x0.
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -29,8 +41,26 @@ struct AstronautOptions {
   int waypoints = 36;            // orientation goals at t = i·T/n, i = 1..n (the n-th is terminal)
   int waypoint_width = 1;        // knots on each side of a waypoint where its goal is also on
   double w_orientation = 100.0;  // per waypoint knot
-  double w_posture = 1e-2;       // joint angles towards the default posture
+  // Base angular velocity (world axes) towards turn / T about y and 0 about x, z at every knot:
+  // the integral of ω_y is the unwrapped pitch, so this term has no 0°/360° ambiguity and gives
+  // every knot, not only the waypoints, a push forward (0: off).
+  double w_rate = 0.0;
+  double w_rate_off_axis = 0.0;
+  // Shape-cycle prior ("gait", off when w_gait = 0): joint angles towards a closed loop in the
+  // hip-knee plane, hip = c_h + a_h sin(2πt/P), knee = c_k + sign·a_k cos(2πt/P) (both legs),
+  // faded in over the first period and out over the last (it starts and ends at the default
+  // posture). See the README for why the solver needs it.
+  double w_gait = 0.0;
+  double gait_period = 2.5;
+  double gait_hip_center = -0.5, gait_hip_amplitude = 1.2;
+  double gait_knee_center = 1.2, gait_knee_amplitude = 1.0;
+  double gait_sign = 1.0;
+  double w_posture = 1e-2;  // joint angles towards the default posture
   double w_joint_velocity = 1e-3;
+  // Added to w_posture at the waypoints (and the terminal knot): the legs come back to the
+  // default posture at every goal, so each segment must be a closed shape cycle (a stroke that
+  // is never undone cannot meet the next goals).
+  double w_waypoint_posture = 0.0;
   double w_control = 1e-4;
   double w_limits = 1e3;      // barrier on the joint position and velocity limits
   double limit_margin = 0.9;  // fraction of each joint's range allowed (limits.hpp activation)
@@ -41,25 +71,43 @@ struct AstronautOptions {
   // +90° into -150°). The true motion keeps h_g = 0, so penalizing h_g at every knot keeps the plan
   // where the discretization is faithful; it changes nothing for the continuous-time dynamics.
   double w_momentum = 100.0;
+  // Receding windows (solveAstronaut): segments per window (>= waypoints: one solve of the full
+  // problem from zero torques, the previous scheme), DDP iterations per window and on the last
+  // one.
+  int window = 3;
+  int window_commit = 1;  // segments kept from each window
+  int window_iterations = 50;
+  int final_iterations = 200;
+  SolverKind solver = SolverKind::Ddp;
   std::vector<std::string> free_joints = {"L_hip_pitch", "L_knee", "R_hip_pitch", "R_knee"};
   std::string base_frame = "base_link";
 };
 
-// The locked robot, the problem on it and its start (rest, default posture, base at the origin).
+// The locked robot, the problem on it and its start. By default the full problem: from rest in
+// the default posture, base at the origin (x0()), to the last waypoint, at rest. A window
+// (first, last, start): the knots from waypoint `first` (0: the start) to waypoint `last`, from
+// the state `start`, with waypoint `last` as the terminal cost (at rest only when it is the last
+// one). `goals` (rad, one per waypoint first+1..last) replaces the waypoints' own angles.
 // Not movable: the knots keep references to the model.
 class AstronautProblem {
  public:
-  AstronautProblem(const Robot& robot, const AstronautOptions& options);
+  AstronautProblem(const Robot& robot, const AstronautOptions& options, int first = 0,
+                   int last = -1, const Eigen::VectorXd& start = Eigen::VectorXd(),
+                   const std::vector<double>& goals = {});
   AstronautProblem(const AstronautProblem&) = delete;
   AstronautProblem& operator=(const AstronautProblem&) = delete;
 
   const Model& model() const { return locked_.model; }
   const LockedRobot& locked() const { return locked_; }
   ShootingProblem& problem() { return *problem_; }
-  const Eigen::VectorXd& x0() const { return x0_; }
+  const Eigen::VectorXd& x0() const { return x0_; }  // rest, default posture (not the window's)
   const AstronautOptions& options() const { return options_; }
   // Knot index and goal angle (rad) of each orientation waypoint (the last: T, terminal).
+  // (All n of them, in knots from the start of the whole motion, also in a window.)
   const std::vector<std::pair<int, double>>& waypoints() const { return waypoints_; }
+  // Knot of waypoint i (0: the start of the motion).
+  int waypointKnot(int i) const { return i == 0 ? 0 : waypoints_[i - 1].first; }
+  int horizon() const { return problem_->horizon(); }
 
  private:
   AstronautOptions options_;
@@ -68,6 +116,37 @@ class AstronautProblem {
   std::unique_ptr<ShootingProblem> problem_;
   std::vector<std::pair<int, double>> waypoints_;
 };
+
+// One receding window of solveAstronaut.
+struct AstronautWindow {
+  int first = 0, last = 0;  // waypoints it spans (first = 0: the start)
+  int committed = 0;        // segments kept (1, or all for the last window)
+  int knots = 0;            // its horizon
+  double goal = 0.0;        // goal at the end of what it committed, rad
+  double pitch = 0.0;       // unwrapped base pitch reached there, rad
+  int iterations = 0;
+  double solve_s = 0.0;  // Solver::solve only
+  SolveStatus status = SolveStatus::MaxIterations;
+};
+
+struct AstronautSolution {
+  std::unique_ptr<AstronautProblem> problem;  // the full problem (model, waypoints, cost)
+  std::vector<Eigen::VectorXd> xs, us;        // the committed plan, knots 0..T
+  std::vector<AstronautWindow> windows;
+  std::vector<IterationStats> stats;  // every iteration of every window, in order
+  std::vector<int> stats_window;      // the window (0-based) of each entry of stats
+  int iterations = 0;                 // over all windows
+  double solve_s = 0.0;               // Σ Solver::solve over the windows
+  double wall_s = 0.0;                // the whole of solveAstronaut (building the windows too)
+  double cost = 0.0;                  // of the plan on the full problem
+  bool finite = true;                 // false when a window's solve hit a non-finite value
+};
+
+// Zero warm start + receding windows over the waypoints (options.window). `progress`, when set,
+// is called after every window; `callback` after every DDP iteration.
+AstronautSolution solveAstronaut(const Robot& robot, const AstronautOptions& options,
+                                 const std::function<void(const AstronautWindow&)>& progress = {},
+                                 const std::function<void(const IterationStats&)>& callback = {});
 
 // What the experiment reports, per knot (T + 1 entries) and overall.
 struct AstronautMotion {

@@ -1,7 +1,7 @@
 // stride-paper-astronaut: the paper's astronaut reorientation (§V-B, Fig. 5-6). Builds the
-// problem (astronaut.hpp), solves it with DDP from zero torques, checks the plan by re-integrating
-// its torques with a finer step, prints the numbers and writes the trajectories for
-// tools/paper/plot_astronaut.py.
+// problem (astronaut.hpp), plans it with DDP from zero torques in receding windows over the
+// orientation waypoints, checks the plan by re-integrating its torques with a finer step, prints
+// the numbers and writes the trajectories for tools/paper/plot_astronaut.py.
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
       std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml";
   std::string out;
   std::string solver_name = "ddp";
-  int iterations = 500, substeps = 10;  // defaults: the README run
+  int substeps = 10;
   bool verbose = false;
   app.add_option("--robot", robot_yaml, "robot YAML")->check(CLI::ExistingFile);
   app.add_option("--out", out, "output folder (CSV, JSON); nothing written without it");
@@ -59,11 +59,29 @@ int main(int argc, char** argv) {
   app.add_option("--turn", o.turn_deg, "rotation about +y, degrees");
   app.add_option("--waypoints", o.waypoints, "orientation goals along the horizon")
       ->check(CLI::PositiveNumber);
-  app.add_option("--iterations", iterations, "DDP iteration budget")->check(CLI::PositiveNumber);
+  app.add_option("--window", o.window,
+                 "waypoint segments per receding window (0 or >= waypoints: one solve of the "
+                 "whole problem)");
+  app.add_option("--window-commit", o.window_commit, "segments kept from each window")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--window-iterations", o.window_iterations, "DDP iterations per window")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--iterations", o.final_iterations,
+                 "DDP iterations on the last window (the one that reaches the end)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--solver", solver_name, "ddp or fddp")->check(CLI::IsMember({"ddp", "fddp"}));
   app.add_option("--replay-substeps", substeps, "substeps of the re-integration")
       ->check(CLI::PositiveNumber);
   app.add_option("--w-orientation", o.w_orientation, "waypoint weight");
+  app.add_option("--w-rate", o.w_rate, "base pitch-rate weight (0: off)");
+  app.add_option("--w-rate-off-axis", o.w_rate_off_axis, "base roll/yaw-rate weight");
+  app.add_option("--w-waypoint-posture", o.w_waypoint_posture,
+                 "joint posture weight added at the waypoints");
+  app.add_option("--w-gait", o.w_gait, "shape-cycle prior weight (0: off)");
+  app.add_option("--gait-period", o.gait_period, "shape-cycle period, s");
+  app.add_option("--gait-sign", o.gait_sign, "shape-cycle direction (+1 / -1)");
+  app.add_option("--gait-hip", o.gait_hip_amplitude, "shape-cycle hip amplitude, rad");
+  app.add_option("--gait-knee", o.gait_knee_amplitude, "shape-cycle knee amplitude, rad");
   app.add_option("--w-posture", o.w_posture, "joint posture weight");
   app.add_option("--w-control", o.w_control, "torque weight");
   app.add_option("--w-momentum", o.w_momentum, "centroidal momentum weight (0: off)");
@@ -71,34 +89,43 @@ int main(int argc, char** argv) {
   app.add_flag("-v,--verbose", verbose, "print the iteration table");
   CLI11_PARSE(app, argc, argv);
 
+  o.solver = solver_name == "ddp" ? SolverKind::Ddp : SolverKind::Fddp;
   const Robot robot = loadRobot(robot_yaml);
-  AstronautProblem astro(robot, o);
+  std::printf(
+      "astronaut reorientation (paper §V-B): %d knots x %.3f s, %d waypoints, goal %.0f deg\n",
+      o.knots, o.dt, o.waypoints, o.turn_deg);
+  // Zero warm start (paper): the first window starts from zero torques; each later one from the
+  // previous one's torques and zeros on its new segment (astronaut.hpp).
+  std::printf("  %-7s %9s %6s %10s %11s %6s %7s\n", "window", "waypoints", "knots", "goal,deg",
+              "reached,deg", "iters", "time,s");
+  const AstronautSolution sol = solveAstronaut(
+      robot, o,
+      [&](const AstronautWindow& w) {
+        std::printf("  %-7d %4d-%-4d %6d %10.1f %11.1f %6d %7.2f\n", w.first + 1, w.first, w.last,
+                    w.knots, w.goal * kDeg, w.pitch * kDeg, w.iterations, w.solve_s);
+        std::fflush(stdout);
+      },
+      verbose ? std::function<void(const IterationStats&)>(Solver::printIterationTable)
+              : std::function<void(const IterationStats&)>());
+  const AstronautProblem& astro = *sol.problem;
   const Model& model = astro.model();
-  Solver solver(astro.problem(), solver_name == "ddp" ? SolverKind::Ddp : SolverKind::Fddp);
-  if (verbose) solver.callback = Solver::printIterationTable;
-  // No warm start (paper): the solver starts from x0 everywhere and zero torques.
-  const auto t0 = std::chrono::steady_clock::now();
-  const SolveStatus status = solver.solve(iterations);
-  const double solve_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double solve_s = sol.solve_s;
+  const std::vector<Eigen::VectorXd>& xs = sol.xs;
+  const std::vector<Eigen::VectorXd>& us = sol.us;
 
-  const AstronautMotion m = analyzeMotion(model, solver.xs(), o.dt, o.base_frame);
-  const FineCheck fine =
-      checkWithFinerSteps(model, solver.xs(), solver.us(), o.dt, substeps, o.base_frame);
+  const AstronautMotion m = analyzeMotion(model, xs, o.dt, o.base_frame);
+  const FineCheck fine = checkWithFinerSteps(model, xs, us, o.dt, substeps, o.base_frame);
   // Distance of the final base orientation from the last goal (identity for 360°).
   const double final_err =
       log3(Eigen::AngleAxisd(astro.waypoints().back().second, Eigen::Vector3d::UnitY())
                .toRotationMatrix()
                .transpose() *
-           Eigen::Quaterniond(solver.xs().back().segment<4>(3)).toRotationMatrix())
+           Eigen::Quaterniond(xs.back().segment<4>(3)).toRotationMatrix())
           .norm();
   const double max_pitch = *std::max_element(m.pitch.begin(), m.pitch.end());
   double max_tau = 0.0;
-  for (const auto& u : solver.us()) max_tau = std::max(max_tau, u.cwiseAbs().maxCoeff());
+  for (const auto& u : us) max_tau = std::max(max_tau, u.cwiseAbs().maxCoeff());
 
-  std::printf(
-      "astronaut reorientation (paper §V-B): %d knots x %.3f s, %d waypoints, goal %.0f deg\n",
-      o.knots, o.dt, o.waypoints, o.turn_deg);
   std::printf("  %-44s %12s\n", "quantity", "value");
   std::printf("  %-44s %12.1f\n", "base pitch at the end (unwrapped), deg", m.pitch.back() * kDeg);
   std::printf("  %-44s %12.1f\n", "largest base pitch reached, deg", max_pitch * kDeg);
@@ -115,10 +142,12 @@ int main(int argc, char** argv) {
   std::printf("  %-44s %12.3f\n", "max |angular momentum| one leg, kg m^2/s", m.max_h_leg);
   std::printf("  %-44s %12.3e\n", "max CoM drift, m", m.max_com_drift);
   std::printf("  %-44s %12.1f\n", "max |torque|, Nm", max_tau);
-  std::printf("  %-44s %12d\n", "iterations", solver.iterations());
-  std::printf("  %-44s %12.2f\n", "solve time, s", solve_s);
-  std::printf("  %-44s %12s\n", "status", toString(status));
-  std::printf("  %-44s %12.3e\n", "final cost", solver.cost());
+  std::printf("  %-44s %12d\n", "DDP iterations (all windows)", sol.iterations);
+  std::printf("  %-44s %12zu\n", "windows", sol.windows.size());
+  std::printf("  %-44s %12.2f\n", "solve time (all windows), s", solve_s);
+  std::printf("  %-44s %12.2f\n", "wall time (building the windows too), s", sol.wall_s);
+  std::printf("  %-44s %12s\n", "last window", toString(sol.windows.back().status));
+  std::printf("  %-44s %12.3e\n", "cost of the plan (full problem)", sol.cost);
   std::printf("  %-44s %12.1f\n",
               ("pitch re-integrated knot-wise at dt/" + std::to_string(substeps) + ", deg").c_str(),
               fine.pitch * kDeg);
@@ -141,7 +170,7 @@ int main(int argc, char** argv) {
   traj << "\n";
   traj.precision(9);
   for (int k = 0; k <= T; ++k) {
-    const Eigen::VectorXd& x = solver.xs()[k];
+    const Eigen::VectorXd& x = xs[k];
     traj << m.t[k] << ',' << m.pitch[k] * kDeg << ',' << m.off_axis[k] * kDeg << ',' << m.h[k].x()
          << ',' << m.h[k].y() << ',' << m.h[k].z() << ',' << m.h[k].norm() << ',' << m.h_left[k].y()
          << ',' << m.h_right[k].y() << ',' << m.h_left[k].norm() << ',' << m.h_right[k].norm()
@@ -151,7 +180,7 @@ int main(int argc, char** argv) {
     // Torques are held over a knot: the last state has none.
     for (int j = 0; j < nv - 6; ++j) {
       traj << ',';
-      if (k < T) traj << solver.us()[k][j];
+      if (k < T) traj << us[k][j];
     }
     traj << "\n";
   }
@@ -164,7 +193,7 @@ int main(int argc, char** argv) {
   frames.precision(6);
   Data data(model);
   for (int k = 0; k <= T; ++k) {
-    framesForwardKinematics(model, data, solver.xs()[k].head(nq));
+    framesForwardKinematics(model, data, xs[k].head(nq));
     frames << m.t[k];
     for (const auto& f : kFigureFrames) {
       const Eigen::Vector3d p = data.oMf[model.getFrameId(f)].p - m.com.front();
@@ -174,11 +203,11 @@ int main(int argc, char** argv) {
   }
 
   std::ofstream iters(out + "/iterations.csv");
-  iters << "iteration,cost,step,regularization,time_ms\n";
-  for (int i = 0; i < solver.statsCount(); ++i) {
-    const IterationStats& s = solver.stats()[i];
-    iters << s.iteration << ',' << s.cost << ',' << s.step << ',' << s.regularization << ','
-          << s.time_ms << "\n";
+  iters << "window,iteration,cost,step,regularization,time_ms\n";
+  for (std::size_t i = 0; i < sol.stats.size(); ++i) {
+    const IterationStats& s = sol.stats[i];
+    iters << sol.stats_window[i] << ',' << s.iteration << ',' << s.cost << ',' << s.step << ','
+          << s.regularization << ',' << s.time_ms << "\n";
   }
 
   std::ofstream skel(out + "/skeleton.json");
@@ -195,10 +224,15 @@ int main(int argc, char** argv) {
       << "  \"max_base_pitch_deg\": " << max_pitch * kDeg << ",\n"
       << "  \"max_angular_momentum_norm\": " << m.max_h << ",\n"
       << "  \"max_leg_angular_momentum_norm\": " << m.max_h_leg << ",\n"
-      << "  \"iterations\": " << solver.iterations() << ",\n"
+      << "  \"iterations\": " << sol.iterations << ",\n"
+
       << "  \"solve_time_s\": " << solve_s << ",\n"
-      << "  \"status\": \"" << toString(status) << "\",\n"
-      << "  \"final_cost\": " << solver.cost() << ",\n"
+      << "  \"wall_time_s\": " << sol.wall_s << ",\n"
+      << "  \"window_segments\": " << o.window << ",\n"
+      << "  \"window_iterations\": " << o.window_iterations << ",\n"
+      << "  \"last_window_iterations\": " << o.final_iterations << ",\n"
+      << "  \"last_window_status\": \"" << toString(sol.windows.back().status) << "\",\n"
+      << "  \"plan_cost\": " << sol.cost << ",\n"
       << "  \"off_axis_deg\": " << m.off_axis.back() * kDeg << ",\n"
       << "  \"max_com_drift_m\": " << m.max_com_drift << ",\n"
       << "  \"max_torque_nm\": " << max_tau << ",\n"
@@ -215,8 +249,16 @@ int main(int argc, char** argv) {
     sum << (i ? ", " : "") << "{\"t\": " << k * o.dt << ", \"goal_deg\": " << goal * kDeg
         << ", \"pitch_deg\": " << m.pitch[k] * kDeg << "}";
   }
+  sum << "],\n  \"windows\": [";
+  for (std::size_t i = 0; i < sol.windows.size(); ++i) {
+    const AstronautWindow& w = sol.windows[i];
+    sum << (i ? ", " : "") << "{\"first\": " << w.first << ", \"last\": " << w.last
+        << ", \"committed\": " << w.committed << ", \"goal_deg\": " << w.goal * kDeg
+        << ", \"pitch_deg\": " << w.pitch * kDeg << ", \"iterations\": " << w.iterations
+        << ", \"solve_time_s\": " << w.solve_s << "}";
+  }
   sum << "]\n}\n";
   std::printf("  wrote %s/{summary.json,trajectory.csv,frames.csv,iterations.csv,skeleton.json}\n",
               out.c_str());
-  return status == SolveStatus::NonFinite ? 1 : 0;
+  return sol.finite ? 0 : 1;
 }
