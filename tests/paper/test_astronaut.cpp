@@ -1,5 +1,6 @@
 // A short astronaut reorientation (paper §V-B; the full one is tools/paper/astronaut.sh): DDP from
-// zero torques must turn the floating humanoid with its legs alone, and the plan must be
+// zero torques, in receding windows over the orientation goals, must turn the floating humanoid
+// with its legs alone, and the plan must be
 // physical: with no external force the angular momentum stays near zero (small next to what the
 // legs carry), so the rotation comes from the shape cycles, not from momentum the integrator made
 // up, and a finer integrator agrees on the angle.
@@ -14,15 +15,15 @@ namespace {
 const std::string kHumanoid = STRIDE_CONFIG_DIR "/robots/stride_humanoid/stride_humanoid.yaml";
 constexpr double kDeg = 180.0 / M_PI;
 
-// 30 s of motion at dt = 40 ms (~5 s of solve): long enough for several leg cycles. The full
-// experiment's 360° needs about 90 s of motion (tools/paper/README.md); this run is asked for 120°
-// and must pass 60° (the issue asked for 180° in a short run: the formulation does not reach it,
-// see the README).
+// 40 s of motion at dt = 40 ms, 16 goals 10° apart, planned in receding windows of 8 segments
+// (20 s) keeping 2 at a time (~12 s of solve): the scheme of tools/paper/astronaut.sh, shorter.
+// This run reaches ~70°; 180° needs several times the motion and the solve (tools/paper/README.md),
+// so the test asks for 60°.
 constexpr double kShortDt = 0.04;
-constexpr int kShortKnots = 750;
-constexpr double kShortTurnDeg = 120.0;
-constexpr int kShortWaypoints = 10;
-constexpr int kShortIterations = 200;
+constexpr int kShortKnots = 1000;
+constexpr double kShortTurnDeg = 160.0;
+constexpr int kShortWaypoints = 16;
+constexpr int kShortWindow = 8, kShortCommit = 2, kShortIterations = 60;
 constexpr double kPastDeg = 60.0;
 
 TEST(Astronaut, LegsAloneTurnTheBaseWithoutMomentum) {
@@ -32,10 +33,16 @@ TEST(Astronaut, LegsAloneTurnTheBaseWithoutMomentum) {
   o.knots = kShortKnots;
   o.turn_deg = kShortTurnDeg;
   o.waypoints = kShortWaypoints;
-  AstronautProblem astro(robot, o);
-  Solver solver(astro.problem(), SolverKind::Ddp);
-  solver.solve(kShortIterations);  // from zero torques, as in the paper
-  const AstronautMotion m = analyzeMotion(astro.model(), solver.xs(), o.dt);
+  o.window = kShortWindow;
+  o.window_commit = kShortCommit;
+  o.window_iterations = kShortIterations;
+  o.final_iterations = kShortIterations;
+  // From zero torques, as in the paper; each window from the previous one's torques.
+  const AstronautSolution sol = solveAstronaut(robot, o);
+  ASSERT_TRUE(sol.finite);
+  ASSERT_EQ(sol.xs.size(), static_cast<std::size_t>(kShortKnots) + 1);
+  const AstronautProblem& astro = *sol.problem;
+  const AstronautMotion m = analyzeMotion(astro.model(), sol.xs, o.dt);
 
   // The legs really move: each carries angular momentum, the whole body (almost) none.
   EXPECT_GT(m.max_h_leg, 0.5);
@@ -43,8 +50,8 @@ TEST(Astronaut, LegsAloneTurnTheBaseWithoutMomentum) {
   EXPECT_LT(m.max_com_drift, 0.05);
 
   // Past kPastDeg, and monotonically from goal to goal: within a leg cycle the base swings back
-  // and forth by tens of degrees, so the pitch is compared at the waypoints (a few cycles apart),
-  // allowing 5° of that swing where the solver stalls near the end.
+  // and forth, so the pitch is compared at the waypoints (about a cycle apart), allowing 5° of
+  // that swing. (The single solve of the whole horizon turned back by 110° over 90 s.)
   EXPECT_GT(m.pitch.back() * kDeg, kPastDeg);
   double previous = 0.0;
   for (const auto& [k, goal] : astro.waypoints()) {
@@ -55,8 +62,8 @@ TEST(Astronaut, LegsAloneTurnTheBaseWithoutMomentum) {
 
   // A 10 times finer integrator, knot by knot, turns the base by the same angle and creates far
   // less momentum per knot than the legs carry.
-  const FineCheck fine = checkWithFinerSteps(astro.model(), solver.xs(), solver.us(), o.dt, 10);
-  EXPECT_NEAR(fine.pitch * kDeg, m.pitch.back() * kDeg, 10.0);
+  const FineCheck fine = checkWithFinerSteps(astro.model(), sol.xs, sol.us, o.dt, 10);
+  EXPECT_NEAR(fine.pitch * kDeg, m.pitch.back() * kDeg, 5.0);
   EXPECT_LT(fine.max_dh_fine, 0.05 * m.max_h_leg);
 }
 

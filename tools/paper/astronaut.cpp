@@ -56,9 +56,10 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
   if (first < 0 || first >= last)
     throw std::invalid_argument("AstronautProblem: need 0 <= first < last <= waypoints");
   const bool at_end = last == n;
+  // Goal angle at waypoint i (0 at the start of the motion).
   auto goal = [&](int i) {
-    return goals.size() == static_cast<std::size_t>(last - first) ? goals[i - first - 1]
-                                                                  : waypoints_[i - 1].second;
+    if (goals.size() == static_cast<std::size_t>(last - first + 1)) return goals[i - first];
+    return i == 0 ? 0.0 : waypoints_[i - 1].second;
   };
   const int k0 = waypointKnot(first), T = waypointKnot(last) - k0;
   // Is global knot k within the width of an intermediate waypoint of the window? (its index)
@@ -66,26 +67,6 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
     for (int i = first + 1; i < last; ++i)
       if (std::abs(k - waypointKnot(i)) <= options.waypoint_width) return i;
     return 0;
-  };
-
-  // The shape-cycle prior at global knot k: the default posture faded into the loop.
-  auto gaitReference = [&](int k) {
-    Eigen::VectorXd x = x0_;
-    const double t = k * options.dt, P = options.gait_period, T_all = options.knots * options.dt;
-    const double fade = std::clamp(std::min(t, T_all - t) / P, 0.0, 1.0);
-    const double phase = 2.0 * M_PI * t / P;
-    for (std::size_t j = 0; j < locked_.free.size(); ++j) {
-      const std::string& name = locked_.free[j];
-      const int iq = 7 + static_cast<int>(j);
-      double target = x[iq];
-      if (name.find("hip_pitch") != std::string::npos)
-        target = options.gait_hip_center + options.gait_hip_amplitude * std::sin(phase);
-      else if (name.find("knee") != std::string::npos)
-        target = options.gait_knee_center +
-                 options.gait_sign * options.gait_knee_amplitude * std::cos(phase);
-      x[iq] += fade * (target - x[iq]);
-    }
-    return x;
   };
 
   const ContactSet none;
@@ -96,26 +77,12 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
     CostModel& costs = knot->costs();
     const int wp = waypointAt(k0 + k);
     costs.add("posture", std::make_unique<StateResidual>(model, nu, x0_),
-              Activation::weightedQuadratic(postureWeights(
-                  model, options.w_posture + (wp > 0 ? options.w_waypoint_posture : 0.0),
-                  options.w_joint_velocity)));
-    if (options.w_gait > 0.0)
-      costs.add("gait", std::make_unique<StateResidual>(model, nu, gaitReference(k0 + k)),
-                Activation::weightedQuadratic(postureWeights(model, options.w_gait, 0.0)));
+              Activation::weightedQuadratic(
+                  postureWeights(model, options.w_posture, options.w_joint_velocity)));
     costs.add("control", std::make_unique<ControlResidual>(model, nu), Activation::quadratic(nu),
               options.w_control);
     costs.add("momentum", std::make_unique<CentroidalMomentumResidual>(model, nu),
               Activation::quadratic(6), options.w_momentum);
-    if (options.w_rate > 0.0) {
-      Vector6d ref = Vector6d::Zero();
-      ref[4] = turn / (options.knots * options.dt);
-      Vector6d w = Vector6d::Zero();
-      w.tail<3>() << options.w_rate_off_axis, options.w_rate, options.w_rate_off_axis;
-      costs.add("rate",
-                std::make_unique<FrameVelocityResidual>(model, nu, options.base_frame,
-                                                        ReferenceFrame::LocalWorldAligned, ref),
-                Activation::weightedQuadratic(w));
-    }
     costs.add("limits", std::make_unique<JointLimitResidual>(model, nu),
               JointLimitResidual::activation(model, 1.0, options.limit_margin), options.w_limits);
     // Every knot carries the orientation term (one workspace slot for all); it is on only near
@@ -130,9 +97,8 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
   }
   // The last waypoint ends the motion at rest; a window ending earlier only reaches its goal.
   auto terminal = std::make_unique<TerminalModel>(model);
-  Eigen::VectorXd wT =
-      postureWeights(model, options.w_posture + options.w_waypoint_posture,
-                     at_end ? options.w_terminal_velocity : options.w_joint_velocity);
+  Eigen::VectorXd wT = postureWeights(
+      model, options.w_posture, at_end ? options.w_terminal_velocity : options.w_joint_velocity);
   if (at_end) wT.segment(nv + 3, 3).setConstant(options.w_terminal_velocity);  // base ang. velocity
   terminal->costs().add("posture", std::make_unique<StateResidual>(model, 0, x0_),
                         Activation::weightedQuadratic(wT));
@@ -160,21 +126,23 @@ AstronautSolution solveAstronaut(const Robot& robot, const AstronautOptions& opt
   const int width = options.window < 1 ? n : options.window;
   s.xs.push_back(full.x0());
   double pitch = 0.0;
-  const double step = options.turn_deg * M_PI / 180.0 / n;
+  const double step =
+      (options.window_step_deg > 0.0 ? options.window_step_deg : options.turn_deg / n) * M_PI /
+      180.0;
   // The warm start of the next window: what the last one planned beyond its committed part, then
   // zero torques. The first window starts from zero torques (paper). Ddp rolls the torques out
   // from the window's start, so the states only matter for Fddp.
   std::vector<Eigen::VectorXd> xs, us;
   for (int first = 0; first < n;) {
     const int last = std::min(first + width, n);
-    // The window's goals: the schedule's step per segment from the pitch reached so far (a
-    // motion behind schedule is not asked to catch up by more than it can, which would bring
-    // the goals past 180° ahead again); the final goal is the absolute one when it is less
-    // than 180° - step ahead.
+    // The window's goals: `step` per segment from the orientation reached so far, never past the
+    // final goal. A motion behind schedule is then never asked for more than the window's steps
+    // (catching up with a fixed schedule would bring the goals past 180° ahead again, where they
+    // pull backwards), and one ahead of it is not pulled back.
     std::vector<double> goals;
-    for (int i = first + 1; i <= last; ++i) goals.push_back(pitch + (i - first) * step);
-    if (last == n && std::abs(full.waypoints().back().second - pitch) < M_PI - step)
-      goals.back() = full.waypoints().back().second;
+    for (int i = first; i <= last; ++i)
+      goals.push_back(std::min(pitch + (i - first) * step, full.waypoints().back().second));
+    goals.front() = pitch;
     AstronautProblem window(robot, options, first, last, s.xs.back(), goals);
     const int T = window.horizon(), nu = window.model().nv - 6;
     us.resize(static_cast<std::size_t>(T), Eigen::VectorXd::Zero(nu));
@@ -192,13 +160,13 @@ AstronautSolution solveAstronaut(const Robot& robot, const AstronautOptions& opt
     w.last = last;
     w.committed = last == n ? last - first : std::clamp(options.window_commit, 1, last - first);
     w.knots = T;
-    w.goal = goals[w.committed - 1];
+    w.goal = goals[w.committed];
     w.iterations = solver.iterations();
     w.status = status;
     // Commit: the states after the window's start and their torques.
     const int kc = full.waypointKnot(first + w.committed) - full.waypointKnot(first);
     const std::vector<Eigen::VectorXd> piece(solver.xs().begin(), solver.xs().begin() + kc + 1);
-    pitch += analyzeMotion(window.model(), piece, options.dt, options.base_frame).pitch.back();
+    pitch += analyzeMotion(window.model(), piece, options.dt, options.base_frame).pitch_axis.back();
     w.pitch = pitch;
     s.xs.insert(s.xs.end(), solver.xs().begin() + 1, solver.xs().begin() + kc + 1);
     s.us.insert(s.us.end(), solver.us().begin(), solver.us().begin() + kc);
@@ -251,7 +219,7 @@ AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::Vecto
   };
 
   Eigen::Matrix3d R_prev = Eigen::Matrix3d::Identity();
-  double pitch = 0.0, off = 0.0;
+  double pitch = 0.0, off = 0.0, axis = 0.0, axis_prev = 0.0;
   for (std::size_t k = 0; k < xs.size(); ++k) {
     const Eigen::VectorXd q = xs[k].head(model.nq), v = xs[k].tail(model.nv);
     const Vector6d hg = computeCentroidalMomentum(model, data, q, v);  // also forward kinematics
@@ -261,10 +229,17 @@ AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::Vecto
       pitch += w.y();
       off += std::hypot(w.x(), w.z());
     }
+    // Forward axis R e_x = (cos θ, ·, -sin θ) for R = Ry(θ); the step wrapped to (-π, π].
+    const double a = std::atan2(-R(2, 0), R(0, 0));
+    if (k > 0) axis += std::remainder(a - axis_prev, 2.0 * M_PI);
+    axis_prev = a;
     R_prev = R;
     m.t.push_back(dt * static_cast<double>(k));
     m.pitch.push_back(pitch);
+    m.pitch_axis.push_back(axis);
     m.off_axis.push_back(off);
+    m.tilt.push_back(std::acos(std::clamp(R(1, 1), -1.0, 1.0)));
+    m.max_tilt = std::max(m.max_tilt, m.tilt.back());
     m.h.push_back(hg.tail<3>());
     m.com.push_back(data.com);
     m.h_left.push_back(legMomentum(left, data.com));
@@ -301,7 +276,10 @@ FineCheck checkWithFinerSteps(const Model& model, const std::vector<Eigen::Vecto
     const Eigen::Vector3d h0 = momentum(xs[k]);
     c.max_dh_plan = std::max(c.max_dh_plan, (momentum(xs[k + 1]) - h0).norm());
     c.max_dh_fine = std::max(c.max_dh_fine, (momentum(x) - h0).norm());
-    c.pitch += log3(rotation(x) * rotation(xs[k]).transpose()).y();
+    const Eigen::Matrix3d R1 = rotation(x), R0 = rotation(xs[k]);
+    c.pitch += log3(R1 * R0.transpose()).y();
+    c.pitch_axis +=
+        std::remainder(std::atan2(-R1(2, 0), R1(0, 0)) - std::atan2(-R0(2, 0), R0(0, 0)), 2 * M_PI);
   }
   return c;
 }

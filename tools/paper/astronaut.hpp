@@ -36,31 +36,13 @@ namespace stride {
 
 struct AstronautOptions {
   double dt = 0.02;
-  int knots = 4500;              // T running knots: 90 s (a leg cycle turns the base ~10°: README)
+  int knots = 8000;              // T running knots: 160 s (README: what limits the rotation)
   double turn_deg = 360.0;       // total rotation about +y
-  int waypoints = 36;            // orientation goals at t = i·T/n, i = 1..n (the n-th is terminal)
+  int waypoints = 64;            // orientation goals at t = i·T/n, i = 1..n (the n-th is terminal)
   int waypoint_width = 1;        // knots on each side of a waypoint where its goal is also on
   double w_orientation = 100.0;  // per waypoint knot
-  // Base angular velocity (world axes) towards turn / T about y and 0 about x, z at every knot:
-  // the integral of ω_y is the unwrapped pitch, so this term has no 0°/360° ambiguity and gives
-  // every knot, not only the waypoints, a push forward (0: off).
-  double w_rate = 0.0;
-  double w_rate_off_axis = 0.0;
-  // Shape-cycle prior ("gait", off when w_gait = 0): joint angles towards a closed loop in the
-  // hip-knee plane, hip = c_h + a_h sin(2πt/P), knee = c_k + sign·a_k cos(2πt/P) (both legs),
-  // faded in over the first period and out over the last (it starts and ends at the default
-  // posture). See the README for why the solver needs it.
-  double w_gait = 0.0;
-  double gait_period = 2.5;
-  double gait_hip_center = -0.5, gait_hip_amplitude = 1.2;
-  double gait_knee_center = 1.2, gait_knee_amplitude = 1.0;
-  double gait_sign = 1.0;
-  double w_posture = 1e-2;  // joint angles towards the default posture
+  double w_posture = 1e-2;       // joint angles towards the default posture
   double w_joint_velocity = 1e-3;
-  // Added to w_posture at the waypoints (and the terminal knot): the legs come back to the
-  // default posture at every goal, so each segment must be a closed shape cycle (a stroke that
-  // is never undone cannot meet the next goals).
-  double w_waypoint_posture = 0.0;
   double w_control = 1e-4;
   double w_limits = 1e3;      // barrier on the joint position and velocity limits
   double limit_margin = 0.9;  // fraction of each joint's range allowed (limits.hpp activation)
@@ -74,9 +56,10 @@ struct AstronautOptions {
   // Receding windows (solveAstronaut): segments per window (>= waypoints: one solve of the full
   // problem from zero torques, the previous scheme), DDP iterations per window and on the last
   // one.
-  int window = 3;
-  int window_commit = 1;  // segments kept from each window
-  int window_iterations = 50;
+  int window = 12;
+  int window_commit = 4;          // segments kept from each window
+  double window_step_deg = 10.0;  // a window's goals advance by this per segment (0: turn / n)
+  int window_iterations = 150;
   int final_iterations = 200;
   SolverKind solver = SolverKind::Ddp;
   std::vector<std::string> free_joints = {"L_hip_pitch", "L_knee", "R_hip_pitch", "R_knee"};
@@ -87,7 +70,7 @@ struct AstronautOptions {
 // the default posture, base at the origin (x0()), to the last waypoint, at rest. A window
 // (first, last, start): the knots from waypoint `first` (0: the start) to waypoint `last`, from
 // the state `start`, with waypoint `last` as the terminal cost (at rest only when it is the last
-// one). `goals` (rad, one per waypoint first+1..last) replaces the waypoints' own angles.
+// one). `goals` (rad, one per waypoint first..last; 0 is the start) replaces the schedule.
 // Not movable: the knots keep references to the model.
 class AstronautProblem {
  public:
@@ -151,13 +134,21 @@ AstronautSolution solveAstronaut(const Robot& robot, const AstronautOptions& opt
 // What the experiment reports, per knot (T + 1 entries) and overall.
 struct AstronautMotion {
   std::vector<double> t;
-  std::vector<double> pitch;       // accumulated (unwrapped) base rotation about world y, rad
+  // Accumulated base rotation about world y, rad: Σ of the y components of the increments
+  // log3(R_{k+1} R_kᵀ). Path-dependent when the base also rolls and yaws.
+  std::vector<double> pitch;
+  // The angle of the base's forward axis (R e_x) in the world x-z plane, unwrapped, rad: how far
+  // the body has turned round in the sagittal plane (0 at the start, 2π after a full turn, the
+  // final one differing from the final orientation's only by roll and yaw). Well defined while
+  // the base's y axis stays away from x-z (tilt below).
+  std::vector<double> pitch_axis;
   std::vector<double> off_axis;    // |rotation about world x and z| accumulated, rad
+  std::vector<double> tilt;        // angle between the base's y axis and world y, rad
   std::vector<Eigen::Vector3d> h;  // whole-body angular momentum about the CoM, world axes
   // Angular momentum of each leg (the bodies its hip_pitch moves) about the whole-body CoM.
   std::vector<Eigen::Vector3d> h_left, h_right;
   std::vector<Eigen::Vector3d> com;
-  double max_h = 0.0, max_h_leg = 0.0, max_com_drift = 0.0;
+  double max_h = 0.0, max_h_leg = 0.0, max_com_drift = 0.0, max_tilt = 0.0;
 };
 
 // Unwrapped pitch: the base rotation increments of successive states, log3(R_{k+1} R_kᵀ) in world
@@ -172,6 +163,7 @@ AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::Vecto
 // discretization adds per knot: the pitch it would accumulate and the momentum it creates.
 struct FineCheck {
   double pitch = 0.0;        // Σ pitch increments of the fine steps, rad
+  double pitch_axis = 0.0;   // Σ forward-axis angle changes (AstronautMotion::pitch_axis), rad
   double max_dh_plan = 0.0;  // max over knots of |h(xs[k+1]) - h(xs[k])| (the knots' dynamics)
   double max_dh_fine = 0.0;  // max over knots of |h(fine step from xs[k]) - h(xs[k])|
 };

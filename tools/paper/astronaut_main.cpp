@@ -64,6 +64,8 @@ int main(int argc, char** argv) {
                  "whole problem)");
   app.add_option("--window-commit", o.window_commit, "segments kept from each window")
       ->check(CLI::PositiveNumber);
+  app.add_option("--window-step", o.window_step_deg,
+                 "degrees a window's goals advance per segment (0: turn / waypoints)");
   app.add_option("--window-iterations", o.window_iterations, "DDP iterations per window")
       ->check(CLI::PositiveNumber);
   app.add_option("--iterations", o.final_iterations,
@@ -73,15 +75,6 @@ int main(int argc, char** argv) {
   app.add_option("--replay-substeps", substeps, "substeps of the re-integration")
       ->check(CLI::PositiveNumber);
   app.add_option("--w-orientation", o.w_orientation, "waypoint weight");
-  app.add_option("--w-rate", o.w_rate, "base pitch-rate weight (0: off)");
-  app.add_option("--w-rate-off-axis", o.w_rate_off_axis, "base roll/yaw-rate weight");
-  app.add_option("--w-waypoint-posture", o.w_waypoint_posture,
-                 "joint posture weight added at the waypoints");
-  app.add_option("--w-gait", o.w_gait, "shape-cycle prior weight (0: off)");
-  app.add_option("--gait-period", o.gait_period, "shape-cycle period, s");
-  app.add_option("--gait-sign", o.gait_sign, "shape-cycle direction (+1 / -1)");
-  app.add_option("--gait-hip", o.gait_hip_amplitude, "shape-cycle hip amplitude, rad");
-  app.add_option("--gait-knee", o.gait_knee_amplitude, "shape-cycle knee amplitude, rad");
   app.add_option("--w-posture", o.w_posture, "joint posture weight");
   app.add_option("--w-control", o.w_control, "torque weight");
   app.add_option("--w-momentum", o.w_momentum, "centroidal momentum weight (0: off)");
@@ -122,19 +115,19 @@ int main(int argc, char** argv) {
                .transpose() *
            Eigen::Quaterniond(xs.back().segment<4>(3)).toRotationMatrix())
           .norm();
-  const double max_pitch = *std::max_element(m.pitch.begin(), m.pitch.end());
+  const double max_pitch = *std::max_element(m.pitch_axis.begin(), m.pitch_axis.end());
   double max_tau = 0.0;
   for (const auto& u : us) max_tau = std::max(max_tau, u.cwiseAbs().maxCoeff());
 
   std::printf("  %-44s %12s\n", "quantity", "value");
-  std::printf("  %-44s %12.1f\n", "base pitch at the end (unwrapped), deg", m.pitch.back() * kDeg);
-  std::printf("  %-44s %12.1f\n", "largest base pitch reached, deg", max_pitch * kDeg);
-  for (const auto& [k, goal] : astro.waypoints())
-    std::printf("  %-44s %12.1f\n",
-                ("  pitch at t = " + std::to_string(k * o.dt).substr(0, 4) + " s (goal " +
-                 std::to_string(static_cast<int>(std::lround(goal * kDeg))) + "), deg")
-                    .c_str(),
-                m.pitch[k] * kDeg);
+  std::printf("  %-44s %12.1f\n", "base pitch at the end (forward axis, unwrapped)",
+              m.pitch_axis.back() * kDeg);
+  std::printf("  %-44s %12.1f\n", "base pitch at the end (sum of y increments)",
+              m.pitch.back() * kDeg);
+  std::printf("  %-44s %12.1f\n", "largest base pitch reached (forward axis), deg",
+              max_pitch * kDeg);
+  std::printf("  %-44s %12.1f\n", "max tilt of the base y axis from world y, deg",
+              m.max_tilt * kDeg);
   std::printf("  %-44s %12.2f\n", "off-axis rotation (roll/yaw) accumulated, deg",
               m.off_axis.back() * kDeg);
   std::printf("  %-44s %12.2f\n", "final orientation error to the goal, deg", final_err * kDeg);
@@ -151,6 +144,9 @@ int main(int argc, char** argv) {
   std::printf("  %-44s %12.1f\n",
               ("pitch re-integrated knot-wise at dt/" + std::to_string(substeps) + ", deg").c_str(),
               fine.pitch * kDeg);
+  std::printf("  %-44s %12.1f\n",
+              ("  forward-axis pitch, same, dt/" + std::to_string(substeps) + ", deg").c_str(),
+              fine.pitch_axis * kDeg);
   std::printf("  %-44s %12.3e\n", "max momentum change in one knot: plan", fine.max_dh_plan);
   std::printf("  %-44s %12.3e\n",
               ("max momentum change in one knot: dt/" + std::to_string(substeps)).c_str(),
@@ -162,7 +158,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> joints = astro.locked().free;
 
   std::ofstream traj(out + "/trajectory.csv");
-  traj << "t,pitch_deg,off_axis_deg,h_x,h_y,h_z,h_norm,"
+  traj << "t,pitch_deg,pitch_sum_deg,tilt_deg,off_axis_deg,h_x,h_y,h_z,h_norm,"
           "h_left_y,h_right_y,h_left_norm,h_right_norm,com_x,com_z";
   for (const auto& j : joints) traj << ",q_" << j;
   for (const auto& j : joints) traj << ",v_" << j;
@@ -171,10 +167,11 @@ int main(int argc, char** argv) {
   traj.precision(9);
   for (int k = 0; k <= T; ++k) {
     const Eigen::VectorXd& x = xs[k];
-    traj << m.t[k] << ',' << m.pitch[k] * kDeg << ',' << m.off_axis[k] * kDeg << ',' << m.h[k].x()
-         << ',' << m.h[k].y() << ',' << m.h[k].z() << ',' << m.h[k].norm() << ',' << m.h_left[k].y()
-         << ',' << m.h_right[k].y() << ',' << m.h_left[k].norm() << ',' << m.h_right[k].norm()
-         << ',' << m.com[k].x() << ',' << m.com[k].z();
+    traj << m.t[k] << ',' << m.pitch_axis[k] * kDeg << ',' << m.pitch[k] * kDeg << ','
+         << m.tilt[k] * kDeg << ',' << m.off_axis[k] * kDeg << ',' << m.h[k].x() << ','
+         << m.h[k].y() << ',' << m.h[k].z() << ',' << m.h[k].norm() << ',' << m.h_left[k].y() << ','
+         << m.h_right[k].y() << ',' << m.h_left[k].norm() << ',' << m.h_right[k].norm() << ','
+         << m.com[k].x() << ',' << m.com[k].z();
     for (int j = 0; j < nv - 6; ++j) traj << ',' << x[7 + j];
     for (int j = 0; j < nv - 6; ++j) traj << ',' << x[nq + 6 + j];
     // Torques are held over a knot: the last state has none.
@@ -220,7 +217,9 @@ int main(int argc, char** argv) {
   std::ofstream sum(out + "/summary.json");
   sum.precision(9);
   sum << "{\n"
-      << "  \"base_pitch_deg\": " << m.pitch.back() * kDeg << ",\n"
+      << "  \"base_pitch_deg\": " << m.pitch_axis.back() * kDeg << ",\n"
+      << "  \"base_pitch_sum_deg\": " << m.pitch.back() * kDeg << ",\n"
+      << "  \"max_tilt_deg\": " << m.max_tilt * kDeg << ",\n"
       << "  \"max_base_pitch_deg\": " << max_pitch * kDeg << ",\n"
       << "  \"max_angular_momentum_norm\": " << m.max_h << ",\n"
       << "  \"max_leg_angular_momentum_norm\": " << m.max_h_leg << ",\n"
@@ -237,7 +236,8 @@ int main(int argc, char** argv) {
       << "  \"max_com_drift_m\": " << m.max_com_drift << ",\n"
       << "  \"max_torque_nm\": " << max_tau << ",\n"
       << "  \"replay_substeps\": " << substeps << ",\n"
-      << "  \"fine_base_pitch_deg\": " << fine.pitch * kDeg << ",\n"
+      << "  \"fine_base_pitch_deg\": " << fine.pitch_axis * kDeg << ",\n"
+      << "  \"fine_base_pitch_sum_deg\": " << fine.pitch * kDeg << ",\n"
       << "  \"max_knot_momentum_change_plan\": " << fine.max_dh_plan << ",\n"
       << "  \"max_knot_momentum_change_fine\": " << fine.max_dh_fine << ",\n"
       << "  \"final_orientation_error_deg\": " << final_err * kDeg << ",\n"
@@ -247,7 +247,7 @@ int main(int argc, char** argv) {
   for (std::size_t i = 0; i < astro.waypoints().size(); ++i) {
     const auto& [k, goal] = astro.waypoints()[i];
     sum << (i ? ", " : "") << "{\"t\": " << k * o.dt << ", \"goal_deg\": " << goal * kDeg
-        << ", \"pitch_deg\": " << m.pitch[k] * kDeg << "}";
+        << ", \"pitch_deg\": " << m.pitch_axis[k] * kDeg << "}";
   }
   sum << "],\n  \"windows\": [";
   for (std::size_t i = 0; i < sol.windows.size(); ++i) {
