@@ -150,10 +150,22 @@ AstronautSolution solveAstronaut(const Robot& robot, const AstronautOptions& opt
     xs.front() = s.xs.back();
     Solver solver(window.problem(), options.solver);
     if (callback) solver.callback = callback;
+    const int budget = last == n ? options.final_iterations : options.window_iterations;
     solver.setWarmStart(xs, us);
     const auto t0 = Clock::now();
-    const SolveStatus status =
-        solver.solve(last == n ? options.final_iterations : options.window_iterations);
+    SolveStatus status = solver.solve(budget);
+    if (status == SolveStatus::NonFinite) {
+      // The shifted torques can blow up from the new start (the floating chain is unstable open
+      // loop): the window again from zero torques.
+      std::fill(us.begin(), us.end(), Eigen::VectorXd::Zero(nu));
+      std::fill(xs.begin(), xs.end(), s.xs.back());
+      solver.setWarmStart(xs, us);
+      status = solver.solve(budget);
+    }
+    if (status == SolveStatus::NonFinite) {  // nothing to commit: the plan stops here
+      s.finite = false;
+      break;
+    }
     AstronautWindow w;
     w.solve_s = std::chrono::duration<double>(Clock::now() - t0).count();
     w.first = first;
@@ -178,12 +190,11 @@ AstronautSolution solveAstronaut(const Robot& robot, const AstronautOptions& opt
     }
     s.iterations += w.iterations;
     s.solve_s += w.solve_s;
-    s.finite = s.finite && status != SolveStatus::NonFinite;
     s.windows.push_back(w);
     if (progress) progress(w);
     first += w.committed;
   }
-  s.cost = s.problem->problem().calc(s.xs, s.us);
+  if (s.finite) s.cost = s.problem->problem().calc(s.xs, s.us);
   s.wall_s = std::chrono::duration<double>(Clock::now() - t_start).count();
   return s;
 }

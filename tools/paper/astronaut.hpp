@@ -122,7 +122,9 @@ struct AstronautSolution {
   double solve_s = 0.0;               // Σ Solver::solve over the windows
   double wall_s = 0.0;                // the whole of solveAstronaut (building the windows too)
   double cost = 0.0;                  // of the plan on the full problem
-  bool finite = true;                 // false when a window's solve hit a non-finite value
+  // False when a window failed (non-finite) even from zero torques: the plan stops there
+  // (xs, us shorter than the horizon).
+  bool finite = true;
 };
 
 // Zero warm start + receding windows over the waypoints (options.window). `progress`, when set,

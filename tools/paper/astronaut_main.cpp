@@ -100,6 +100,10 @@ int main(int argc, char** argv) {
       },
       verbose ? std::function<void(const IterationStats&)>(Solver::printIterationTable)
               : std::function<void(const IterationStats&)>());
+  if (!sol.finite) {
+    std::fprintf(stderr, "a window failed (non-finite) even from zero torques: no plan\n");
+    return 1;
+  }
   const AstronautProblem& astro = *sol.problem;
   const Model& model = astro.model();
   const double solve_s = sol.solve_s;
