@@ -120,6 +120,16 @@ int main(int argc, char** argv) {
            Eigen::Quaterniond(xs.back().segment<4>(3)).toRotationMatrix())
           .norm();
   const double max_pitch = *std::max_element(m.pitch_axis.begin(), m.pitch_axis.end());
+  // Joint limits: the smallest distance of a free joint to its position limits, and the largest
+  // rate as a fraction of its velocity limit (nq-indexed limits, nv-indexed velocity limits).
+  double min_limit_margin = INFINITY, max_velocity_ratio = 0.0;
+  for (const auto& x : xs)
+    for (int j = 0; j < model.nv - 6; ++j) {
+      const double q = x[7 + j], v = x[model.nq + 6 + j];
+      min_limit_margin = std::min({min_limit_margin, q - model.lowerPositionLimit[7 + j],
+                                   model.upperPositionLimit[7 + j] - q});
+      max_velocity_ratio = std::max(max_velocity_ratio, std::abs(v) / model.velocityLimit[6 + j]);
+    }
   double max_tau = 0.0;
   for (const auto& u : us) max_tau = std::max(max_tau, u.cwiseAbs().maxCoeff());
 
@@ -139,6 +149,8 @@ int main(int argc, char** argv) {
   std::printf("  %-44s %12.3f\n", "max |angular momentum| one leg, kg m^2/s", m.max_h_leg);
   std::printf("  %-44s %12.3e\n", "max CoM drift, m", m.max_com_drift);
   std::printf("  %-44s %12.1f\n", "max |torque|, Nm", max_tau);
+  std::printf("  %-44s %12.3f\n", "min distance of a joint to its limits, rad", min_limit_margin);
+  std::printf("  %-44s %12.2f\n", "max joint rate / velocity limit", max_velocity_ratio);
   std::printf("  %-44s %12d\n", "DDP iterations (all windows)", sol.iterations);
   std::printf("  %-44s %12zu\n", "windows", sol.windows.size());
   std::printf("  %-44s %12.2f\n", "solve time (all windows), s", solve_s);
@@ -239,6 +251,8 @@ int main(int argc, char** argv) {
       << "  \"off_axis_deg\": " << m.off_axis.back() * kDeg << ",\n"
       << "  \"max_com_drift_m\": " << m.max_com_drift << ",\n"
       << "  \"max_torque_nm\": " << max_tau << ",\n"
+      << "  \"min_joint_limit_margin_rad\": " << min_limit_margin << ",\n"
+      << "  \"max_joint_velocity_ratio\": " << max_velocity_ratio << ",\n"
       << "  \"replay_substeps\": " << substeps << ",\n"
       << "  \"fine_base_pitch_deg\": " << fine.pitch_axis * kDeg << ",\n"
       << "  \"fine_base_pitch_sum_deg\": " << fine.pitch * kDeg << ",\n"
