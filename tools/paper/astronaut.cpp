@@ -154,7 +154,8 @@ AstronautSolution solveAstronaut(const Robot& robot, const AstronautOptions& opt
     solver.setWarmStart(xs, us);
     const auto t0 = Clock::now();
     SolveStatus status = solver.solve(budget);
-    if (status == SolveStatus::NonFinite) {
+    const bool restarted = status == SolveStatus::NonFinite;
+    if (restarted) {
       // The shifted torques can blow up from the new start (the floating chain is unstable open
       // loop): the window again from zero torques.
       std::fill(us.begin(), us.end(), Eigen::VectorXd::Zero(nu));
@@ -175,6 +176,7 @@ AstronautSolution solveAstronaut(const Robot& robot, const AstronautOptions& opt
     w.goal = goals[w.committed];
     w.iterations = solver.iterations();
     w.status = status;
+    w.restarted = restarted;
     // Commit: the states after the window's start and their torques.
     const int kc = full.waypointKnot(first + w.committed) - full.waypointKnot(first);
     const std::vector<Eigen::VectorXd> piece(solver.xs().begin(), solver.xs().begin() + kc + 1);

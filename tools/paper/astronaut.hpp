@@ -16,12 +16,13 @@
 // way round, so once the motion lags a goal by more than 180° that goal pulls backwards (a single
 // solve over the whole horizon turned to 114° and back to 0°). solveAstronaut therefore plans in
 // receding windows over the waypoints: a window covers the next `window` waypoint segments from
-// the state reached so far, is solved with DDP (the first from zero torques, each later one from
-// the previous window's torques shifted by a segment and zero torques on its new segment), and
-// its first segment is committed. Every goal a window sees is at most window·360°/n ahead of its
-// start, never 180°, and a later window cannot undo the rotation already committed. The last
-// window (reaching the terminal goal, at rest) is committed whole. The plan is one trajectory,
-// the rollout of its torques from x0.
+// the state reached so far, asks for `window_step_deg` more per segment from the orientation
+// reached (capped at the final goal), is solved with DDP (the first window from zero torques,
+// each later one from the previous window's torques beyond what it committed and zero torques on
+// its new segments), and its first `window_commit` segments are committed. No goal a window sees
+// is more than window · window_step_deg (120°) ahead, so never on the wrong side of 180°, and a
+// later window cannot undo the rotation already committed. The last window (reaching the end, at
+// rest) is committed whole. The plan is one trajectory, the rollout of its torques from x0.
 
 #include <functional>
 #include <memory>
@@ -53,9 +54,9 @@ struct AstronautOptions {
   // +90° into -150°). The true motion keeps h_g = 0, so penalizing h_g at every knot keeps the plan
   // where the discretization is faithful; it changes nothing for the continuous-time dynamics.
   double w_momentum = 100.0;
-  // Receding windows (solveAstronaut): segments per window (>= waypoints: one solve of the full
-  // problem from zero torques, the previous scheme), DDP iterations per window and on the last
-  // one.
+  // Receding windows (solveAstronaut): segments per window (0 or >= waypoints, with
+  // window_step_deg = 0: one solve of the full problem from zero torques, the previous scheme),
+  // DDP iterations per window and on the last one.
   int window = 12;
   int window_commit = 4;          // segments kept from each window
   double window_step_deg = 10.0;  // a window's goals advance by this per segment (0: turn / n)
@@ -103,13 +104,14 @@ class AstronautProblem {
 // One receding window of solveAstronaut.
 struct AstronautWindow {
   int first = 0, last = 0;  // waypoints it spans (first = 0: the start)
-  int committed = 0;        // segments kept (1, or all for the last window)
+  int committed = 0;        // segments kept (window_commit, or all for the last window)
   int knots = 0;            // its horizon
   double goal = 0.0;        // goal at the end of what it committed, rad
-  double pitch = 0.0;       // unwrapped base pitch reached there, rad
+  double pitch = 0.0;       // base pitch reached there (AstronautMotion::pitch_axis), rad
   int iterations = 0;
   double solve_s = 0.0;  // Solver::solve only
   SolveStatus status = SolveStatus::MaxIterations;
+  bool restarted = false;  // re-solved from zero torques (the warm start blew up)
 };
 
 struct AstronautSolution {

@@ -94,8 +94,9 @@ int main(int argc, char** argv) {
   const AstronautSolution sol = solveAstronaut(
       robot, o,
       [&](const AstronautWindow& w) {
-        std::printf("  %-7d %4d-%-4d %6d %10.1f %11.1f %6d %7.2f\n", w.first + 1, w.first, w.last,
-                    w.knots, w.goal * kDeg, w.pitch * kDeg, w.iterations, w.solve_s);
+        std::printf("  %-7d %4d-%-4d %6d %10.1f %11.1f %6d %7.2f%s\n", w.first + 1, w.first, w.last,
+                    w.knots, w.goal * kDeg, w.pitch * kDeg, w.iterations, w.solve_s,
+                    w.restarted ? "  (restarted from zero torques)" : "");
         std::fflush(stdout);
       },
       verbose ? std::function<void(const IterationStats&)>(Solver::printIterationTable)
@@ -273,7 +274,8 @@ int main(int argc, char** argv) {
     sum << (i ? ", " : "") << "{\"first\": " << w.first << ", \"last\": " << w.last
         << ", \"committed\": " << w.committed << ", \"goal_deg\": " << w.goal * kDeg
         << ", \"pitch_deg\": " << w.pitch * kDeg << ", \"iterations\": " << w.iterations
-        << ", \"solve_time_s\": " << w.solve_s << "}";
+        << ", \"solve_time_s\": " << w.solve_s
+        << ", \"restarted\": " << (w.restarted ? "true" : "false") << "}";
   }
   sum << "]\n}\n";
   std::printf("  wrote %s/{summary.json,trajectory.csv,frames.csv,iterations.csv,skeleton.json}\n",
