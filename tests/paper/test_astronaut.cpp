@@ -1,10 +1,14 @@
 // A short astronaut reorientation (paper §V-B; the full one is tools/paper/astronaut.sh): DDP from
-// zero torques must turn the floating humanoid with its legs alone, and the plan must be
+// zero torques, in receding windows over the orientation goals, must turn the floating humanoid
+// with its legs alone, and the plan must be
 // physical: with no external force the angular momentum stays near zero (small next to what the
 // legs carry), so the rotation comes from the shape cycles, not from momentum the integrator made
 // up, and a finer integrator agrees on the angle.
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
 
 #include "tools/paper/astronaut.hpp"
 
@@ -14,15 +18,15 @@ namespace {
 const std::string kHumanoid = STRIDE_CONFIG_DIR "/robots/stride_humanoid/stride_humanoid.yaml";
 constexpr double kDeg = 180.0 / M_PI;
 
-// 30 s of motion at dt = 40 ms (~5 s of solve): long enough for several leg cycles. The full
-// experiment's 360° needs about 90 s of motion (tools/paper/README.md); this run is asked for 120°
-// and must pass 60° (the issue asked for 180° in a short run: the formulation does not reach it,
-// see the README).
-constexpr double kShortDt = 0.04;
-constexpr int kShortKnots = 750;
-constexpr double kShortTurnDeg = 120.0;
-constexpr int kShortWaypoints = 10;
-constexpr int kShortIterations = 200;
+// The default scheme of tools/paper/astronaut.sh (20 ms knots, 2.5 s segments, windows of 12
+// segments keeping 4, goals 10° per segment), cut to 50 s of motion and 100 DDP iterations per
+// window (3 windows, ~15 s of solve). It reaches ~75°; 180° needs about 60 s of motion at the
+// full iteration budget (~40 s of solve, tools/paper/README.md), too long for ctest, so the test
+// asks for 60°.
+constexpr double kShortDt = 0.02;
+constexpr int kShortKnots = 2500;
+constexpr int kShortWaypoints = 20;
+constexpr int kShortIterations = 100;
 constexpr double kPastDeg = 60.0;
 
 TEST(Astronaut, LegsAloneTurnTheBaseWithoutMomentum) {
@@ -30,33 +34,45 @@ TEST(Astronaut, LegsAloneTurnTheBaseWithoutMomentum) {
   AstronautOptions o;
   o.dt = kShortDt;
   o.knots = kShortKnots;
-  o.turn_deg = kShortTurnDeg;
   o.waypoints = kShortWaypoints;
-  AstronautProblem astro(robot, o);
-  Solver solver(astro.problem(), SolverKind::Ddp);
-  solver.solve(kShortIterations);  // from zero torques, as in the paper
-  const AstronautMotion m = analyzeMotion(astro.model(), solver.xs(), o.dt);
+  o.window_iterations = kShortIterations;
+  o.final_iterations = kShortIterations;
+  // From zero torques, as in the paper; each window from the previous one's torques.
+  const AstronautSolution sol = solveAstronaut(robot, o);
+  ASSERT_TRUE(sol.finite);
+  ASSERT_EQ(sol.xs.size(), static_cast<std::size_t>(kShortKnots) + 1);
+  const AstronautProblem& astro = *sol.problem;
+  const AstronautMotion m = analyzeMotion(astro.model(), sol.xs, o.dt);
 
   // The legs really move: each carries angular momentum, the whole body (almost) none.
   EXPECT_GT(m.max_h_leg, 0.5);
   EXPECT_LT(m.max_h, 0.1 * m.max_h_leg);
   EXPECT_LT(m.max_com_drift, 0.05);
 
-  // Past kPastDeg, and monotonically from goal to goal: within a leg cycle the base swings back
-  // and forth by tens of degrees, so the pitch is compared at the waypoints (a few cycles apart),
-  // allowing 5° of that swing where the solver stalls near the end.
-  EXPECT_GT(m.pitch.back() * kDeg, kPastDeg);
-  double previous = 0.0;
-  for (const auto& [k, goal] : astro.waypoints()) {
-    EXPECT_GT(m.pitch[k] * kDeg, previous * kDeg - 5.0)
-        << "at knot " << k << " (goal " << goal * kDeg << " deg)";
-    previous = m.pitch[k];
+  // Past kPastDeg, and monotonically: within a leg cycle the base swings back and forth (by up
+  // to ~35° in the full run), so the pitch (of the forward axis, unwrapped) must not fall from
+  // one 10 s mark (what a window commits) to the next (2° allowed: the motion ends at rest, the
+  // last 10 s nearly flat) and never more than 45° below its largest value so far. (The single
+  // solve of the whole horizon turned back by 110°.) The two measures of the pitch agree while
+  // the base barely rolls or yaws.
+  EXPECT_GT(m.pitch_axis.back() * kDeg, kPastDeg);
+  EXPECT_NEAR(m.pitch.back() * kDeg, m.pitch_axis.back() * kDeg, 10.0);
+  EXPECT_LT(m.max_tilt * kDeg, 30.0);
+  const int mark = static_cast<int>(std::lround(10.0 / kShortDt));
+  for (int k = mark; k < kShortKnots + 1; k += mark)
+    EXPECT_GT(m.pitch_axis[k] * kDeg, m.pitch_axis[k - mark] * kDeg - 2.0)
+        << "from t = " << (k - mark) * kShortDt;
+  double largest = 0.0;
+  for (std::size_t k = 0; k < m.pitch_axis.size(); ++k) {
+    largest = std::max(largest, m.pitch_axis[k]);
+    ASSERT_GT(m.pitch_axis[k] * kDeg, largest * kDeg - 45.0) << "at t = " << k * kShortDt;
   }
 
   // A 10 times finer integrator, knot by knot, turns the base by the same angle and creates far
   // less momentum per knot than the legs carry.
-  const FineCheck fine = checkWithFinerSteps(astro.model(), solver.xs(), solver.us(), o.dt, 10);
-  EXPECT_NEAR(fine.pitch * kDeg, m.pitch.back() * kDeg, 10.0);
+  const FineCheck fine = checkWithFinerSteps(astro.model(), sol.xs, sol.us, o.dt, 10);
+  EXPECT_NEAR(fine.pitch_axis * kDeg, m.pitch_axis.back() * kDeg, 5.0);
+  EXPECT_NEAR(fine.pitch * kDeg, m.pitch.back() * kDeg, 5.0);
   EXPECT_LT(fine.max_dh_fine, 0.05 * m.max_h_leg);
 }
 

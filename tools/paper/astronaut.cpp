@@ -2,7 +2,10 @@
 
 #include <omp.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <stdexcept>
 
 #include "solver/multibody/centroidal.hpp"
 #include "solver/multibody/frames.hpp"
@@ -30,12 +33,14 @@ Eigen::VectorXd postureWeights(const Model& model, double w_q, double w_v) {
 }
 }  // namespace
 
-AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& options)
+AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& options, int first,
+                                   int last, const Eigen::VectorXd& start,
+                                   const std::vector<double>& goals)
     : options_(options), locked_(lockJoints(robot, options.free_joints)) {
   Model& model = locked_.model;
   // Floating in space (§V-B): no gravity; an empty contact set gives the free-floating dynamics.
   model.gravity.setZero();
-  const int nv = model.nv, nu = nv - 6, T = options.knots;
+  const int nv = model.nv, nu = nv - 6;
   x0_ = Eigen::VectorXd::Zero(model.nq + nv);
   x0_.head(model.nq) = locked_.default_q;
   x0_.head(3).setZero();
@@ -43,8 +48,26 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
   // Waypoint i at knot round(i T / n) asks for Ry(i·turn/n).
   const double turn = options.turn_deg * M_PI / 180.0;
   for (int i = 1; i <= options.waypoints; ++i)
-    waypoints_.emplace_back(static_cast<int>(std::lround(double(i) * T / options.waypoints)),
-                            turn * i / options.waypoints);
+    waypoints_.emplace_back(
+        static_cast<int>(std::lround(double(i) * options.knots / options.waypoints)),
+        turn * i / options.waypoints);
+  const int n = static_cast<int>(waypoints_.size());
+  if (last < 0 || last > n) last = n;
+  if (first < 0 || first >= last)
+    throw std::invalid_argument("AstronautProblem: need 0 <= first < last <= waypoints");
+  const bool at_end = last == n;
+  // Goal angle at waypoint i (0 at the start of the motion).
+  auto goal = [&](int i) {
+    if (goals.size() == static_cast<std::size_t>(last - first + 1)) return goals[i - first];
+    return i == 0 ? 0.0 : waypoints_[i - 1].second;
+  };
+  const int k0 = waypointKnot(first), T = waypointKnot(last) - k0;
+  // Is global knot k within the width of an intermediate waypoint of the window? (its index)
+  auto waypointAt = [&](int k) {
+    for (int i = first + 1; i < last; ++i)
+      if (std::abs(k - waypointKnot(i)) <= options.waypoint_width) return i;
+    return 0;
+  };
 
   const ContactSet none;
   auto workspace = std::make_shared<SharedWorkspace>(model, std::max(omp_get_max_threads(), 2));
@@ -52,6 +75,7 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
   for (int k = 0; k < T; ++k) {
     auto knot = std::make_unique<KnotModel>(model, none, options.dt, workspace);
     CostModel& costs = knot->costs();
+    const int wp = waypointAt(k0 + k);
     costs.add("posture", std::make_unique<StateResidual>(model, nu, x0_),
               Activation::weightedQuadratic(
                   postureWeights(model, options.w_posture, options.w_joint_velocity)));
@@ -67,29 +91,114 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
                                std::make_unique<FrameRotationResidual>(
                                    model, nu, options.base_frame, Eigen::Matrix3d::Identity()),
                                Activation::quadratic(3), options.w_orientation);
-    costs[term].active = false;
-    for (std::size_t i = 0; i + 1 < waypoints_.size(); ++i) {
-      if (std::abs(k - waypoints_[i].first) > options.waypoint_width) continue;
-      costs.residual<FrameRotationResidual>("orientation")
-          ->setReference(rotY(waypoints_[i].second));
-      costs[term].active = true;
-    }
+    costs[term].active = wp > 0;
+    if (wp > 0) costs.residual<FrameRotationResidual>("orientation")->setReference(rotY(goal(wp)));
     running.push_back(std::move(knot));
   }
+  // The last waypoint ends the motion at rest; a window ending earlier only reaches its goal.
   auto terminal = std::make_unique<TerminalModel>(model);
-  Eigen::VectorXd wT = postureWeights(model, options.w_posture, options.w_terminal_velocity);
-  wT.segment(nv + 3, 3).setConstant(options.w_terminal_velocity);  // base angular velocity
+  Eigen::VectorXd wT = postureWeights(
+      model, options.w_posture, at_end ? options.w_terminal_velocity : options.w_joint_velocity);
+  if (at_end) wT.segment(nv + 3, 3).setConstant(options.w_terminal_velocity);  // base ang. velocity
   terminal->costs().add("posture", std::make_unique<StateResidual>(model, 0, x0_),
                         Activation::weightedQuadratic(wT));
   terminal->costs().add("limits", std::make_unique<JointLimitResidual>(model, 0),
                         JointLimitResidual::activation(model, 1.0, options.limit_margin),
                         options.w_limits);
-  terminal->costs().add("orientation",
-                        std::make_unique<FrameRotationResidual>(model, 0, options.base_frame,
-                                                                rotY(waypoints_.back().second)),
-                        Activation::quadratic(3), options.w_orientation);
-  problem_ = std::make_unique<ShootingProblem>(x0_, std::move(running), std::move(terminal));
+  terminal->costs().add(
+      "orientation",
+      std::make_unique<FrameRotationResidual>(model, 0, options.base_frame, rotY(goal(last))),
+      Activation::quadratic(3), options.w_orientation);
+  problem_ = std::make_unique<ShootingProblem>(start.size() ? start : x0_, std::move(running),
+                                               std::move(terminal));
   problem_->setThreads(workspace->threads());
+}
+
+AstronautSolution solveAstronaut(const Robot& robot, const AstronautOptions& options,
+                                 const std::function<void(const AstronautWindow&)>& progress,
+                                 const std::function<void(const IterationStats&)>& callback) {
+  using Clock = std::chrono::steady_clock;
+  const auto t_start = Clock::now();
+  AstronautSolution s;
+  s.problem = std::make_unique<AstronautProblem>(robot, options);
+  const AstronautProblem& full = *s.problem;
+  const int n = static_cast<int>(full.waypoints().size());
+  const int width = options.window < 1 ? n : options.window;
+  s.xs.push_back(full.x0());
+  double pitch = 0.0;
+  const double step =
+      (options.window_step_deg > 0.0 ? options.window_step_deg : options.turn_deg / n) * M_PI /
+      180.0;
+  // The warm start of the next window: what the last one planned beyond its committed part, then
+  // zero torques. The first window starts from zero torques (paper). Ddp rolls the torques out
+  // from the window's start, so the states only matter for Fddp.
+  std::vector<Eigen::VectorXd> xs, us;
+  for (int first = 0; first < n;) {
+    const int last = std::min(first + width, n);
+    // The window's goals: `step` per segment from the orientation reached so far, never past the
+    // final goal. A motion behind schedule is then never asked for more than the window's steps
+    // (catching up with a fixed schedule would bring the goals past 180° ahead again, where they
+    // pull backwards), and one ahead of it is not pulled back.
+    std::vector<double> goals;
+    for (int i = first; i <= last; ++i)
+      goals.push_back(std::min(pitch + (i - first) * step, full.waypoints().back().second));
+    goals.front() = pitch;
+    AstronautProblem window(robot, options, first, last, s.xs.back(), goals);
+    const int T = window.horizon(), nu = window.model().nv - 6;
+    us.resize(static_cast<std::size_t>(T), Eigen::VectorXd::Zero(nu));
+    xs.resize(static_cast<std::size_t>(T) + 1, xs.empty() ? s.xs.back() : xs.back());
+    xs.front() = s.xs.back();
+    Solver solver(window.problem(), options.solver);
+    if (callback) solver.callback = callback;
+    const int budget = last == n ? options.final_iterations : options.window_iterations;
+    solver.setWarmStart(xs, us);
+    const auto t0 = Clock::now();
+    SolveStatus status = solver.solve(budget);
+    const bool restarted = status == SolveStatus::NonFinite;
+    if (restarted) {
+      // The shifted torques can blow up from the new start (the floating chain is unstable open
+      // loop): the window again from zero torques.
+      std::fill(us.begin(), us.end(), Eigen::VectorXd::Zero(nu));
+      std::fill(xs.begin(), xs.end(), s.xs.back());
+      solver.setWarmStart(xs, us);
+      status = solver.solve(budget);
+    }
+    if (status == SolveStatus::NonFinite) {  // nothing to commit: the plan stops here
+      s.finite = false;
+      break;
+    }
+    AstronautWindow w;
+    w.solve_s = std::chrono::duration<double>(Clock::now() - t0).count();
+    w.first = first;
+    w.last = last;
+    w.committed = last == n ? last - first : std::clamp(options.window_commit, 1, last - first);
+    w.knots = T;
+    w.goal = goals[w.committed];
+    w.iterations = solver.iterations();
+    w.status = status;
+    w.restarted = restarted;
+    // Commit: the states after the window's start and their torques.
+    const int kc = full.waypointKnot(first + w.committed) - full.waypointKnot(first);
+    const std::vector<Eigen::VectorXd> piece(solver.xs().begin(), solver.xs().begin() + kc + 1);
+    pitch += analyzeMotion(window.model(), piece, options.dt, options.base_frame).pitch_axis.back();
+    w.pitch = pitch;
+    s.xs.insert(s.xs.end(), solver.xs().begin() + 1, solver.xs().begin() + kc + 1);
+    s.us.insert(s.us.end(), solver.us().begin(), solver.us().begin() + kc);
+    xs.assign(solver.xs().begin() + kc, solver.xs().end());
+    us.assign(solver.us().begin() + kc, solver.us().end());
+    for (int i = 0; i < solver.statsCount(); ++i) {
+      s.stats.push_back(solver.stats()[i]);
+      s.stats_window.push_back(static_cast<int>(s.windows.size()));
+    }
+    s.iterations += w.iterations;
+    s.solve_s += w.solve_s;
+    s.windows.push_back(w);
+    if (progress) progress(w);
+    first += w.committed;
+  }
+  if (s.finite) s.cost = s.problem->problem().calc(s.xs, s.us);
+  s.wall_s = std::chrono::duration<double>(Clock::now() - t_start).count();
+  return s;
 }
 
 AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::VectorXd>& xs, double dt,
@@ -123,7 +232,7 @@ AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::Vecto
   };
 
   Eigen::Matrix3d R_prev = Eigen::Matrix3d::Identity();
-  double pitch = 0.0, off = 0.0;
+  double pitch = 0.0, off = 0.0, axis = 0.0, axis_prev = 0.0;
   for (std::size_t k = 0; k < xs.size(); ++k) {
     const Eigen::VectorXd q = xs[k].head(model.nq), v = xs[k].tail(model.nv);
     const Vector6d hg = computeCentroidalMomentum(model, data, q, v);  // also forward kinematics
@@ -133,10 +242,17 @@ AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::Vecto
       pitch += w.y();
       off += std::hypot(w.x(), w.z());
     }
+    // Forward axis R e_x = (cos θ, ·, -sin θ) for R = Ry(θ); the step wrapped to (-π, π].
+    const double a = std::atan2(-R(2, 0), R(0, 0));
+    if (k > 0) axis += std::remainder(a - axis_prev, 2.0 * M_PI);
+    axis_prev = a;
     R_prev = R;
     m.t.push_back(dt * static_cast<double>(k));
     m.pitch.push_back(pitch);
+    m.pitch_axis.push_back(axis);
     m.off_axis.push_back(off);
+    m.tilt.push_back(std::acos(std::clamp(R(1, 1), -1.0, 1.0)));
+    m.max_tilt = std::max(m.max_tilt, m.tilt.back());
     m.h.push_back(hg.tail<3>());
     m.com.push_back(data.com);
     m.h_left.push_back(legMomentum(left, data.com));
@@ -173,7 +289,10 @@ FineCheck checkWithFinerSteps(const Model& model, const std::vector<Eigen::Vecto
     const Eigen::Vector3d h0 = momentum(xs[k]);
     c.max_dh_plan = std::max(c.max_dh_plan, (momentum(xs[k + 1]) - h0).norm());
     c.max_dh_fine = std::max(c.max_dh_fine, (momentum(x) - h0).norm());
-    c.pitch += log3(rotation(x) * rotation(xs[k]).transpose()).y();
+    const Eigen::Matrix3d R1 = rotation(x), R0 = rotation(xs[k]);
+    c.pitch += log3(R1 * R0.transpose()).y();
+    c.pitch_axis +=
+        std::remainder(std::atan2(-R1(2, 0), R1(0, 0)) - std::atan2(-R0(2, 0), R0(0, 0)), 2 * M_PI);
   }
   return c;
 }

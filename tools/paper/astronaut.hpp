@@ -11,7 +11,20 @@
 // one the terminal cost. A running posture cost regularizes, and quadratic barriers keep the
 // joints inside (a margin of) their limits, standing in for self-collision avoidance as in the
 // paper.
+//
+// The waypoints alone do not remove the ambiguity: log3 measures an orientation error the short
+// way round, so once the motion lags a goal by more than 180° that goal pulls backwards (a single
+// solve over the whole horizon turned to 114° and back to 0°). solveAstronaut therefore plans in
+// receding windows over the waypoints: a window covers the next `window` waypoint segments from
+// the state reached so far, asks for `window_step_deg` more per segment from the orientation
+// reached (capped at the final goal), is solved with DDP (the first window from zero torques,
+// each later one from the previous window's torques beyond what it committed and zero torques on
+// its new segments), and its first `window_commit` segments are committed. No goal a window sees
+// is more than window · window_step_deg (120°) ahead, so never on the wrong side of 180°, and a
+// later window cannot undo the rotation already committed. The last window (reaching the end, at
+// rest) is committed whole. The plan is one trajectory, the rollout of its torques from x0.
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -24,9 +37,9 @@ namespace stride {
 
 struct AstronautOptions {
   double dt = 0.02;
-  int knots = 4500;              // T running knots: 90 s (a leg cycle turns the base ~10°: README)
+  int knots = 8000;              // T running knots: 160 s (README: what limits the rotation)
   double turn_deg = 360.0;       // total rotation about +y
-  int waypoints = 36;            // orientation goals at t = i·T/n, i = 1..n (the n-th is terminal)
+  int waypoints = 64;            // orientation goals at t = i·T/n, i = 1..n (the n-th is terminal)
   int waypoint_width = 1;        // knots on each side of a waypoint where its goal is also on
   double w_orientation = 100.0;  // per waypoint knot
   double w_posture = 1e-2;       // joint angles towards the default posture
@@ -41,25 +54,44 @@ struct AstronautOptions {
   // +90° into -150°). The true motion keeps h_g = 0, so penalizing h_g at every knot keeps the plan
   // where the discretization is faithful; it changes nothing for the continuous-time dynamics.
   double w_momentum = 100.0;
+  // Receding windows (solveAstronaut): segments per window (0 or >= waypoints, with
+  // window_step_deg = 0: one solve of the full problem from zero torques, the previous scheme),
+  // DDP iterations per window and on the last one.
+  int window = 12;
+  int window_commit = 4;          // segments kept from each window
+  double window_step_deg = 10.0;  // a window's goals advance by this per segment (0: turn / n)
+  int window_iterations = 150;
+  int final_iterations = 200;
+  SolverKind solver = SolverKind::Ddp;
   std::vector<std::string> free_joints = {"L_hip_pitch", "L_knee", "R_hip_pitch", "R_knee"};
   std::string base_frame = "base_link";
 };
 
-// The locked robot, the problem on it and its start (rest, default posture, base at the origin).
+// The locked robot, the problem on it and its start. By default the full problem: from rest in
+// the default posture, base at the origin (x0()), to the last waypoint, at rest. A window
+// (first, last, start): the knots from waypoint `first` (0: the start) to waypoint `last`, from
+// the state `start`, with waypoint `last` as the terminal cost (at rest only when it is the last
+// one). `goals` (rad, one per waypoint first..last; 0 is the start) replaces the schedule.
 // Not movable: the knots keep references to the model.
 class AstronautProblem {
  public:
-  AstronautProblem(const Robot& robot, const AstronautOptions& options);
+  AstronautProblem(const Robot& robot, const AstronautOptions& options, int first = 0,
+                   int last = -1, const Eigen::VectorXd& start = Eigen::VectorXd(),
+                   const std::vector<double>& goals = {});
   AstronautProblem(const AstronautProblem&) = delete;
   AstronautProblem& operator=(const AstronautProblem&) = delete;
 
   const Model& model() const { return locked_.model; }
   const LockedRobot& locked() const { return locked_; }
   ShootingProblem& problem() { return *problem_; }
-  const Eigen::VectorXd& x0() const { return x0_; }
+  const Eigen::VectorXd& x0() const { return x0_; }  // rest, default posture (not the window's)
   const AstronautOptions& options() const { return options_; }
   // Knot index and goal angle (rad) of each orientation waypoint (the last: T, terminal).
+  // (All n of them, in knots from the start of the whole motion, also in a window.)
   const std::vector<std::pair<int, double>>& waypoints() const { return waypoints_; }
+  // Knot of waypoint i (0: the start of the motion).
+  int waypointKnot(int i) const { return i == 0 ? 0 : waypoints_[i - 1].first; }
+  int horizon() const { return problem_->horizon(); }
 
  private:
   AstronautOptions options_;
@@ -69,16 +101,58 @@ class AstronautProblem {
   std::vector<std::pair<int, double>> waypoints_;
 };
 
+// One receding window of solveAstronaut.
+struct AstronautWindow {
+  int first = 0, last = 0;  // waypoints it spans (first = 0: the start)
+  int committed = 0;        // segments kept (window_commit, or all for the last window)
+  int knots = 0;            // its horizon
+  double goal = 0.0;        // goal at the end of what it committed, rad
+  double pitch = 0.0;       // base pitch reached there (AstronautMotion::pitch_axis), rad
+  int iterations = 0;
+  double solve_s = 0.0;  // Solver::solve only
+  SolveStatus status = SolveStatus::MaxIterations;
+  bool restarted = false;  // re-solved from zero torques (the warm start blew up)
+};
+
+struct AstronautSolution {
+  std::unique_ptr<AstronautProblem> problem;  // the full problem (model, waypoints, cost)
+  std::vector<Eigen::VectorXd> xs, us;        // the committed plan, knots 0..T
+  std::vector<AstronautWindow> windows;
+  std::vector<IterationStats> stats;  // every iteration of every window, in order
+  std::vector<int> stats_window;      // the window (0-based) of each entry of stats
+  int iterations = 0;                 // over all windows
+  double solve_s = 0.0;               // Σ Solver::solve over the windows
+  double wall_s = 0.0;                // the whole of solveAstronaut (building the windows too)
+  double cost = 0.0;                  // of the plan on the full problem
+  // False when a window failed (non-finite) even from zero torques: the plan stops there
+  // (xs, us shorter than the horizon).
+  bool finite = true;
+};
+
+// Zero warm start + receding windows over the waypoints (options.window). `progress`, when set,
+// is called after every window; `callback` after every DDP iteration.
+AstronautSolution solveAstronaut(const Robot& robot, const AstronautOptions& options,
+                                 const std::function<void(const AstronautWindow&)>& progress = {},
+                                 const std::function<void(const IterationStats&)>& callback = {});
+
 // What the experiment reports, per knot (T + 1 entries) and overall.
 struct AstronautMotion {
   std::vector<double> t;
-  std::vector<double> pitch;       // accumulated (unwrapped) base rotation about world y, rad
+  // Accumulated base rotation about world y, rad: Σ of the y components of the increments
+  // log3(R_{k+1} R_kᵀ). Path-dependent when the base also rolls and yaws.
+  std::vector<double> pitch;
+  // The angle of the base's forward axis (R e_x) in the world x-z plane, unwrapped, rad: how far
+  // the body has turned round in the sagittal plane (0 at the start, 2π after a full turn, the
+  // final one differing from the final orientation's only by roll and yaw). Well defined while
+  // the base's y axis stays away from x-z (tilt below).
+  std::vector<double> pitch_axis;
   std::vector<double> off_axis;    // |rotation about world x and z| accumulated, rad
+  std::vector<double> tilt;        // angle between the base's y axis and world y, rad
   std::vector<Eigen::Vector3d> h;  // whole-body angular momentum about the CoM, world axes
   // Angular momentum of each leg (the bodies its hip_pitch moves) about the whole-body CoM.
   std::vector<Eigen::Vector3d> h_left, h_right;
   std::vector<Eigen::Vector3d> com;
-  double max_h = 0.0, max_h_leg = 0.0, max_com_drift = 0.0;
+  double max_h = 0.0, max_h_leg = 0.0, max_com_drift = 0.0, max_tilt = 0.0;
 };
 
 // Unwrapped pitch: the base rotation increments of successive states, log3(R_{k+1} R_kᵀ) in world
@@ -93,6 +167,7 @@ AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::Vecto
 // discretization adds per knot: the pitch it would accumulate and the momentum it creates.
 struct FineCheck {
   double pitch = 0.0;        // Σ pitch increments of the fine steps, rad
+  double pitch_axis = 0.0;   // Σ forward-axis angle changes (AstronautMotion::pitch_axis), rad
   double max_dh_plan = 0.0;  // max over knots of |h(xs[k+1]) - h(xs[k])| (the knots' dynamics)
   double max_dh_fine = 0.0;  // max over knots of |h(fine step from xs[k]) - h(xs[k])|
 };

@@ -2,7 +2,8 @@
 # The paper's astronaut reorientation (§V-B, Fig. 5-6) with one command: builds
 # stride-paper-astronaut if it is missing, solves, prints the table, writes the trajectories
 # (CSV / JSON) and the plots (PNG) into --out DIR. Other options go to the program
-# (stride-paper-astronaut --help), e.g. --knots 100 --iterations 200.
+# (stride-paper-astronaut --help), e.g. --knots 4500 --waypoints 36. One thread unless
+# OMP_NUM_THREADS says otherwise (the README's timings are on one core).
 #   tools/paper/astronaut.sh --out build/paper/astronaut
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -21,7 +22,7 @@ if [ ! -x "$bin" ]; then
   "$root/tools/build.sh" >/dev/null
 fi
 mkdir -p "$out"
-"$bin" --out "$out" "${args[@]}"
+OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}" "$bin" --out "$out" "${args[@]}"
 # Debian's python3-matplotlib lives under /usr/bin/python3; a python3 earlier on PATH (pyenv,
 # a venv) may not see it.
 py=""

@@ -1,7 +1,7 @@
 // stride-paper-astronaut: the paper's astronaut reorientation (§V-B, Fig. 5-6). Builds the
-// problem (astronaut.hpp), solves it with DDP from zero torques, checks the plan by re-integrating
-// its torques with a finer step, prints the numbers and writes the trajectories for
-// tools/paper/plot_astronaut.py.
+// problem (astronaut.hpp), plans it with DDP from zero torques in receding windows over the
+// orientation waypoints, checks the plan by re-integrating its torques with a finer step, prints
+// the numbers and writes the trajectories for tools/paper/plot_astronaut.py.
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
       std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml";
   std::string out;
   std::string solver_name = "ddp";
-  int iterations = 500, substeps = 10;  // defaults: the README run
+  int substeps = 10;
   bool verbose = false;
   app.add_option("--robot", robot_yaml, "robot YAML")->check(CLI::ExistingFile);
   app.add_option("--out", out, "output folder (CSV, JSON); nothing written without it");
@@ -59,7 +59,18 @@ int main(int argc, char** argv) {
   app.add_option("--turn", o.turn_deg, "rotation about +y, degrees");
   app.add_option("--waypoints", o.waypoints, "orientation goals along the horizon")
       ->check(CLI::PositiveNumber);
-  app.add_option("--iterations", iterations, "DDP iteration budget")->check(CLI::PositiveNumber);
+  app.add_option("--window", o.window,
+                 "waypoint segments per receding window (0 or >= waypoints: one solve of the "
+                 "whole problem)");
+  app.add_option("--window-commit", o.window_commit, "segments kept from each window")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--window-step", o.window_step_deg,
+                 "degrees a window's goals advance per segment (0: turn / waypoints)");
+  app.add_option("--window-iterations", o.window_iterations, "DDP iterations per window")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--iterations", o.final_iterations,
+                 "DDP iterations on the last window (the one that reaches the end)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--solver", solver_name, "ddp or fddp")->check(CLI::IsMember({"ddp", "fddp"}));
   app.add_option("--replay-substeps", substeps, "substeps of the re-integration")
       ->check(CLI::PositiveNumber);
@@ -71,43 +82,67 @@ int main(int argc, char** argv) {
   app.add_flag("-v,--verbose", verbose, "print the iteration table");
   CLI11_PARSE(app, argc, argv);
 
+  o.solver = solver_name == "ddp" ? SolverKind::Ddp : SolverKind::Fddp;
   const Robot robot = loadRobot(robot_yaml);
-  AstronautProblem astro(robot, o);
+  std::printf(
+      "astronaut reorientation (paper §V-B): %d knots x %.3f s, %d waypoints, goal %.0f deg\n",
+      o.knots, o.dt, o.waypoints, o.turn_deg);
+  // Zero warm start (paper): the first window starts from zero torques; each later one from the
+  // previous one's torques and zeros on its new segment (astronaut.hpp).
+  std::printf("  %-7s %9s %6s %10s %11s %6s %7s\n", "window", "waypoints", "knots", "goal,deg",
+              "reached,deg", "iters", "time,s");
+  const AstronautSolution sol = solveAstronaut(
+      robot, o,
+      [&](const AstronautWindow& w) {
+        std::printf("  %-7d %4d-%-4d %6d %10.1f %11.1f %6d %7.2f%s\n", w.first + 1, w.first, w.last,
+                    w.knots, w.goal * kDeg, w.pitch * kDeg, w.iterations, w.solve_s,
+                    w.restarted ? "  (restarted from zero torques)" : "");
+        std::fflush(stdout);
+      },
+      verbose ? std::function<void(const IterationStats&)>(Solver::printIterationTable)
+              : std::function<void(const IterationStats&)>());
+  if (!sol.finite) {
+    std::fprintf(stderr, "a window failed (non-finite) even from zero torques: no plan\n");
+    return 1;
+  }
+  const AstronautProblem& astro = *sol.problem;
   const Model& model = astro.model();
-  Solver solver(astro.problem(), solver_name == "ddp" ? SolverKind::Ddp : SolverKind::Fddp);
-  if (verbose) solver.callback = Solver::printIterationTable;
-  // No warm start (paper): the solver starts from x0 everywhere and zero torques.
-  const auto t0 = std::chrono::steady_clock::now();
-  const SolveStatus status = solver.solve(iterations);
-  const double solve_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double solve_s = sol.solve_s;
+  const std::vector<Eigen::VectorXd>& xs = sol.xs;
+  const std::vector<Eigen::VectorXd>& us = sol.us;
 
-  const AstronautMotion m = analyzeMotion(model, solver.xs(), o.dt, o.base_frame);
-  const FineCheck fine =
-      checkWithFinerSteps(model, solver.xs(), solver.us(), o.dt, substeps, o.base_frame);
+  const AstronautMotion m = analyzeMotion(model, xs, o.dt, o.base_frame);
+  const FineCheck fine = checkWithFinerSteps(model, xs, us, o.dt, substeps, o.base_frame);
   // Distance of the final base orientation from the last goal (identity for 360°).
   const double final_err =
       log3(Eigen::AngleAxisd(astro.waypoints().back().second, Eigen::Vector3d::UnitY())
                .toRotationMatrix()
                .transpose() *
-           Eigen::Quaterniond(solver.xs().back().segment<4>(3)).toRotationMatrix())
+           Eigen::Quaterniond(xs.back().segment<4>(3)).toRotationMatrix())
           .norm();
-  const double max_pitch = *std::max_element(m.pitch.begin(), m.pitch.end());
+  const double max_pitch = *std::max_element(m.pitch_axis.begin(), m.pitch_axis.end());
+  // Joint limits: the smallest distance of a free joint to its position limits, and the largest
+  // rate as a fraction of its velocity limit (nq-indexed limits, nv-indexed velocity limits).
+  double min_limit_margin = INFINITY, max_velocity_ratio = 0.0;
+  for (const auto& x : xs)
+    for (int j = 0; j < model.nv - 6; ++j) {
+      const double q = x[7 + j], v = x[model.nq + 6 + j];
+      min_limit_margin = std::min({min_limit_margin, q - model.lowerPositionLimit[7 + j],
+                                   model.upperPositionLimit[7 + j] - q});
+      max_velocity_ratio = std::max(max_velocity_ratio, std::abs(v) / model.velocityLimit[6 + j]);
+    }
   double max_tau = 0.0;
-  for (const auto& u : solver.us()) max_tau = std::max(max_tau, u.cwiseAbs().maxCoeff());
+  for (const auto& u : us) max_tau = std::max(max_tau, u.cwiseAbs().maxCoeff());
 
-  std::printf(
-      "astronaut reorientation (paper §V-B): %d knots x %.3f s, %d waypoints, goal %.0f deg\n",
-      o.knots, o.dt, o.waypoints, o.turn_deg);
   std::printf("  %-44s %12s\n", "quantity", "value");
-  std::printf("  %-44s %12.1f\n", "base pitch at the end (unwrapped), deg", m.pitch.back() * kDeg);
-  std::printf("  %-44s %12.1f\n", "largest base pitch reached, deg", max_pitch * kDeg);
-  for (const auto& [k, goal] : astro.waypoints())
-    std::printf("  %-44s %12.1f\n",
-                ("  pitch at t = " + std::to_string(k * o.dt).substr(0, 4) + " s (goal " +
-                 std::to_string(static_cast<int>(std::lround(goal * kDeg))) + "), deg")
-                    .c_str(),
-                m.pitch[k] * kDeg);
+  std::printf("  %-44s %12.1f\n", "base pitch at the end (forward axis, unwrapped)",
+              m.pitch_axis.back() * kDeg);
+  std::printf("  %-44s %12.1f\n", "base pitch at the end (sum of y increments)",
+              m.pitch.back() * kDeg);
+  std::printf("  %-44s %12.1f\n", "largest base pitch reached (forward axis), deg",
+              max_pitch * kDeg);
+  std::printf("  %-44s %12.1f\n", "max tilt of the base y axis from world y, deg",
+              m.max_tilt * kDeg);
   std::printf("  %-44s %12.2f\n", "off-axis rotation (roll/yaw) accumulated, deg",
               m.off_axis.back() * kDeg);
   std::printf("  %-44s %12.2f\n", "final orientation error to the goal, deg", final_err * kDeg);
@@ -115,13 +150,20 @@ int main(int argc, char** argv) {
   std::printf("  %-44s %12.3f\n", "max |angular momentum| one leg, kg m^2/s", m.max_h_leg);
   std::printf("  %-44s %12.3e\n", "max CoM drift, m", m.max_com_drift);
   std::printf("  %-44s %12.1f\n", "max |torque|, Nm", max_tau);
-  std::printf("  %-44s %12d\n", "iterations", solver.iterations());
-  std::printf("  %-44s %12.2f\n", "solve time, s", solve_s);
-  std::printf("  %-44s %12s\n", "status", toString(status));
-  std::printf("  %-44s %12.3e\n", "final cost", solver.cost());
+  std::printf("  %-44s %12.3f\n", "min distance of a joint to its limits, rad", min_limit_margin);
+  std::printf("  %-44s %12.2f\n", "max joint rate / velocity limit", max_velocity_ratio);
+  std::printf("  %-44s %12d\n", "DDP iterations (all windows)", sol.iterations);
+  std::printf("  %-44s %12zu\n", "windows", sol.windows.size());
+  std::printf("  %-44s %12.2f\n", "solve time (all windows), s", solve_s);
+  std::printf("  %-44s %12.2f\n", "wall time (building the windows too), s", sol.wall_s);
+  std::printf("  %-44s %12s\n", "last window", toString(sol.windows.back().status));
+  std::printf("  %-44s %12.3e\n", "cost of the plan (full problem)", sol.cost);
   std::printf("  %-44s %12.1f\n",
               ("pitch re-integrated knot-wise at dt/" + std::to_string(substeps) + ", deg").c_str(),
               fine.pitch * kDeg);
+  std::printf("  %-44s %12.1f\n",
+              ("  forward-axis pitch, same, dt/" + std::to_string(substeps) + ", deg").c_str(),
+              fine.pitch_axis * kDeg);
   std::printf("  %-44s %12.3e\n", "max momentum change in one knot: plan", fine.max_dh_plan);
   std::printf("  %-44s %12.3e\n",
               ("max momentum change in one knot: dt/" + std::to_string(substeps)).c_str(),
@@ -133,7 +175,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> joints = astro.locked().free;
 
   std::ofstream traj(out + "/trajectory.csv");
-  traj << "t,pitch_deg,off_axis_deg,h_x,h_y,h_z,h_norm,"
+  traj << "t,pitch_deg,pitch_sum_deg,tilt_deg,off_axis_deg,h_x,h_y,h_z,h_norm,"
           "h_left_y,h_right_y,h_left_norm,h_right_norm,com_x,com_z";
   for (const auto& j : joints) traj << ",q_" << j;
   for (const auto& j : joints) traj << ",v_" << j;
@@ -141,17 +183,18 @@ int main(int argc, char** argv) {
   traj << "\n";
   traj.precision(9);
   for (int k = 0; k <= T; ++k) {
-    const Eigen::VectorXd& x = solver.xs()[k];
-    traj << m.t[k] << ',' << m.pitch[k] * kDeg << ',' << m.off_axis[k] * kDeg << ',' << m.h[k].x()
-         << ',' << m.h[k].y() << ',' << m.h[k].z() << ',' << m.h[k].norm() << ',' << m.h_left[k].y()
-         << ',' << m.h_right[k].y() << ',' << m.h_left[k].norm() << ',' << m.h_right[k].norm()
-         << ',' << m.com[k].x() << ',' << m.com[k].z();
+    const Eigen::VectorXd& x = xs[k];
+    traj << m.t[k] << ',' << m.pitch_axis[k] * kDeg << ',' << m.pitch[k] * kDeg << ','
+         << m.tilt[k] * kDeg << ',' << m.off_axis[k] * kDeg << ',' << m.h[k].x() << ','
+         << m.h[k].y() << ',' << m.h[k].z() << ',' << m.h[k].norm() << ',' << m.h_left[k].y() << ','
+         << m.h_right[k].y() << ',' << m.h_left[k].norm() << ',' << m.h_right[k].norm() << ','
+         << m.com[k].x() << ',' << m.com[k].z();
     for (int j = 0; j < nv - 6; ++j) traj << ',' << x[7 + j];
     for (int j = 0; j < nv - 6; ++j) traj << ',' << x[nq + 6 + j];
     // Torques are held over a knot: the last state has none.
     for (int j = 0; j < nv - 6; ++j) {
       traj << ',';
-      if (k < T) traj << solver.us()[k][j];
+      if (k < T) traj << us[k][j];
     }
     traj << "\n";
   }
@@ -164,7 +207,7 @@ int main(int argc, char** argv) {
   frames.precision(6);
   Data data(model);
   for (int k = 0; k <= T; ++k) {
-    framesForwardKinematics(model, data, solver.xs()[k].head(nq));
+    framesForwardKinematics(model, data, xs[k].head(nq));
     frames << m.t[k];
     for (const auto& f : kFigureFrames) {
       const Eigen::Vector3d p = data.oMf[model.getFrameId(f)].p - m.com.front();
@@ -174,11 +217,11 @@ int main(int argc, char** argv) {
   }
 
   std::ofstream iters(out + "/iterations.csv");
-  iters << "iteration,cost,step,regularization,time_ms\n";
-  for (int i = 0; i < solver.statsCount(); ++i) {
-    const IterationStats& s = solver.stats()[i];
-    iters << s.iteration << ',' << s.cost << ',' << s.step << ',' << s.regularization << ','
-          << s.time_ms << "\n";
+  iters << "window,iteration,cost,step,regularization,time_ms\n";
+  for (std::size_t i = 0; i < sol.stats.size(); ++i) {
+    const IterationStats& s = sol.stats[i];
+    iters << sol.stats_window[i] << ',' << s.iteration << ',' << s.cost << ',' << s.step << ','
+          << s.regularization << ',' << s.time_ms << "\n";
   }
 
   std::ofstream skel(out + "/skeleton.json");
@@ -191,19 +234,29 @@ int main(int argc, char** argv) {
   std::ofstream sum(out + "/summary.json");
   sum.precision(9);
   sum << "{\n"
-      << "  \"base_pitch_deg\": " << m.pitch.back() * kDeg << ",\n"
+      << "  \"base_pitch_deg\": " << m.pitch_axis.back() * kDeg << ",\n"
+      << "  \"base_pitch_sum_deg\": " << m.pitch.back() * kDeg << ",\n"
+      << "  \"max_tilt_deg\": " << m.max_tilt * kDeg << ",\n"
       << "  \"max_base_pitch_deg\": " << max_pitch * kDeg << ",\n"
       << "  \"max_angular_momentum_norm\": " << m.max_h << ",\n"
       << "  \"max_leg_angular_momentum_norm\": " << m.max_h_leg << ",\n"
-      << "  \"iterations\": " << solver.iterations() << ",\n"
+      << "  \"iterations\": " << sol.iterations << ",\n"
+
       << "  \"solve_time_s\": " << solve_s << ",\n"
-      << "  \"status\": \"" << toString(status) << "\",\n"
-      << "  \"final_cost\": " << solver.cost() << ",\n"
+      << "  \"wall_time_s\": " << sol.wall_s << ",\n"
+      << "  \"window_segments\": " << o.window << ",\n"
+      << "  \"window_iterations\": " << o.window_iterations << ",\n"
+      << "  \"last_window_iterations\": " << o.final_iterations << ",\n"
+      << "  \"last_window_status\": \"" << toString(sol.windows.back().status) << "\",\n"
+      << "  \"plan_cost\": " << sol.cost << ",\n"
       << "  \"off_axis_deg\": " << m.off_axis.back() * kDeg << ",\n"
       << "  \"max_com_drift_m\": " << m.max_com_drift << ",\n"
       << "  \"max_torque_nm\": " << max_tau << ",\n"
+      << "  \"min_joint_limit_margin_rad\": " << min_limit_margin << ",\n"
+      << "  \"max_joint_velocity_ratio\": " << max_velocity_ratio << ",\n"
       << "  \"replay_substeps\": " << substeps << ",\n"
-      << "  \"fine_base_pitch_deg\": " << fine.pitch * kDeg << ",\n"
+      << "  \"fine_base_pitch_deg\": " << fine.pitch_axis * kDeg << ",\n"
+      << "  \"fine_base_pitch_sum_deg\": " << fine.pitch * kDeg << ",\n"
       << "  \"max_knot_momentum_change_plan\": " << fine.max_dh_plan << ",\n"
       << "  \"max_knot_momentum_change_fine\": " << fine.max_dh_fine << ",\n"
       << "  \"final_orientation_error_deg\": " << final_err * kDeg << ",\n"
@@ -213,10 +266,19 @@ int main(int argc, char** argv) {
   for (std::size_t i = 0; i < astro.waypoints().size(); ++i) {
     const auto& [k, goal] = astro.waypoints()[i];
     sum << (i ? ", " : "") << "{\"t\": " << k * o.dt << ", \"goal_deg\": " << goal * kDeg
-        << ", \"pitch_deg\": " << m.pitch[k] * kDeg << "}";
+        << ", \"pitch_deg\": " << m.pitch_axis[k] * kDeg << "}";
+  }
+  sum << "],\n  \"windows\": [";
+  for (std::size_t i = 0; i < sol.windows.size(); ++i) {
+    const AstronautWindow& w = sol.windows[i];
+    sum << (i ? ", " : "") << "{\"first\": " << w.first << ", \"last\": " << w.last
+        << ", \"committed\": " << w.committed << ", \"goal_deg\": " << w.goal * kDeg
+        << ", \"pitch_deg\": " << w.pitch * kDeg << ", \"iterations\": " << w.iterations
+        << ", \"solve_time_s\": " << w.solve_s
+        << ", \"restarted\": " << (w.restarted ? "true" : "false") << "}";
   }
   sum << "]\n}\n";
   std::printf("  wrote %s/{summary.json,trajectory.csv,frames.csv,iterations.csv,skeleton.json}\n",
               out.c_str());
-  return status == SolveStatus::NonFinite ? 1 : 0;
+  return sol.finite ? 0 : 1;
 }

@@ -2,7 +2,7 @@
 """Plots of the astronaut reorientation (paper §V-B, Fig. 5-6) from stride-paper-astronaut's output.
 
 Usage: plot_astronaut.py DIR   (reads DIR/{trajectory,frames}.csv, summary.json, skeleton.json;
-writes DIR/astronaut_{torques,pitch,snapshots}.png). matplotlib only (Debian python3-matplotlib).
+writes DIR/astronaut_{torques,pitch,snapshots,sagittal}.png). matplotlib only (Debian python3-matplotlib).
 """
 import csv
 import json
@@ -51,11 +51,15 @@ def main(out):
     # Base pitch (unwrapped) with the waypoint goals, and the angular momentum.
     fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
     ax = axes[0]
-    ax.plot(t, traj["pitch_deg"], label="plan", lw=1.5)
-    ax.plot([w["t"] for w in summary["waypoints"]], [w["goal_deg"] for w in summary["waypoints"]],
-            "kx", ms=8, label="orientation goals")
+    ax.plot(t, traj["pitch_deg"], label="plan: forward axis in the x-z plane", lw=1.5)
+    ax.plot(t, traj["pitch_sum_deg"], label="plan: Σ y increments", lw=0.8, alpha=0.7)
+    # Each window's goal at the end of what it committed (relative to the pitch it started from).
+    wt = [summary["waypoints"][w["first"] + w["committed"] - 1]["t"] for w in summary["windows"]]
+    ax.plot(wt, [w["goal_deg"] for w in summary["windows"]], "kx", ms=7,
+            label="window goals (at commit)")
     ax.set_ylabel("base pitch [deg]")
     ax.set_yticks(range(-90, 361 + 90, 90))
+    ax.axhline(360, color="tab:green", lw=0.8)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     ax = axes[1]
@@ -96,7 +100,38 @@ def main(out):
     fig.tight_layout()
     fig.savefig(f"{out}/astronaut_snapshots.png", dpi=80)
     plt.close(fig)
-    print(f"  plots: {out}/astronaut_torques.png, astronaut_pitch.png, astronaut_snapshots.png")
+    # Sagittal view: the stick figure at a few instants overlaid about the initial CoM (the body
+    # turning round), and the legs' shape loops (hip vs knee angle) that produce the rotation.
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 5), gridspec_kw={"width_ratios": [1, 1.2]})
+    n = 16
+    picks = [round(i * (count - 1) / n) for i in range(n)]
+    cmap = plt.get_cmap("viridis")
+    for i, k in enumerate(picks):
+        c = cmap(i / (n - 1))
+        for a, b in segments:
+            ax.plot([frames[f"{a}_x"][k], frames[f"{b}_x"][k]],
+                    [frames[f"{a}_z"][k], frames[f"{b}_z"][k]], color=c, lw=1.5, alpha=0.8)
+        ax.plot(frames["head_x"][k], frames["head_z"][k], "o", color=c, ms=4)
+    ax.plot(0, 0, "k+", ms=10)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("z [m]")
+    ax.set_title("stick figure every 1/16 of the motion\n(dark → light), about the initial CoM",
+                 fontsize=9)
+    for side, color in (("L", "tab:blue"), ("R", "tab:red")):
+        hip, knee = traj.get(f"q_{side}_hip_pitch"), traj.get(f"q_{side}_knee")
+        if hip is not None and knee is not None:
+            ax2.plot(hip, knee, color=color, lw=0.5, alpha=0.6, label=f"{side} leg")
+    ax2.set_xlabel("hip pitch [rad]")
+    ax2.set_ylabel("knee [rad]")
+    ax2.set_title("leg shape loops (each closed loop turns the base)", fontsize=9)
+    ax2.grid(alpha=0.3)
+    ax2.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(f"{out}/astronaut_sagittal.png", dpi=80)
+    plt.close(fig)
+    print(f"  plots: {out}/astronaut_torques.png, astronaut_pitch.png, astronaut_snapshots.png, "
+          "astronaut_sagittal.png")
 
 
 if __name__ == "__main__":
