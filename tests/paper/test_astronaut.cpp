@@ -19,15 +19,14 @@ const std::string kHumanoid = STRIDE_CONFIG_DIR "/robots/stride_humanoid/stride_
 constexpr double kDeg = 180.0 / M_PI;
 
 // The default scheme of tools/paper/astronaut.sh (20 ms knots, 2.5 s segments, windows of 12
-// segments keeping 4, goals 10° per segment), cut to 50 s of motion and 100 DDP iterations per
-// window (3 windows, ~15 s of solve). It reaches ~75°; 180° needs about 60 s of motion at the
-// full iteration budget (~40 s of solve, tools/paper/README.md), too long for ctest, so the test
-// asks for 60°.
+// segments keeping 4, goals 10° per segment), cut to 90 s of motion (36 segments, 150 DDP
+// iterations per window, ~45 s of solve on one core). It reaches ~220° (forward axis) and ~200°
+// (summed increments): past 180°, as the issue asks of the short run.
 constexpr double kShortDt = 0.02;
-constexpr int kShortKnots = 2500;
-constexpr int kShortWaypoints = 20;
-constexpr int kShortIterations = 100;
-constexpr double kPastDeg = 60.0;
+constexpr int kShortKnots = 4500;
+constexpr int kShortWaypoints = 36;
+constexpr int kShortIterations = 150;
+constexpr double kPastDeg = 180.0;
 
 TEST(Astronaut, LegsAloneTurnTheBaseWithoutMomentum) {
   const Robot robot = loadRobot(kHumanoid);
@@ -53,10 +52,12 @@ TEST(Astronaut, LegsAloneTurnTheBaseWithoutMomentum) {
   // to ~35° in the full run), so the pitch (of the forward axis, unwrapped) must not fall from
   // one 10 s mark (what a window commits) to the next (2° allowed: the motion ends at rest, the
   // last 10 s nearly flat) and never more than 45° below its largest value so far. (The single
-  // solve of the whole horizon turned back by 110°.) The two measures of the pitch agree while
-  // the base barely rolls or yaws.
+  // solve of the whole horizon turned back by 110°.) Both measures of the pitch get past
+  // kPastDeg; they differ by the base's roll and yaw wobble (up to ~20°: the legs often move one
+  // at a time), ~8% of the angle here and in the full run.
   EXPECT_GT(m.pitch_axis.back() * kDeg, kPastDeg);
-  EXPECT_NEAR(m.pitch.back() * kDeg, m.pitch_axis.back() * kDeg, 10.0);
+  EXPECT_GT(m.pitch.back() * kDeg, kPastDeg);
+  EXPECT_NEAR(m.pitch.back() / m.pitch_axis.back(), 1.0, 0.15);
   EXPECT_LT(m.max_tilt * kDeg, 30.0);
   const int mark = static_cast<int>(std::lround(10.0 / kShortDt));
   for (int k = mark; k < kShortKnots + 1; k += mark)
