@@ -147,6 +147,9 @@ int main(int argc, char** argv) {
         clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
       }
     }
+    // The fallen pose goes out too: a log then shows the fall the run stopped at (the estimate
+    // of the last step before it may still look upright).
+    if (node.stats().fell) node.publishState();
     node.writeSummary(summary);
     if (node.stats().diverged) {
       std::fprintf(stderr, "stride-sim: the simulation diverged at t = %.3f s (stopped)\n",
