@@ -99,6 +99,19 @@ void Mpc::restartWarmStart(double t) {
   need_restart_ = false;
 }
 
+bool Mpc::shiftTo(double t) {
+  const double dt = config_.locomotion.dt;
+  const double shift = std::floor((t - t_warm_) / dt + 0.5);
+  if (shift >= loco_->problem().horizon()) return false;
+  if (shift >= 1.0) {
+    const int n = static_cast<int>(shift);
+    loco_->problem().shift(n);
+    solver_->shiftWarmStart(n);
+    t_warm_ += n * dt;
+  }
+  return true;
+}
+
 bool Mpc::solveTick(double t, Clock::time_point deadline, SolveStatus& result) {
   ShootingProblem& problem = loco_->problem();
   const double dt = config_.locomotion.dt;
@@ -111,27 +124,11 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, SolveStatus& result) {
   const bool use_prepared = !need_restart_ && solver_->prepared() && std::abs(t - t_warm_) < dt;
   status_.prepared = use_prepared ? 1 : 0;
   status_.prepare_ms = use_prepared ? prepare_ms_ : 0.0;
-  if (use_prepared) {
-    problem.setX0(x_);
-  } else {
+  problem.setX0(x_);
+  if (!use_prepared) {
     solver_->discardPreparation();  // made for another time, or left over from before a restart
     if (!first) ++counters_.unprepared_solves;
-    if (need_restart_) {
-      restartWarmStart(t);
-    } else {
-      // Whole knots elapsed since the warm start's knot 0; the remainder (under half a knot) is
-      // left to FDDP as a gap at x0.
-      const double shift = std::floor((t - t_warm_) / dt + 0.5);
-      if (shift >= problem.horizon()) {
-        restartWarmStart(t);
-      } else if (shift >= 1.0) {
-        const int n = static_cast<int>(shift);
-        problem.shift(n);
-        solver_->shiftWarmStart(n);
-        t_warm_ += n * dt;
-      }
-    }
-    problem.setX0(x_);
+    if (need_restart_ || !shiftTo(t)) restartWarmStart(t);
     // The knots' phases and references on the warm start's own time grid: its knot 0 is at
     // t_warm_. Updated for t instead, a touch-down half a knot away would land on the next knot
     // while the shifted trajectory has its velocity jump on this one: a gap of tens of rad/s at
@@ -223,17 +220,8 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
 void Mpc::prepare(Clock::time_point deadline) {
   if (!solved_ || need_restart_) return;
   solved_ = false;  // one preparation per solved tick
-  ShootingProblem& problem = loco_->problem();
-  const double dt = config_.locomotion.dt;
-  const double t = t_last_ + 1.0 / config_.rate_hz;  // when the next state is expected
-  const double shift = std::floor((t - t_warm_) / dt + 0.5);
-  if (shift >= problem.horizon()) return;  // the next tick restarts anyway
-  if (shift >= 1.0) {
-    const int n = static_cast<int>(shift);
-    problem.shift(n);
-    solver_->shiftWarmStart(n);
-    t_warm_ += n * dt;
-  }
+  // For when the next state is expected; past the horizon the next tick restarts anyway.
+  if (!shiftTo(t_last_ + 1.0 / config_.rate_hz)) return;
   if (!loco_->update(t_warm_)) return;  // on the trajectory's grid, as in solveTick
   const Clock::time_point start = Clock::now();
   SolveStatus why = SolveStatus::MaxIterations;

@@ -95,6 +95,10 @@ class Mpc {
 
  private:
   void start(std::int64_t utime);  // builds the problem around x_ (allocates)
+  // Shifts the horizon and the warm start by the whole knots from the warm start's knot 0 to t
+  // (the remainder, under half a knot, is left to FDDP as a gap at x0). False, and nothing
+  // shifted, when t is past the horizon: the warm start is used up.
+  bool shiftTo(double t);
   bool solveTick(double t, Clock::time_point deadline, SolveStatus& status);
   void restartWarmStart(double t);
   void writePolicy(std::int64_t utime, double t, std::int8_t status);
