@@ -5,10 +5,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
+#include <stdexcept>
 
 #include "sim/policy.hpp"
 #include "sim/simulator.hpp"
+#include "solver/multibody/frames.hpp"
 #include "solver/multibody/lie_group.hpp"
 #include "solver/ocp/knot.hpp"
 #include "solver/ocp/residual_com.hpp"
@@ -31,11 +34,27 @@ const std::vector<std::string>& strideCostGroups() {
 
 StrideProblem::StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& o)
     : robot_(robot), plan_(plan), options_(o) {
+  build(0, plan.N, nullptr);
+}
+
+StrideProblem::StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& o,
+                             int first, int knots, const Eigen::VectorXd& x_terminal)
+    : robot_(robot), plan_(plan), options_(o) {
+  if (first < 0 || first > plan.N || knots < 1)
+    throw std::invalid_argument("StrideProblem: window out of range");
+  build(first, knots, &x_terminal);
+}
+
+void StrideProblem::build(int first, int knots, const Eigen::VectorXd* x_terminal) {
+  const Robot& robot = robot_;
+  const StridePlan& plan = plan_;
+  const StrideDdpOptions& o = options_;
   const Model& model = robot.model;
   const int nq = model.nq, nv = model.nv, nu = nv - 6, N = plan.N;
   ContactSet contacts;
   for (int c = 0; c < 2; ++c)
-    contacts.add(model, plan.feet[c], 6, ReferenceFrame::LocalWorldAligned, 0.0, o.contact_kd);
+    contacts.add(model, plan.feet[c], 6, ReferenceFrame::LocalWorldAligned, o.contact_kp,
+                 o.contact_kd);
   // State weights: base position free (the CoM term places the body), base orientation upright,
   // joints to the nominal posture, velocities to zero.
   Eigen::VectorXd w_state(2 * nv);
@@ -49,13 +68,17 @@ StrideProblem::StrideProblem(const Robot& robot, const StridePlan& plan, const S
 
   auto workspace = std::make_shared<SharedWorkspace>(model, std::max(omp_get_max_threads(), 2));
   std::vector<std::unique_ptr<ActionModel>> running;
-  for (int k = 0; k < N; ++k) {
-    const bool impulse = k > 0 && plan.touchdown[k];
+  for (int j = 0; j < knots; ++j) {
+    const int k = std::min(first + j, N);
+    const bool impulse = j > 0 && k > 0 && k != std::min(first + j - 1, N) && plan.touchdown[k];
     for (int pass = impulse ? 0 : 1; pass < 2; ++pass) {
       const bool is_impulse = pass == 0;
       auto knot = std::make_unique<KnotModel>(model, contacts, plan.options.dt, workspace);
       knot->setMode(is_impulse ? KnotMode::Impulse : KnotMode::Contact);
-      for (int c = 0; c < 2; ++c) knot->contacts().setActive(c, plan.closed[k][c]);
+      for (int c = 0; c < 2; ++c) {
+        knot->contacts().setActive(c, plan.closed[k][c]);
+        knot->contacts().setReference(c, SE3(Eigen::Matrix3d::Identity(), plan.foot[k][c]));
+      }
       CostModel& costs = knot->costs();
       std::vector<int> group;
       costs.add("posture", std::make_unique<StateResidual>(model, nu, x_ref),
@@ -99,10 +122,12 @@ StrideProblem::StrideProblem(const Robot& robot, const StridePlan& plan, const S
       running.push_back(std::move(knot));
     }
   }
+  const int k_end = std::min(first + knots, N);
   auto terminal = std::make_unique<TerminalModel>(model);
-  terminal->costs().add("posture", std::make_unique<StateResidual>(model, 0, x_ref),
-                        Activation::weightedQuadratic(o.w_terminal * w_state));
-  terminal->costs().add("com", std::make_unique<ComPositionResidual>(model, 0, plan.com[N]),
+  terminal->costs().add(
+      "posture", std::make_unique<StateResidual>(model, 0, x_terminal ? *x_terminal : x_ref),
+      Activation::weightedQuadratic(o.w_terminal * w_state));
+  terminal->costs().add("com", std::make_unique<ComPositionResidual>(model, 0, plan.com[k_end]),
                         Activation::quadratic(3), o.w_com);
   term_group_.push_back({kPosture, kCom});
   term_active_.push_back({1, 1});
@@ -228,8 +253,21 @@ StrideSolve solveStrides(StrideProblem& sp, const IkTrajectory& ik, int iteratio
   return out;
 }
 
+const std::vector<std::string>& StrideSimResult::stepColumns() {
+  static const std::vector<std::string> c = {
+      "t",         "base_x",    "base_y",    "base_z",    "ref_x",     "ref_y",    "ref_z",
+      "roll_deg",  "pitch_deg", "fz_L",      "fz_R",      "plan_fz_L", "plan_fz_R", "cop_L_x",
+      "cop_L_y",   "cop_R_x",   "cop_R_y",   "plan_cop_L_x", "plan_cop_L_y", "plan_cop_R_x",
+      "plan_cop_R_y", "foot_L_x", "foot_L_z", "foot_R_x", "foot_R_z", "plan_foot_L_x",
+      "plan_foot_L_z", "plan_foot_R_x", "plan_foot_R_z", "foot_L_tilt_deg", "foot_R_tilt_deg",
+      "dx_norm",   "dq_norm",   "dv_norm",   "tau_ratio", "clamped"};
+  return c;
+}
+
 StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,
-                                double hold_s) {
+                                const StrideSimOptions& opt) {
+  const double hold_s = opt.hold_s;
+  const bool record_steps = opt.record_steps;
   const Model& model = robot.model;
   const StridePlan& plan = sp.plan();
   const int nq = model.nq, nv = model.nv, nu = nv - 6, N = plan.N;
@@ -247,6 +285,68 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
     for (int r = 0; r < nu; ++r)
       for (int c = 0; c < 2 * nv; ++c) out[r * 2 * nv + c] = -solve.K[j](r, c);
   }
+  // Closed loop: the window's first contact knots.
+  const int window = std::max(1, static_cast<int>(std::lround(opt.window_s / dt)));
+  constexpr int kPolicyKnots = 3;
+  sim::Policy mpc;
+  mpc.resize(kPolicyKnots, nq, nv, nu);
+  mpc.dt = dt;
+  std::unique_ptr<StrideProblem> prev;  // the last window and its solution
+  std::vector<Eigen::VectorXd> prev_xs, prev_us;
+  // The offline solution's state and control of (sample, impulse); past N the final state at
+  // rest with the last control.
+  auto offline = [&](int s, bool impulse, Eigen::VectorXd& x, Eigen::VectorXd& u) {
+    if (s >= N) {
+      x = solve.xs.back();
+      u = solve.us.back();
+      return;
+    }
+    const int j = sp.contactKnot(s) - (impulse ? 1 : 0);
+    x = solve.xs[j];
+    u = solve.us[j];
+  };
+  auto resolve = [&](int first, const Eigen::VectorXd& x_measured) {
+    Eigen::VectorXd x_term, u_dummy;
+    offline(first + window, false, x_term, u_dummy);
+    auto w = std::make_unique<StrideProblem>(robot, plan, sp.options(), std::min(first, N), window,
+                                             x_term);
+    const int T = w->problem().horizon();
+    std::vector<Eigen::VectorXd> xs(T + 1), us(T);
+    for (int i = 0; i < T; ++i) {
+      const int s_i = w->sampleOfKnot(i);
+      const bool imp = w->isImpulse(i);
+      bool found = false;
+      if (prev) {
+        const int Tp = prev->problem().horizon();
+        for (int p = 0; p < Tp && !found; ++p)
+          if (prev->sampleOfKnot(p) == s_i && prev->isImpulse(p) == imp && (s_i < N || p > 0)) {
+            xs[i] = prev_xs[p];
+            us[i] = prev_us[p];
+            found = true;
+          }
+      }
+      if (!found) offline(s_i, imp, xs[i], us[i]);
+    }
+    xs[T] = x_term;
+    xs[0] = x_measured;
+    w->problem().setX0(x_measured);
+    Solver solver(w->problem(), SolverKind::BoxFddp);
+    solver.setControlBounds(w->controlLower(), w->controlUpper());
+    solver.setWarmStart(xs, us);
+    solver.solve(opt.iterations);
+    prev_xs = solver.xs();
+    prev_us = solver.us();
+    const int P = std::min(kPolicyKnots, w->contactKnots());
+    for (int k = 0; k < kPolicyKnots; ++k) {
+      const int j = w->contactKnot(std::min(k, P - 1));
+      std::copy(prev_xs[j].data(), prev_xs[j].data() + nq + nv, mpc.xRef(k));
+      std::copy(prev_us[j].data(), prev_us[j].data() + nu, mpc.uFf(k));
+      double* out = mpc.gain(k);
+      for (int r = 0; r < nu; ++r)
+        for (int c = 0; c < 2 * nv; ++c) out[r * 2 * nv + c] = -solver.K()[j](r, c);
+    }
+    prev = std::move(w);
+  };
   StrideSimResult res;
   sim::SimOptions so;
   sim::Simulator simulator(robot, so);
@@ -257,10 +357,107 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
   const int total = static_cast<int>(std::lround((N * dt + hold_s) / so.dt));
   std::array<double, 2> acc{0.0, 0.0};
   const Eigen::VectorXd q_end = solve.xs.back().head(nq);
+  std::vector<std::array<Vector6d, 2>> plan_force;
+  if (record_steps) plan_force = sp.forces(solve.xs, solve.us);
+  Data fk(model);
+  if (record_steps && std::getenv("STRIDE_PRINT_WRENCH")) {
+    const double r = robot.sole_half_extents.norm();
+    for (int k = 0; k < N; ++k)
+      for (int c = 0; c < 2; ++c) {
+        const Vector6d& f = plan_force[k][c];
+        if (!plan.closed[k][c]) continue;
+        std::printf("k %3d t %.2f foot %d fz %6.1f ft/fz %.2f cop %6.3f %6.3f tz %6.1f tz/(0.8 fz r) %.2f\n",
+                    k, k * dt, c, f[2], f.head<2>().norm() / f[2], -f[4] / f[2], f[3] / f[2], f[5],
+                    std::abs(f[5]) / (0.8 * f[2] * r));
+      }
+  }
+  if (record_steps && std::getenv("STRIDE_PRINT_K")) {
+    for (int k : {0, 10, 20, 30, 36, 37, 38, 39, 40, 45}) {
+      if (k >= N) continue;
+      const Eigen::MatrixXd& K = solve.K[sp.contactKnot(k)];
+      std::printf("knot %d closed %d%d Kp diag:", k, plan.closed[k][0], plan.closed[k][1]);
+      for (int i = 0; i < nu; ++i) std::printf(" %.0f", -K(i, 6 + i));
+      std::printf("\n          Kd diag:");
+      for (int i = 0; i < nu; ++i) std::printf(" %.1f", -K(i, nv + 6 + i));
+      std::printf("\n          |K| %.3g, max |Kd| row %.3g\n", K.norm(),
+                  K.rightCols(nv).rowwise().norm().maxCoeff());
+    }
+  }
+  const int sole_frame[2] = {model.getFrameId(plan.feet[0]), model.getFrameId(plan.feet[1])};
   for (int s = 0; s < total; ++s) {
     const double t = simulator.time();
-    evaluator.evaluate(policy, t, simulator.q(), simulator.v(), tau);
+    if (opt.closed_loop && s % steps_per_knot == 0) {
+      const auto a = std::chrono::steady_clock::now();
+      Eigen::VectorXd x(nq + nv);
+      x << simulator.q(), simulator.v();
+      resolve(s / steps_per_knot, x);
+      mpc.t0 = t;
+      ++res.resolves;
+      res.resolve_time_s +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+    }
+    evaluator.evaluate(opt.closed_loop ? mpc : policy, t, simulator.q(), simulator.v(), tau);
+    const Eigen::VectorXd dx = evaluator.stateError();
     simulator.step(tau);
+    if (record_steps) {
+      const Eigen::VectorXd& q = simulator.q();
+      framesForwardKinematics(model, fk, q);
+      const int k = std::min(static_cast<int>(simulator.time() / dt + 1e-9), N - 1);
+      std::vector<double> row = {simulator.time(), q[0], q[1], q[2], policy.xRef(k)[0],
+                                 policy.xRef(k)[1], policy.xRef(k)[2]};
+      const Eigen::Quaterniond quat(q[6], q[3], q[4], q[5]);
+      const Eigen::Vector3d ez = quat.toRotationMatrix().col(2);
+      const Eigen::Vector3d ex = quat.toRotationMatrix().col(0);
+      row.push_back(std::atan2(ez.y(), ez.z()) * -180.0 / M_PI);  // roll (about x)
+      row.push_back(std::atan2(-ex.z(), ex.x()) * 180.0 / M_PI);  // pitch (about y)
+      for (int c = 0; c < 2; ++c) row.push_back(simulator.normalForce(c));
+      for (int c = 0; c < 2; ++c) row.push_back(plan_force[k][c][2]);
+      // Measured centre of pressure of each sole in its frame (NaN when unloaded).
+      for (int c = 0; c < 2; ++c) {
+        Eigen::Vector3d num = Eigen::Vector3d::Zero();
+        double fz = 0.0;
+        for (size_t i = 0; i < simulator.contactPoints().size(); ++i) {
+          const auto& pt = simulator.contactPoints()[i];
+          if (pt.contact != c) continue;
+          const Eigen::Vector3d pw = fk.oMf[pt.frame].R * pt.offset + fk.oMf[pt.frame].p;
+          num += simulator.contactForces()(2, i) * pw;
+          fz += simulator.contactForces()(2, i);
+        }
+        const SE3& M = fk.oMf[sole_frame[c]];
+        const Eigen::Vector3d cop = fz > 1.0 ? Eigen::Vector3d(M.R.transpose() * (num / fz - M.p))
+                                             : Eigen::Vector3d::Constant(NAN);
+        row.push_back(cop.x());
+        row.push_back(cop.y());
+      }
+      for (int c = 0; c < 2; ++c) {
+        const Vector6d& f = plan_force[k][c];
+        const bool loaded = f[2] > 1.0;
+        row.push_back(loaded ? -f[4] / f[2] : NAN);
+        row.push_back(loaded ? f[3] / f[2] : NAN);
+      }
+      for (int c = 0; c < 2; ++c) {
+        row.push_back(fk.oMf[sole_frame[c]].p.x());
+        row.push_back(fk.oMf[sole_frame[c]].p.z());
+      }
+      for (int c = 0; c < 2; ++c) {
+        row.push_back(plan.foot[k][c].x());
+        row.push_back(plan.foot[k][c].z());
+      }
+      for (int c = 0; c < 2; ++c)
+        row.push_back(std::acos(std::clamp(fk.oMf[sole_frame[c]].R(2, 2), -1.0, 1.0)) * 180.0 /
+                      M_PI);
+      row.push_back(dx.norm());
+      row.push_back(dx.head(nv).norm());
+      row.push_back(dx.tail(nv).norm());
+      double ratio = 0.0;
+      for (int i = 0; i < nu; ++i)
+        ratio = std::max(ratio, std::abs(tau[i]) / model.effortLimit[6 + i]);
+      row.push_back(ratio);
+      row.push_back(ratio > 1.0 ? 1.0 : 0.0);
+      for (int i = 0; i < 2 * nv; ++i) row.push_back(dx[i]);
+      for (int i = 0; i < nu; ++i) row.push_back(tau[i]);
+      res.steps.push_back(std::move(row));
+    }
     for (int c = 0; c < 2; ++c) {
       const double f = simulator.normalForce(c);
       res.peak_normal_force[c] = std::max(res.peak_normal_force[c], f);

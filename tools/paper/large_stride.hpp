@@ -48,6 +48,7 @@ struct StrideDdpOptions {
   double mu = 0.7;
   double sole_margin = 0.8;  // the centre of pressure stays in this fraction of the sole
   double contact_kd = 50.0;  // Baumgarte velocity gain of the rigid contacts
+  double contact_kp = 0.0;   // Baumgarte position gain (to the planned, flat foot placement)
   bool torque_limits = true;
 };
 
@@ -56,8 +57,15 @@ const std::vector<std::string>& strideCostGroups();
 
 class StrideProblem {
  public:
-  // q_nominal: the posture the regularization pulls to (robot.default_q).
+  // The whole plan: knots for samples 0..N-1, the terminal knot at sample N (posture at rest, the
+  // regularization pulls to robot.default_q).
   StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& options);
+  // A window of the plan (the closed-loop replay): `knots` contact knots for samples first,
+  // first + 1, ... (past N they repeat the final standing sample N), plus the impulse knots of
+  // the touch-downs inside the window (not one at `first`: the state there is measured); the
+  // terminal knot tracks x_terminal (posture weights × w_terminal, the CoM of its sample).
+  StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& options,
+                int first, int knots, const Eigen::VectorXd& x_terminal);
   StrideProblem(const StrideProblem&) = delete;
   StrideProblem& operator=(const StrideProblem&) = delete;
 
@@ -65,10 +73,13 @@ class StrideProblem {
   const StridePlan& plan() const { return plan_; }
   const Model& model() const { return robot_.model; }
   // The plan sample a knot stands for; impulse knots share the sample of the contact knot after
-  // them. contactKnot(k): the contact knot of sample k (k < N).
+  // them. contactKnot(k): the contact knot of sample k (k < N; for a window, of its k-th contact
+  // knot, sample first + k).
   int sampleOfKnot(int knot) const { return sample_[knot]; }
   bool isImpulse(int knot) const { return impulse_[knot] != 0; }
   int contactKnot(int sample) const { return contact_knot_[sample]; }
+  int contactKnots() const { return static_cast<int>(contact_knot_.size()); }
+  const StrideDdpOptions& options() const { return options_; }
   const Eigen::VectorXd& controlLower() const { return u_lower_; }
   const Eigen::VectorXd& controlUpper() const { return u_upper_; }
 
@@ -84,6 +95,7 @@ class StrideProblem {
                                               const std::vector<Eigen::VectorXd>& us);
 
  private:
+  void build(int first, int knots, const Eigen::VectorXd* x_terminal);
   void setGroup(int group);  // -1: every term as built
 
   const Robot& robot_;
@@ -137,10 +149,26 @@ struct StrideSimResult {
   double final_base_error = 0.0;
   double max_tilt_deg = 0.0;
   int clamped_steps = 0;
+  int resolves = 0;             // closed loop: windows solved
+  double resolve_time_s = 0.0;  // closed loop: their total wall time (build + solve)
   // Per knot period: time, mean normal force per foot, base x, base z.
   std::vector<std::array<double, 5>> trace;
+  // Per 1 ms step when asked for (record_steps): the columns of stepColumns().
+  std::vector<std::vector<double>> steps;
+  static const std::vector<std::string>& stepColumns();
+};
+struct StrideSimOptions {
+  double hold_s = 1.0;  // standing after the plan's end
+  // Closed loop (an MPC over the plan): every knot period, box-FDDP re-solves a window of the plan
+  // from the measured state, warm-started from the previous window (the offline solution beyond
+  // it), and the robot plays that window's policy until the next one. Open loop: the offline
+  // solution's policy for the whole walk.
+  bool closed_loop = true;
+  double window_s = 1.0;  // the window's horizon
+  int iterations = 2;     // box-FDDP iterations per re-solve
+  bool record_steps = false;
 };
 StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,
-                                double hold_s = 1.0);
+                                const StrideSimOptions& options = {});
 
 }  // namespace stride

@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
   StrideDdpOptions dop;
   IkOptions iko;
   int iterations = 100;
-  bool verbose = false, no_sim = false;
+  bool verbose = false, no_sim = false, sim_trace = false;
   app.add_option("--robot", robot_yaml, "robot YAML")->check(CLI::ExistingFile);
   app.add_option("--out", out, "output folder (CSV, JSON); nothing written without it");
   app.add_option("--lengths", lengths, "stride lengths [m] (foot displacement per step)");
@@ -86,7 +86,19 @@ int main(int argc, char** argv) {
   app.add_option("--w-torque", dop.w_torque, "torque weight");
   app.add_option("--w-posture", dop.w_posture, "joint posture weight");
   app.add_option("--w-velocity", dop.w_velocity, "velocity weight");
+  app.add_option("--contact-kd", dop.contact_kd, "Baumgarte velocity gain of the contacts");
+  app.add_option("--contact-kp", dop.contact_kp, "Baumgarte position gain of the contacts");
+  app.add_option("--sole-margin", dop.sole_margin,
+                 "the centre of pressure stays in this fraction of the sole");
+  app.add_option("--mu", dop.mu, "friction coefficient of the plan");
   app.add_flag("--no-sim", no_sim, "skip the mock-robot check");
+  StrideSimOptions sim_options;
+  app.add_flag("!--open-loop", sim_options.closed_loop,
+               "play the offline policy on the mock robot instead of re-solving every knot");
+  app.add_option("--mpc-window", sim_options.window_s, "closed loop: horizon of the re-solves [s]");
+  app.add_option("--mpc-iterations", sim_options.iterations,
+                 "closed loop: box-FDDP iterations per re-solve");
+  app.add_flag("--sim-trace", sim_trace, "write the mock robot's 1 ms trace (sim_trace.csv)");
   app.add_flag("-v,--verbose", verbose, "print the iteration table");
   CLI11_PARSE(app, argc, argv);
 
@@ -134,15 +146,18 @@ int main(int argc, char** argv) {
             !no_sim,
             plan.mass * 9.81};
     if (!no_sim) {
-      row.sim = simulateStrides(robot, sp, solve);
+      StrideSimOptions so = sim_options;
+      so.record_steps = sim_trace && !out.empty();
+      row.sim = simulateStrides(robot, sp, solve, so);
       std::printf(
           "  sim: %s%s, peak normal force L/R %.0f / %.0f N (1 ms), %.0f / %.0f N (knot mean), "
-          "max base error %.3f m, final %.3f m, max tilt %.1f deg\n",
+          "max base error %.3f m, final %.3f m, max tilt %.1f deg; %d re-solves, %.1f s\n",
           row.sim.completed ? "completed" : "NOT completed",
           row.sim.fell ? (" (fell at " + std::to_string(row.sim.fall_time) + " s)").c_str() : "",
           row.sim.peak_normal_force[0], row.sim.peak_normal_force[1],
           row.sim.peak_normal_force_knot[0], row.sim.peak_normal_force_knot[1],
-          row.sim.max_base_error, row.sim.final_base_error, row.sim.max_tilt_deg);
+          row.sim.max_base_error, row.sim.final_base_error, row.sim.max_tilt_deg, row.sim.resolves,
+          row.sim.resolve_time_s);
     }
     rows.push_back(row);
 
@@ -179,6 +194,18 @@ int main(int argc, char** argv) {
           f << ",,,,";
         }
         f << "\n";
+      }
+      if (!row.sim.steps.empty()) {
+        std::ofstream st(dir + "/sim_trace.csv");
+        const auto& cols = StrideSimResult::stepColumns();
+        for (size_t i = 0; i < cols.size(); ++i) st << (i ? "," : "") << cols[i];
+        for (int i = 0; i < 2 * model.nv; ++i) st << ",dx" << i;
+        for (int i = 0; i < model.nv - 6; ++i) st << ",tau" << i;
+        st << "\n";
+        for (const auto& r : row.sim.steps) {
+          for (size_t i = 0; i < r.size(); ++i) st << (i ? "," : "") << r[i];
+          st << "\n";
+        }
       }
       std::ofstream it(dir + "/iterations.csv");
       it << "iteration,cost,gap";
