@@ -24,6 +24,53 @@ namespace stride {
 
 namespace {
 enum Group { kCom = 0, kFeet, kForces, kTorque, kPosture, kContact, kGroups };
+
+// The policy τ = u_ff + K (x_ref ⊖ x) of P contact knots of a solution (states x, controls u,
+// solver gains K: u = us + K (x ⊖ xs), so the policy's gain is -K), knot k at t0 + k dt.
+// midpoint: the knots are semi-implicit Euler steps, q_{k+1} = q_k ⊕ dt v_{k+1}, so v_{k+1} is
+// the velocity over [t_k, t_{k+1}], i.e. at its middle, and u_k the control centred at t_k
+// (v_{k+1} - v_k = dt a(u_k)); the policy gets a knot every dt / 2: at t_k (q_k, (v_k + v_{k+1})/2,
+// u_k, K_k) and at t_k + dt / 2 (the geodesic midpoint of q_k, q_{k+1}, v_{k+1}, the mean of u
+// and K). Without it: the knots as they are (v_k at t_k), every dt.
+void fillPolicy(const Model& model, const std::vector<const Eigen::VectorXd*>& x,
+                const std::vector<const Eigen::VectorXd*>& u,
+                const std::vector<const Eigen::MatrixXd*>& K, double t0, double dt, bool midpoint,
+                sim::Policy& policy) {
+  const int P = static_cast<int>(x.size()), nq = model.nq, nv = model.nv;
+  const int nu = static_cast<int>(u[0]->size());
+  const int knots = midpoint ? 2 * P - 1 : P;
+  if (policy.knots != knots || policy.nq != nq || policy.nv != nv || policy.nu != nu)
+    policy.resize(knots, nq, nv, nu);
+  policy.t0 = t0;
+  policy.dt = midpoint ? 0.5 * dt : dt;
+  Eigen::VectorXd xr(nq + nv), dq(nv), ur(nu);
+  Eigen::MatrixXd Kr(nu, 2 * nv);
+  auto put = [&](int i) {
+    std::copy(xr.data(), xr.data() + nq + nv, policy.xRef(i));
+    std::copy(ur.data(), ur.data() + nu, policy.uFf(i));
+    double* out = policy.gain(i);
+    for (int r = 0; r < nu; ++r)
+      for (int c = 0; c < 2 * nv; ++c) out[r * 2 * nv + c] = -Kr(r, c);
+  };
+  for (int k = 0; k < P; ++k) {
+    const bool next = k + 1 < P;
+    xr = *x[k];
+    ur = *u[k];
+    Kr = *K[k];
+    if (midpoint && next) xr.tail(nv) = 0.5 * (x[k]->tail(nv) + x[k + 1]->tail(nv));
+    put(midpoint ? 2 * k : k);
+    if (!midpoint || !next) continue;
+    difference(model, x[k]->head(nq), x[k + 1]->head(nq), dq);
+    dq *= 0.5;
+    Eigen::VectorXd q_mid(nq);
+    integrate(model, x[k]->head(nq), dq, q_mid);
+    xr.head(nq) = q_mid;
+    xr.tail(nv) = x[k + 1]->tail(nv);
+    ur = 0.5 * (*u[k] + *u[k + 1]);
+    Kr = 0.5 * (*K[k] + *K[k + 1]);
+    put(2 * k + 1);
+  }
+}
 }  // namespace
 
 const std::vector<std::string>& strideCostGroups() {
@@ -34,18 +81,35 @@ const std::vector<std::string>& strideCostGroups() {
 
 StrideProblem::StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& o)
     : robot_(robot), plan_(plan), options_(o) {
-  build(0, plan.N, nullptr);
+  build(0, plan.N, nullptr, nullptr);
 }
 
 StrideProblem::StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& o,
-                             int first, int knots, const Eigen::VectorXd& x_terminal)
+                             int first, int knots, const Eigen::VectorXd& x_terminal,
+                             const std::vector<Eigen::VectorXd>* x_refs)
     : robot_(robot), plan_(plan), options_(o) {
   if (first < 0 || first > plan.N || knots < 1)
     throw std::invalid_argument("StrideProblem: window out of range");
-  build(first, knots, &x_terminal);
+  if (x_refs && x_refs->size() != windowKnots(plan, first, knots).size())
+    throw std::invalid_argument("StrideProblem: one state reference per knot");
+  build(first, knots, &x_terminal, x_refs);
 }
 
-void StrideProblem::build(int first, int knots, const Eigen::VectorXd* x_terminal) {
+std::vector<std::pair<int, bool>> StrideProblem::windowKnots(const StridePlan& plan, int first,
+                                                             int knots) {
+  std::vector<std::pair<int, bool>> out;
+  const int N = plan.N;
+  for (int j = 0; j < knots; ++j) {
+    const int k = std::min(first + j, N);
+    const bool impulse = j > 0 && k > 0 && k != std::min(first + j - 1, N) && plan.touchdown[k];
+    if (impulse) out.emplace_back(k, true);
+    out.emplace_back(k, false);
+  }
+  return out;
+}
+
+void StrideProblem::build(int first, int knots, const Eigen::VectorXd* x_terminal,
+                          const std::vector<Eigen::VectorXd>* x_refs) {
   const Robot& robot = robot_;
   const StridePlan& plan = plan_;
   const StrideDdpOptions& o = options_;
@@ -81,7 +145,9 @@ void StrideProblem::build(int first, int knots, const Eigen::VectorXd* x_termina
       }
       CostModel& costs = knot->costs();
       std::vector<int> group;
-      costs.add("posture", std::make_unique<StateResidual>(model, nu, x_ref),
+      costs.add("posture",
+                std::make_unique<StateResidual>(
+                    model, nu, x_refs ? (*x_refs)[running.size()] : x_ref),
                 Activation::weightedQuadratic(w_state));
       group.push_back(kPosture);
       costs.add("torque", std::make_unique<ControlResidual>(model, nu), Activation::quadratic(nu),
@@ -272,32 +338,31 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
   const StridePlan& plan = sp.plan();
   const int nq = model.nq, nv = model.nv, nu = nv - 6, N = plan.N;
   const double dt = plan.options.dt;
-  sim::Policy policy;
-  policy.resize(N, nq, nv, nu);
-  policy.t0 = 0.0;
-  policy.dt = dt;
-  for (int k = 0; k < N; ++k) {
-    const int j = sp.contactKnot(k);
-    std::copy(solve.xs[j].data(), solve.xs[j].data() + nq + nv, policy.xRef(k));
-    std::copy(solve.us[j].data(), solve.us[j].data() + nu, policy.uFf(k));
-    // The solver's law u = us + K (x ⊖ xs); the policy's u_ff + K' (x_ref ⊖ x): K' = -K.
-    double* out = policy.gain(k);
-    for (int r = 0; r < nu; ++r)
-      for (int c = 0; c < 2 * nv; ++c) out[r * 2 * nv + c] = -solve.K[j](r, c);
+  sim::Policy policy;  // the offline solution's (open loop; and the reference of the trace)
+  {
+    std::vector<const Eigen::VectorXd*> x, u;
+    std::vector<const Eigen::MatrixXd*> K;
+    for (int k = 0; k < N; ++k) {
+      const int j = sp.contactKnot(k);
+      x.push_back(&solve.xs[j]);
+      u.push_back(&solve.us[j]);
+      K.push_back(&solve.K[j]);
+    }
+    fillPolicy(model, x, u, K, 0.0, dt, opt.midpoint, policy);
   }
   // Closed loop: the window's first contact knots.
   const int window = std::max(1, static_cast<int>(std::lround(opt.window_s / dt)));
   constexpr int kPolicyKnots = 3;
   sim::Policy mpc;
-  mpc.resize(kPolicyKnots, nq, nv, nu);
-  mpc.dt = dt;
   std::unique_ptr<StrideProblem> prev;  // the last window and its solution
   std::vector<Eigen::VectorXd> prev_xs, prev_us;
   // The offline solution's state and control of (sample, impulse); past N the final state at
   // rest with the last control.
   auto offline = [&](int s, bool impulse, Eigen::VectorXd& x, Eigen::VectorXd& u) {
-    if (s >= N) {
+    if (s >= N) {  // standing still where the walk ends, in the nominal posture
       x = solve.xs.back();
+      x.segment(3, nq - 3) = robot.default_q.segment(3, nq - 3);
+      x.tail(nv).setZero();
       u = solve.us.back();
       return;
     }
@@ -305,30 +370,34 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
     x = solve.xs[j];
     u = solve.us[j];
   };
-  auto resolve = [&](int first, const Eigen::VectorXd& x_measured) {
-    Eigen::VectorXd x_term, u_dummy;
-    offline(first + window, false, x_term, u_dummy);
-    auto w = std::make_unique<StrideProblem>(robot, plan, sp.options(), std::min(first, N), window,
-                                             x_term);
-    const int T = w->problem().horizon();
-    std::vector<Eigen::VectorXd> xs(T + 1), us(T);
+  StrideDdpOptions track = sp.options();
+  track.w_posture = opt.w_track_posture;
+  track.w_base_orientation = opt.w_track_base_orientation;
+  track.w_velocity = opt.w_track_velocity;
+  auto resolve = [&](int first, const Eigen::VectorXd& x_measured, double t) {
+    first = std::min(first, N);
+    Eigen::VectorXd x_term, u_unused;
+    offline(first + window, false, x_term, u_unused);
+    const auto knots = StrideProblem::windowKnots(plan, first, window);
+    const int T = static_cast<int>(knots.size());
+    std::vector<Eigen::VectorXd> x_refs(T), xs(T + 1), us(T);
     for (int i = 0; i < T; ++i) {
-      const int s_i = w->sampleOfKnot(i);
-      const bool imp = w->isImpulse(i);
-      bool found = false;
-      if (prev) {
-        const int Tp = prev->problem().horizon();
-        for (int p = 0; p < Tp && !found; ++p)
-          if (prev->sampleOfKnot(p) == s_i && prev->isImpulse(p) == imp && (s_i < N || p > 0)) {
-            xs[i] = prev_xs[p];
-            us[i] = prev_us[p];
-            found = true;
-          }
+      const auto [s_i, imp] = knots[i];
+      offline(s_i, imp, x_refs[i], us[i]);
+      xs[i] = x_refs[i];
+      // The previous window's solution where it covers this knot: one knot period later, its
+      // second contact knot is this window's first (the impulse knot before it, if any, is
+      // behind).
+      if (!prev || prev->contactKnots() < 2) continue;
+      const int p = prev->contactKnot(1) + i;
+      if (p < prev->problem().horizon()) {
+        xs[i] = prev_xs[p];
+        us[i] = prev_us[p];
       }
-      if (!found) offline(s_i, imp, xs[i], us[i]);
     }
     xs[T] = x_term;
     xs[0] = x_measured;
+    auto w = std::make_unique<StrideProblem>(robot, plan, track, first, window, x_term, &x_refs);
     w->problem().setX0(x_measured);
     Solver solver(w->problem(), SolverKind::BoxFddp);
     solver.setControlBounds(w->controlLower(), w->controlUpper());
@@ -337,14 +406,15 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
     prev_xs = solver.xs();
     prev_us = solver.us();
     const int P = std::min(kPolicyKnots, w->contactKnots());
-    for (int k = 0; k < kPolicyKnots; ++k) {
-      const int j = w->contactKnot(std::min(k, P - 1));
-      std::copy(prev_xs[j].data(), prev_xs[j].data() + nq + nv, mpc.xRef(k));
-      std::copy(prev_us[j].data(), prev_us[j].data() + nu, mpc.uFf(k));
-      double* out = mpc.gain(k);
-      for (int r = 0; r < nu; ++r)
-        for (int c = 0; c < 2 * nv; ++c) out[r * 2 * nv + c] = -solver.K()[j](r, c);
+    std::vector<const Eigen::VectorXd*> px, pu;
+    std::vector<const Eigen::MatrixXd*> pK;
+    for (int k = 0; k < P; ++k) {
+      const int j = w->contactKnot(k);
+      px.push_back(&prev_xs[j]);
+      pu.push_back(&prev_us[j]);
+      pK.push_back(&solver.K()[j]);
     }
+    fillPolicy(model, px, pu, pK, t, dt, opt.midpoint, mpc);
     prev = std::move(w);
   };
   StrideSimResult res;
@@ -390,8 +460,7 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
       const auto a = std::chrono::steady_clock::now();
       Eigen::VectorXd x(nq + nv);
       x << simulator.q(), simulator.v();
-      resolve(s / steps_per_knot, x);
-      mpc.t0 = t;
+      resolve(s / steps_per_knot, x, t);
       ++res.resolves;
       res.resolve_time_s +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
@@ -403,8 +472,8 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
       const Eigen::VectorXd& q = simulator.q();
       framesForwardKinematics(model, fk, q);
       const int k = std::min(static_cast<int>(simulator.time() / dt + 1e-9), N - 1);
-      std::vector<double> row = {simulator.time(), q[0], q[1], q[2], policy.xRef(k)[0],
-                                 policy.xRef(k)[1], policy.xRef(k)[2]};
+      const double* xk = solve.xs[sp.contactKnot(k)].data();
+      std::vector<double> row = {simulator.time(), q[0], q[1], q[2], xk[0], xk[1], xk[2]};
       const Eigen::Quaterniond quat(q[6], q[3], q[4], q[5]);
       const Eigen::Vector3d ez = quat.toRotationMatrix().col(2);
       const Eigen::Vector3d ex = quat.toRotationMatrix().col(0);
@@ -470,7 +539,7 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
     res.max_tilt_deg = std::max(res.max_tilt_deg, tilt);
     const int k = std::min(static_cast<int>(simulator.time() / dt + 1e-9), N);
     const Eigen::Vector3d base_ref =
-        k < N ? Eigen::Vector3d(Eigen::Map<const Eigen::Vector3d>(policy.xRef(k)))
+        k < N ? Eigen::Vector3d(solve.xs[sp.contactKnot(k)].head<3>())
               : Eigen::Vector3d(q_end.head<3>());
     const double err = (q.head<3>() - base_ref).norm();
     res.max_base_error = std::max(res.max_base_error, err);

@@ -64,8 +64,14 @@ class StrideProblem {
   // first + 1, ... (past N they repeat the final standing sample N), plus the impulse knots of
   // the touch-downs inside the window (not one at `first`: the state there is measured); the
   // terminal knot tracks x_terminal (posture weights × w_terminal, the CoM of its sample).
+  // With x_refs (one per knot, impulse knots included, as sampleOfKnot orders them), the
+  // "posture" term tracks those states instead of the nominal posture at rest.
   StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& options,
-                int first, int knots, const Eigen::VectorXd& x_terminal);
+                int first, int knots, const Eigen::VectorXd& x_terminal,
+                const std::vector<Eigen::VectorXd>* x_refs = nullptr);
+  // The knots of a window: (sample, impulse) in order, without building it.
+  static std::vector<std::pair<int, bool>> windowKnots(const StridePlan& plan, int first,
+                                                       int knots);
   StrideProblem(const StrideProblem&) = delete;
   StrideProblem& operator=(const StrideProblem&) = delete;
 
@@ -95,7 +101,8 @@ class StrideProblem {
                                               const std::vector<Eigen::VectorXd>& us);
 
  private:
-  void build(int first, int knots, const Eigen::VectorXd* x_terminal);
+  void build(int first, int knots, const Eigen::VectorXd* x_terminal,
+             const std::vector<Eigen::VectorXd>* x_refs);
   void setGroup(int group);  // -1: every term as built
 
   const Robot& robot_;
@@ -166,6 +173,13 @@ struct StrideSimOptions {
   bool closed_loop = true;
   double window_s = 1.0;  // the window's horizon
   int iterations = 2;     // box-FDDP iterations per re-solve
+  // The policy's velocity reference at the knots' middles (semi-implicit Euler knots; see
+  // fillPolicy in large_stride.cpp) instead of at the knots.
+  bool midpoint = true;
+  // The windows track the offline solution's states ("posture" term: x ⊖ x_offline) with these
+  // weights (stiffer than the offline problem's regularization; the other costs are the
+  // offline problem's).
+  double w_track_posture = 10.0, w_track_base_orientation = 10.0, w_track_velocity = 1.0;
   bool record_steps = false;
 };
 StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,

@@ -98,6 +98,12 @@ int main(int argc, char** argv) {
   app.add_option("--mpc-window", sim_options.window_s, "closed loop: horizon of the re-solves [s]");
   app.add_option("--mpc-iterations", sim_options.iterations,
                  "closed loop: box-FDDP iterations per re-solve");
+  app.add_option("--mpc-w-posture", sim_options.w_track_posture,
+                 "closed loop: weight of the joints on the offline solution's");
+  app.add_option("--mpc-w-velocity", sim_options.w_track_velocity,
+                 "closed loop: weight of the velocities on the offline solution's");
+  app.add_flag("!--no-midpoint", sim_options.midpoint,
+               "policy velocities at the knots rather than at the knots' middles");
   app.add_flag("--sim-trace", sim_trace, "write the mock robot's 1 ms trace (sim_trace.csv)");
   app.add_flag("-v,--verbose", verbose, "print the iteration table");
   CLI11_PARSE(app, argc, argv);
