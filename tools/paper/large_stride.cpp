@@ -5,7 +5,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 
@@ -118,7 +117,7 @@ void StrideProblem::build(int first, int knots, const Eigen::VectorXd* x_termina
   ContactSet contacts;
   for (int c = 0; c < 2; ++c)
     contacts.add(model, plan.feet[c], 6, ReferenceFrame::LocalWorldAligned, o.contact_kp,
-                 o.contact_kd);
+                 o.contact_kd > 0.0 ? o.contact_kd : 1.0 / plan.options.dt);
   // State weights: base position free (the CoM term places the body), base orientation upright,
   // joints to the nominal posture, velocities to zero.
   Eigen::VectorXd w_state(2 * nv);
@@ -430,29 +429,6 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
   std::vector<std::array<Vector6d, 2>> plan_force;
   if (record_steps) plan_force = sp.forces(solve.xs, solve.us);
   Data fk(model);
-  if (record_steps && std::getenv("STRIDE_PRINT_WRENCH")) {
-    const double r = robot.sole_half_extents.norm();
-    for (int k = 0; k < N; ++k)
-      for (int c = 0; c < 2; ++c) {
-        const Vector6d& f = plan_force[k][c];
-        if (!plan.closed[k][c]) continue;
-        std::printf("k %3d t %.2f foot %d fz %6.1f ft/fz %.2f cop %6.3f %6.3f tz %6.1f tz/(0.8 fz r) %.2f\n",
-                    k, k * dt, c, f[2], f.head<2>().norm() / f[2], -f[4] / f[2], f[3] / f[2], f[5],
-                    std::abs(f[5]) / (0.8 * f[2] * r));
-      }
-  }
-  if (record_steps && std::getenv("STRIDE_PRINT_K")) {
-    for (int k : {0, 10, 20, 30, 36, 37, 38, 39, 40, 45}) {
-      if (k >= N) continue;
-      const Eigen::MatrixXd& K = solve.K[sp.contactKnot(k)];
-      std::printf("knot %d closed %d%d Kp diag:", k, plan.closed[k][0], plan.closed[k][1]);
-      for (int i = 0; i < nu; ++i) std::printf(" %.0f", -K(i, 6 + i));
-      std::printf("\n          Kd diag:");
-      for (int i = 0; i < nu; ++i) std::printf(" %.1f", -K(i, nv + 6 + i));
-      std::printf("\n          |K| %.3g, max |Kd| row %.3g\n", K.norm(),
-                  K.rightCols(nv).rowwise().norm().maxCoeff());
-    }
-  }
   const int sole_frame[2] = {model.getFrameId(plan.feet[0]), model.getFrameId(plan.feet[1])};
   for (int s = 0; s < total; ++s) {
     const double t = simulator.time();

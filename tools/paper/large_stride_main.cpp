@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
   app.add_option("--w-torque", dop.w_torque, "torque weight");
   app.add_option("--w-posture", dop.w_posture, "joint posture weight");
   app.add_option("--w-velocity", dop.w_velocity, "velocity weight");
-  app.add_option("--contact-kd", dop.contact_kd, "Baumgarte velocity gain of the contacts");
+  app.add_option("--contact-kd", dop.contact_kd, "Baumgarte velocity gain of the contacts (0: 1 / dt)");
   app.add_option("--contact-kp", dop.contact_kp, "Baumgarte position gain of the contacts");
   app.add_option("--sole-margin", dop.sole_margin,
                  "the centre of pressure stays in this fraction of the sole");
@@ -241,11 +241,12 @@ int main(int argc, char** argv) {
     const Row& r = rows[i];
     std::string sim = "not run";
     if (r.sim_run) {
-      char b[160];
-      std::snprintf(b, sizeof(b), "%s, peak %.0f N (knot mean %.0f N)",
+      char b[200];
+      std::snprintf(b, sizeof(b), "%s, peak %.0f N (knot mean %.0f N; plan %.0f N)",
                     r.sim.completed ? "completed" : (r.sim.fell ? "FELL" : "not completed"),
                     std::max(r.sim.peak_normal_force[0], r.sim.peak_normal_force[1]),
-                    std::max(r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1]));
+                    std::max(r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1]),
+                    r.ddp.peak_normal_force_N);
       sim = b;
     }
     std::printf("%5.0f cm | %10.0f %10.0f | %10.1f %10.1f | %11.4g %11.4g | %s\n", 100 * r.length,
@@ -255,15 +256,24 @@ int main(int argc, char** argv) {
             << ", \"weight_N\": " << r.weight << ", \"ik\": " << json(r.ik)
             << ", \"ddp\": " << json(r.ddp);
     if (r.sim_run)
-      summary << ", \"sim\": {\"completed\": " << (r.sim.completed ? "true" : "false")
+      summary << ", \"sim\": {\"closed_loop\": " << (sim_options.closed_loop ? "true" : "false")
+              << ", \"completed\": " << (r.sim.completed ? "true" : "false")
               << ", \"fell\": " << (r.sim.fell ? "true" : "false")
               << ", \"fall_time_s\": " << r.sim.fall_time << ", \"peak_normal_force_N\": "
               << std::max(r.sim.peak_normal_force[0], r.sim.peak_normal_force[1])
               << ", \"peak_normal_force_knot_mean_N\": "
               << std::max(r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1])
+              << ", \"planned_peak_normal_force_N\": " << r.ddp.peak_normal_force_N
+              << ", \"peak_normal_force_left_N\": " << r.sim.peak_normal_force[0]
+              << ", \"peak_normal_force_right_N\": " << r.sim.peak_normal_force[1]
+              << ", \"planned_peak_normal_force_left_N\": " << r.ddp.peak_normal_force[0]
+              << ", \"planned_peak_normal_force_right_N\": " << r.ddp.peak_normal_force[1]
               << ", \"max_base_error_m\": " << r.sim.max_base_error
               << ", \"final_base_error_m\": " << r.sim.final_base_error
-              << ", \"max_tilt_deg\": " << r.sim.max_tilt_deg << "}";
+              << ", \"max_tilt_deg\": " << r.sim.max_tilt_deg
+              << ", \"clamped_steps\": " << r.sim.clamped_steps
+              << ", \"resolves\": " << r.sim.resolves
+              << ", \"resolve_time_s\": " << r.sim.resolve_time_s << "}";
     summary << "}";
   }
   summary << "\n  ]\n}\n";
