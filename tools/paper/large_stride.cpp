@@ -144,10 +144,10 @@ void StrideProblem::build(int first, int knots, const Eigen::VectorXd* x_termina
       }
       CostModel& costs = knot->costs();
       std::vector<int> group;
-      costs.add("posture",
-                std::make_unique<StateResidual>(
-                    model, nu, x_refs ? (*x_refs)[running.size()] : x_ref),
-                Activation::weightedQuadratic(w_state));
+      costs.add(
+          "posture",
+          std::make_unique<StateResidual>(model, nu, x_refs ? (*x_refs)[running.size()] : x_ref),
+          Activation::weightedQuadratic(w_state));
       group.push_back(kPosture);
       costs.add("torque", std::make_unique<ControlResidual>(model, nu), Activation::quadratic(nu),
                 o.w_torque);
@@ -189,9 +189,9 @@ void StrideProblem::build(int first, int knots, const Eigen::VectorXd* x_termina
   }
   const int k_end = std::min(first + knots, N);
   auto terminal = std::make_unique<TerminalModel>(model);
-  terminal->costs().add(
-      "posture", std::make_unique<StateResidual>(model, 0, x_terminal ? *x_terminal : x_ref),
-      Activation::weightedQuadratic(o.w_terminal * w_state));
+  terminal->costs().add("posture",
+                        std::make_unique<StateResidual>(model, 0, x_terminal ? *x_terminal : x_ref),
+                        Activation::weightedQuadratic(o.w_terminal * w_state));
   terminal->costs().add("com", std::make_unique<ComPositionResidual>(model, 0, plan.com[k_end]),
                         Activation::quadratic(3), o.w_com);
   term_group_.push_back({kPosture, kCom});
@@ -319,13 +319,42 @@ StrideSolve solveStrides(StrideProblem& sp, const IkTrajectory& ik, int iteratio
 }
 
 const std::vector<std::string>& StrideSimResult::stepColumns() {
-  static const std::vector<std::string> c = {
-      "t",         "base_x",    "base_y",    "base_z",    "ref_x",     "ref_y",    "ref_z",
-      "roll_deg",  "pitch_deg", "fz_L",      "fz_R",      "plan_fz_L", "plan_fz_R", "cop_L_x",
-      "cop_L_y",   "cop_R_x",   "cop_R_y",   "plan_cop_L_x", "plan_cop_L_y", "plan_cop_R_x",
-      "plan_cop_R_y", "foot_L_x", "foot_L_z", "foot_R_x", "foot_R_z", "plan_foot_L_x",
-      "plan_foot_L_z", "plan_foot_R_x", "plan_foot_R_z", "foot_L_tilt_deg", "foot_R_tilt_deg",
-      "dx_norm",   "dq_norm",   "dv_norm",   "tau_ratio", "clamped"};
+  static const std::vector<std::string> c = {"t",
+                                             "base_x",
+                                             "base_y",
+                                             "base_z",
+                                             "ref_x",
+                                             "ref_y",
+                                             "ref_z",
+                                             "roll_deg",
+                                             "pitch_deg",
+                                             "fz_L",
+                                             "fz_R",
+                                             "plan_fz_L",
+                                             "plan_fz_R",
+                                             "cop_L_x",
+                                             "cop_L_y",
+                                             "cop_R_x",
+                                             "cop_R_y",
+                                             "plan_cop_L_x",
+                                             "plan_cop_L_y",
+                                             "plan_cop_R_x",
+                                             "plan_cop_R_y",
+                                             "foot_L_x",
+                                             "foot_L_z",
+                                             "foot_R_x",
+                                             "foot_R_z",
+                                             "plan_foot_L_x",
+                                             "plan_foot_L_z",
+                                             "plan_foot_R_x",
+                                             "plan_foot_R_z",
+                                             "foot_L_tilt_deg",
+                                             "foot_R_tilt_deg",
+                                             "dx_norm",
+                                             "dq_norm",
+                                             "dv_norm",
+                                             "tau_ratio",
+                                             "clamped"};
   return c;
 }
 
@@ -514,9 +543,8 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
         std::acos(std::clamp(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0)) * 180.0 / M_PI;
     res.max_tilt_deg = std::max(res.max_tilt_deg, tilt);
     const int k = std::min(static_cast<int>(simulator.time() / dt + 1e-9), N);
-    const Eigen::Vector3d base_ref =
-        k < N ? Eigen::Vector3d(solve.xs[sp.contactKnot(k)].head<3>())
-              : Eigen::Vector3d(q_end.head<3>());
+    const Eigen::Vector3d base_ref = k < N ? Eigen::Vector3d(solve.xs[sp.contactKnot(k)].head<3>())
+                                           : Eigen::Vector3d(q_end.head<3>());
     const double err = (q.head<3>() - base_ref).norm();
     res.max_base_error = std::max(res.max_base_error, err);
     if ((s + 1) % steps_per_knot == 0) {

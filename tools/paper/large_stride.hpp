@@ -53,7 +53,7 @@ struct StrideDdpOptions {
   // tilted on its heel is flattened rather than held tilted (on the mock robot's four corners a
   // tilted sole has its centre of pressure at the edge and tips).
   double contact_kd = 0.0;
-  double contact_kp = 100.0;
+  double contact_kp = 200.0;  // with kd = 25 (40 ms knots): damping ratio kd / (2 √kp) ≈ 0.9
   bool torque_limits = true;
 };
 

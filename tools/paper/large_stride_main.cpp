@@ -86,7 +86,8 @@ int main(int argc, char** argv) {
   app.add_option("--w-torque", dop.w_torque, "torque weight");
   app.add_option("--w-posture", dop.w_posture, "joint posture weight");
   app.add_option("--w-velocity", dop.w_velocity, "velocity weight");
-  app.add_option("--contact-kd", dop.contact_kd, "Baumgarte velocity gain of the contacts (0: 1 / dt)");
+  app.add_option("--contact-kd", dop.contact_kd,
+                 "Baumgarte velocity gain of the contacts (0: 1 / dt)");
   app.add_option("--contact-kp", dop.contact_kp, "Baumgarte position gain of the contacts");
   app.add_option("--sole-margin", dop.sole_margin,
                  "the centre of pressure stays in this fraction of the sole");
