@@ -378,14 +378,14 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
     }
     fillPolicy(model, x, u, K, 0.0, dt, opt.midpoint, policy);
   }
-  // Closed loop: the window's first contact knots.
+  // Closed loop: windows of `window` knots; the policy covers their first kPolicyKnots.
   const int window = std::max(1, static_cast<int>(std::lround(opt.window_s / dt)));
   constexpr int kPolicyKnots = 3;
   sim::Policy mpc;
   std::unique_ptr<StrideProblem> prev;  // the last window and its solution
   std::vector<Eigen::VectorXd> prev_xs, prev_us;
-  // The offline solution's state and control of (sample, impulse); past N the final state at
-  // rest with the last control.
+  // The offline solution's state and control of (sample, impulse); past N standing still where
+  // the walk ends (its base position, the nominal posture, zero velocity) with the last control.
   auto offline = [&](int s, bool impulse, Eigen::VectorXd& x, Eigen::VectorXd& u) {
     if (s >= N) {  // standing still where the walk ends, in the nominal posture
       x = solve.xs.back();

@@ -6,7 +6,7 @@
 //   - KKT-DDP (this file): box-FDDP over rigid contact knots (impulse knots at touch-downs)
 //     with the paper's costs, warm-started from the IK trajectory;
 // then compared on the same measures (peak normal force per foot, peak knee torque, torque cost)
-// and the DDP motion played on the mock robot (sim/) with its feedback policy.
+// and the DDP motion played on the mock robot (sim/), closed loop (simulateStrides).
 //
 // DDP costs per contact knot (weights in StrideDdpOptions):
 //   "com"      w_com |com - c_ref|²                        CoM tracking
@@ -148,8 +148,11 @@ StrideSolve solveStrides(StrideProblem& sp, const IkTrajectory& ik, int iteratio
                          bool verbose = false);
 
 // The DDP motion played on the mock robot: the simulator (1 ms steps, sole corners on flat
-// ground) driven by the policy τ = u_k + K_k (x_k ⊖ x) of the contact knots, evaluated every
-// step (sim::PolicyEvaluator), then holding the last knot for `hold_s`.
+// ground, unilateral Coulomb contact, plastic impacts) driven by a policy τ = u + K (x_ref ⊖ x)
+// evaluated every step (sim::PolicyEvaluator): closed loop, that of a window of the plan re-solved
+// from the measured state every knot (StrideSimOptions); open loop, the offline solution's. Then
+// standing on the final sample for `hold_s`. Fell: base tilt over 45° or base below half its
+// final height.
 struct StrideSimResult {
   bool fell = false;
   double fall_time = -1.0;

@@ -179,8 +179,8 @@ int main(int argc, char** argv) {
       f << "t,closed_L,closed_R,com_ref_x,com_ref_y,com_ref_z,zmp_x,zmp_y,zmp_ref_x,zmp_ref_y,"
            "foot_L_x,foot_L_z,foot_R_x,foot_R_z,fref_L_z,fref_R_z,ik_fz_L,ik_fz_R,ddp_fz_L,"
            "ddp_fz_R,ik_knee_L,ik_knee_R,ddp_knee_L,ddp_knee_R,ik_base_x,ik_base_z,ddp_base_x,"
-           "ddp_base_z,sim_fz_L,sim_fz_R,sim_base_x,sim_base_"
-           "z\n";
+           "ddp_base_z,sim_fz_L,sim_fz_R,sim_base_x,sim_base_z,ik_cop_L_x,ik_cop_L_y,ik_cop_R_x,"
+           "ik_cop_R_y,ddp_cop_L_x,ddp_cop_L_y,ddp_cop_R_x,ddp_cop_R_y\n";
       const int kl = model.joints[model.getJointId("L_knee")].idx_v - 6;
       const int kr = model.joints[model.getJointId("R_knee")].idx_v - 6;
       for (int k = 0; k < plan.N; ++k) {
@@ -200,6 +200,16 @@ int main(int argc, char** argv) {
         } else {
           f << ",,,,";
         }
+        // Centre of pressure of each sole relative to the sole frame (world axes; empty when
+        // the foot carries less than 1 N): x = -τ_y / f_z, y = τ_x / f_z.
+        for (const auto* force : {&ik.force, &ddp_force})
+          for (int c = 0; c < 2; ++c) {
+            const Vector6d& w = (*force)[k][c];
+            if (w[2] > 1.0)
+              f << "," << -w[4] / w[2] << "," << w[3] / w[2];
+            else
+              f << ",,";
+          }
         f << "\n";
       }
       if (!row.sim.steps.empty()) {
