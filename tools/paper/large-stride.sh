@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The paper's large strides on flat ground (§V-A, Fig. 2-4) with one command: builds
 # stride-paper-large-stride if it is missing, runs the IK baseline and KKT-DDP for each stride
-# length, plays the DDP policy on the mock robot, prints the table, writes the trajectories
+# length, walks the DDP motion on the mock robot (closed loop), prints the table, writes the trajectories
 # (CSV / JSON) and the plots (PNG) into --out DIR. Other options go to the program
 # (stride-paper-large-stride --help), e.g. --lengths 0.8 1.0 --iterations 100.
 #   tools/paper/large-stride.sh --out build/paper/large_stride

@@ -6,9 +6,11 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 
 #include "sim/policy.hpp"
 #include "sim/simulator.hpp"
+#include "solver/multibody/frames.hpp"
 #include "solver/multibody/lie_group.hpp"
 #include "solver/ocp/knot.hpp"
 #include "solver/ocp/residual_com.hpp"
@@ -21,6 +23,53 @@ namespace stride {
 
 namespace {
 enum Group { kCom = 0, kFeet, kForces, kTorque, kPosture, kContact, kGroups };
+
+// The policy τ = u_ff + K (x_ref ⊖ x) of P contact knots of a solution (states x, controls u,
+// solver gains K: u = us + K (x ⊖ xs), so the policy's gain is -K), knot k at t0 + k dt.
+// midpoint: the knots are semi-implicit Euler steps, q_{k+1} = q_k ⊕ dt v_{k+1}, so v_{k+1} is
+// the velocity over [t_k, t_{k+1}], i.e. at its middle, and u_k the control centred at t_k
+// (v_{k+1} - v_k = dt a(u_k)); the policy gets a knot every dt / 2: at t_k (q_k, (v_k + v_{k+1})/2,
+// u_k, K_k) and at t_k + dt / 2 (the geodesic midpoint of q_k, q_{k+1}, v_{k+1}, the mean of u
+// and K). Without it: the knots as they are (v_k at t_k), every dt.
+void fillPolicy(const Model& model, const std::vector<const Eigen::VectorXd*>& x,
+                const std::vector<const Eigen::VectorXd*>& u,
+                const std::vector<const Eigen::MatrixXd*>& K, double t0, double dt, bool midpoint,
+                sim::Policy& policy) {
+  const int P = static_cast<int>(x.size()), nq = model.nq, nv = model.nv;
+  const int nu = static_cast<int>(u[0]->size());
+  const int knots = midpoint ? 2 * P - 1 : P;
+  if (policy.knots != knots || policy.nq != nq || policy.nv != nv || policy.nu != nu)
+    policy.resize(knots, nq, nv, nu);
+  policy.t0 = t0;
+  policy.dt = midpoint ? 0.5 * dt : dt;
+  Eigen::VectorXd xr(nq + nv), dq(nv), ur(nu);
+  Eigen::MatrixXd Kr(nu, 2 * nv);
+  auto put = [&](int i) {
+    std::copy(xr.data(), xr.data() + nq + nv, policy.xRef(i));
+    std::copy(ur.data(), ur.data() + nu, policy.uFf(i));
+    double* out = policy.gain(i);
+    for (int r = 0; r < nu; ++r)
+      for (int c = 0; c < 2 * nv; ++c) out[r * 2 * nv + c] = -Kr(r, c);
+  };
+  for (int k = 0; k < P; ++k) {
+    const bool next = k + 1 < P;
+    xr = *x[k];
+    ur = *u[k];
+    Kr = *K[k];
+    if (midpoint && next) xr.tail(nv) = 0.5 * (x[k]->tail(nv) + x[k + 1]->tail(nv));
+    put(midpoint ? 2 * k : k);
+    if (!midpoint || !next) continue;
+    difference(model, x[k]->head(nq), x[k + 1]->head(nq), dq);
+    dq *= 0.5;
+    Eigen::VectorXd q_mid(nq);
+    integrate(model, x[k]->head(nq), dq, q_mid);
+    xr.head(nq) = q_mid;
+    xr.tail(nv) = x[k + 1]->tail(nv);
+    ur = 0.5 * (*u[k] + *u[k + 1]);
+    Kr = 0.5 * (*K[k] + *K[k + 1]);
+    put(2 * k + 1);
+  }
+}
 }  // namespace
 
 const std::vector<std::string>& strideCostGroups() {
@@ -31,11 +80,44 @@ const std::vector<std::string>& strideCostGroups() {
 
 StrideProblem::StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& o)
     : robot_(robot), plan_(plan), options_(o) {
+  build(0, plan.N, nullptr, nullptr);
+}
+
+StrideProblem::StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& o,
+                             int first, int knots, const Eigen::VectorXd& x_terminal,
+                             const std::vector<Eigen::VectorXd>* x_refs)
+    : robot_(robot), plan_(plan), options_(o) {
+  if (first < 0 || first > plan.N || knots < 1)
+    throw std::invalid_argument("StrideProblem: window out of range");
+  if (x_refs && x_refs->size() != windowKnots(plan, first, knots).size())
+    throw std::invalid_argument("StrideProblem: one state reference per knot");
+  build(first, knots, &x_terminal, x_refs);
+}
+
+std::vector<std::pair<int, bool>> StrideProblem::windowKnots(const StridePlan& plan, int first,
+                                                             int knots) {
+  std::vector<std::pair<int, bool>> out;
+  const int N = plan.N;
+  for (int j = 0; j < knots; ++j) {
+    const int k = std::min(first + j, N);
+    const bool impulse = j > 0 && k > 0 && k != std::min(first + j - 1, N) && plan.touchdown[k];
+    if (impulse) out.emplace_back(k, true);
+    out.emplace_back(k, false);
+  }
+  return out;
+}
+
+void StrideProblem::build(int first, int knots, const Eigen::VectorXd* x_terminal,
+                          const std::vector<Eigen::VectorXd>* x_refs) {
+  const Robot& robot = robot_;
+  const StridePlan& plan = plan_;
+  const StrideDdpOptions& o = options_;
   const Model& model = robot.model;
   const int nq = model.nq, nv = model.nv, nu = nv - 6, N = plan.N;
   ContactSet contacts;
   for (int c = 0; c < 2; ++c)
-    contacts.add(model, plan.feet[c], 6, ReferenceFrame::LocalWorldAligned, 0.0, o.contact_kd);
+    contacts.add(model, plan.feet[c], 6, ReferenceFrame::LocalWorldAligned, o.contact_kp,
+                 o.contact_kd > 0.0 ? o.contact_kd : 1.0 / plan.options.dt);
   // State weights: base position free (the CoM term places the body), base orientation upright,
   // joints to the nominal posture, velocities to zero.
   Eigen::VectorXd w_state(2 * nv);
@@ -49,17 +131,23 @@ StrideProblem::StrideProblem(const Robot& robot, const StridePlan& plan, const S
 
   auto workspace = std::make_shared<SharedWorkspace>(model, std::max(omp_get_max_threads(), 2));
   std::vector<std::unique_ptr<ActionModel>> running;
-  for (int k = 0; k < N; ++k) {
-    const bool impulse = k > 0 && plan.touchdown[k];
+  for (int j = 0; j < knots; ++j) {
+    const int k = std::min(first + j, N);
+    const bool impulse = j > 0 && k > 0 && k != std::min(first + j - 1, N) && plan.touchdown[k];
     for (int pass = impulse ? 0 : 1; pass < 2; ++pass) {
       const bool is_impulse = pass == 0;
       auto knot = std::make_unique<KnotModel>(model, contacts, plan.options.dt, workspace);
       knot->setMode(is_impulse ? KnotMode::Impulse : KnotMode::Contact);
-      for (int c = 0; c < 2; ++c) knot->contacts().setActive(c, plan.closed[k][c]);
+      for (int c = 0; c < 2; ++c) {
+        knot->contacts().setActive(c, plan.closed[k][c]);
+        knot->contacts().setReference(c, SE3(Eigen::Matrix3d::Identity(), plan.foot[k][c]));
+      }
       CostModel& costs = knot->costs();
       std::vector<int> group;
-      costs.add("posture", std::make_unique<StateResidual>(model, nu, x_ref),
-                Activation::weightedQuadratic(w_state));
+      costs.add(
+          "posture",
+          std::make_unique<StateResidual>(model, nu, x_refs ? (*x_refs)[running.size()] : x_ref),
+          Activation::weightedQuadratic(w_state));
       group.push_back(kPosture);
       costs.add("torque", std::make_unique<ControlResidual>(model, nu), Activation::quadratic(nu),
                 o.w_torque);
@@ -99,10 +187,12 @@ StrideProblem::StrideProblem(const Robot& robot, const StridePlan& plan, const S
       running.push_back(std::move(knot));
     }
   }
+  const int k_end = std::min(first + knots, N);
   auto terminal = std::make_unique<TerminalModel>(model);
-  terminal->costs().add("posture", std::make_unique<StateResidual>(model, 0, x_ref),
+  terminal->costs().add("posture",
+                        std::make_unique<StateResidual>(model, 0, x_terminal ? *x_terminal : x_ref),
                         Activation::weightedQuadratic(o.w_terminal * w_state));
-  terminal->costs().add("com", std::make_unique<ComPositionResidual>(model, 0, plan.com[N]),
+  terminal->costs().add("com", std::make_unique<ComPositionResidual>(model, 0, plan.com[k_end]),
                         Activation::quadratic(3), o.w_com);
   term_group_.push_back({kPosture, kCom});
   term_active_.push_back({1, 1});
@@ -228,25 +318,133 @@ StrideSolve solveStrides(StrideProblem& sp, const IkTrajectory& ik, int iteratio
   return out;
 }
 
+const std::vector<std::string>& StrideSimResult::stepColumns() {
+  static const std::vector<std::string> c = {"t",
+                                             "base_x",
+                                             "base_y",
+                                             "base_z",
+                                             "ref_x",
+                                             "ref_y",
+                                             "ref_z",
+                                             "roll_deg",
+                                             "pitch_deg",
+                                             "fz_L",
+                                             "fz_R",
+                                             "plan_fz_L",
+                                             "plan_fz_R",
+                                             "cop_L_x",
+                                             "cop_L_y",
+                                             "cop_R_x",
+                                             "cop_R_y",
+                                             "plan_cop_L_x",
+                                             "plan_cop_L_y",
+                                             "plan_cop_R_x",
+                                             "plan_cop_R_y",
+                                             "foot_L_x",
+                                             "foot_L_z",
+                                             "foot_R_x",
+                                             "foot_R_z",
+                                             "plan_foot_L_x",
+                                             "plan_foot_L_z",
+                                             "plan_foot_R_x",
+                                             "plan_foot_R_z",
+                                             "foot_L_tilt_deg",
+                                             "foot_R_tilt_deg",
+                                             "dx_norm",
+                                             "dq_norm",
+                                             "dv_norm",
+                                             "tau_ratio",
+                                             "clamped"};
+  return c;
+}
+
 StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,
-                                double hold_s) {
+                                const StrideSimOptions& opt) {
+  const double hold_s = opt.hold_s;
+  const bool record_steps = opt.record_steps;
   const Model& model = robot.model;
   const StridePlan& plan = sp.plan();
   const int nq = model.nq, nv = model.nv, nu = nv - 6, N = plan.N;
   const double dt = plan.options.dt;
-  sim::Policy policy;
-  policy.resize(N, nq, nv, nu);
-  policy.t0 = 0.0;
-  policy.dt = dt;
-  for (int k = 0; k < N; ++k) {
-    const int j = sp.contactKnot(k);
-    std::copy(solve.xs[j].data(), solve.xs[j].data() + nq + nv, policy.xRef(k));
-    std::copy(solve.us[j].data(), solve.us[j].data() + nu, policy.uFf(k));
-    // The solver's law u = us + K (x ⊖ xs); the policy's u_ff + K' (x_ref ⊖ x): K' = -K.
-    double* out = policy.gain(k);
-    for (int r = 0; r < nu; ++r)
-      for (int c = 0; c < 2 * nv; ++c) out[r * 2 * nv + c] = -solve.K[j](r, c);
+  sim::Policy policy;  // the offline solution's (open loop; and the reference of the trace)
+  {
+    std::vector<const Eigen::VectorXd*> x, u;
+    std::vector<const Eigen::MatrixXd*> K;
+    for (int k = 0; k < N; ++k) {
+      const int j = sp.contactKnot(k);
+      x.push_back(&solve.xs[j]);
+      u.push_back(&solve.us[j]);
+      K.push_back(&solve.K[j]);
+    }
+    fillPolicy(model, x, u, K, 0.0, dt, opt.midpoint, policy);
   }
+  // Closed loop: windows of `window` knots; the policy covers their first kPolicyKnots.
+  const int window = std::max(1, static_cast<int>(std::lround(opt.window_s / dt)));
+  constexpr int kPolicyKnots = 3;
+  sim::Policy mpc;
+  std::unique_ptr<StrideProblem> prev;  // the last window and its solution
+  std::vector<Eigen::VectorXd> prev_xs, prev_us;
+  // The offline solution's state and control of (sample, impulse); past N standing still where
+  // the walk ends (its base position, the nominal posture, zero velocity) with the last control.
+  auto offline = [&](int s, bool impulse, Eigen::VectorXd& x, Eigen::VectorXd& u) {
+    if (s >= N) {  // standing still where the walk ends, in the nominal posture
+      x = solve.xs.back();
+      x.segment(3, nq - 3) = robot.default_q.segment(3, nq - 3);
+      x.tail(nv).setZero();
+      u = solve.us.back();
+      return;
+    }
+    const int j = sp.contactKnot(s) - (impulse ? 1 : 0);
+    x = solve.xs[j];
+    u = solve.us[j];
+  };
+  StrideDdpOptions track = sp.options();
+  track.w_posture = opt.w_track_posture;
+  track.w_base_orientation = opt.w_track_base_orientation;
+  track.w_velocity = opt.w_track_velocity;
+  auto resolve = [&](int first, const Eigen::VectorXd& x_measured, double t) {
+    first = std::min(first, N);
+    Eigen::VectorXd x_term, u_unused;
+    offline(first + window, false, x_term, u_unused);
+    const auto knots = StrideProblem::windowKnots(plan, first, window);
+    const int T = static_cast<int>(knots.size());
+    std::vector<Eigen::VectorXd> x_refs(T), xs(T + 1), us(T);
+    for (int i = 0; i < T; ++i) {
+      const auto [s_i, imp] = knots[i];
+      offline(s_i, imp, x_refs[i], us[i]);
+      xs[i] = x_refs[i];
+      // The previous window's solution where it covers this knot: one knot period later, its
+      // second contact knot is this window's first (the impulse knot before it, if any, is
+      // behind).
+      if (!prev || prev->contactKnots() < 2) continue;
+      const int p = prev->contactKnot(1) + i;
+      if (p < prev->problem().horizon()) {
+        xs[i] = prev_xs[p];
+        us[i] = prev_us[p];
+      }
+    }
+    xs[T] = x_term;
+    xs[0] = x_measured;
+    auto w = std::make_unique<StrideProblem>(robot, plan, track, first, window, x_term, &x_refs);
+    w->problem().setX0(x_measured);
+    Solver solver(w->problem(), SolverKind::BoxFddp);
+    solver.setControlBounds(w->controlLower(), w->controlUpper());
+    solver.setWarmStart(xs, us);
+    solver.solve(opt.iterations);
+    prev_xs = solver.xs();
+    prev_us = solver.us();
+    const int P = std::min(kPolicyKnots, w->contactKnots());
+    std::vector<const Eigen::VectorXd*> px, pu;
+    std::vector<const Eigen::MatrixXd*> pK;
+    for (int k = 0; k < P; ++k) {
+      const int j = w->contactKnot(k);
+      px.push_back(&prev_xs[j]);
+      pu.push_back(&prev_us[j]);
+      pK.push_back(&solver.K()[j]);
+    }
+    fillPolicy(model, px, pu, pK, t, dt, opt.midpoint, mpc);
+    prev = std::move(w);
+  };
   StrideSimResult res;
   sim::SimOptions so;
   sim::Simulator simulator(robot, so);
@@ -257,10 +455,83 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
   const int total = static_cast<int>(std::lround((N * dt + hold_s) / so.dt));
   std::array<double, 2> acc{0.0, 0.0};
   const Eigen::VectorXd q_end = solve.xs.back().head(nq);
+  std::vector<std::array<Vector6d, 2>> plan_force;
+  if (record_steps) plan_force = sp.forces(solve.xs, solve.us);
+  Data fk(model);
+  const int sole_frame[2] = {model.getFrameId(plan.feet[0]), model.getFrameId(plan.feet[1])};
   for (int s = 0; s < total; ++s) {
     const double t = simulator.time();
-    evaluator.evaluate(policy, t, simulator.q(), simulator.v(), tau);
+    if (opt.closed_loop && s % steps_per_knot == 0) {
+      const auto a = std::chrono::steady_clock::now();
+      Eigen::VectorXd x(nq + nv);
+      x << simulator.q(), simulator.v();
+      resolve(s / steps_per_knot, x, t);
+      ++res.resolves;
+      res.resolve_time_s +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+    }
+    evaluator.evaluate(opt.closed_loop ? mpc : policy, t, simulator.q(), simulator.v(), tau);
+    const Eigen::VectorXd dx = evaluator.stateError();
     simulator.step(tau);
+    if (record_steps) {
+      const Eigen::VectorXd& q = simulator.q();
+      framesForwardKinematics(model, fk, q);
+      const int k = std::min(static_cast<int>(simulator.time() / dt + 1e-9), N - 1);
+      const double* xk = solve.xs[sp.contactKnot(k)].data();
+      std::vector<double> row = {simulator.time(), q[0], q[1], q[2], xk[0], xk[1], xk[2]};
+      const Eigen::Quaterniond quat(q[6], q[3], q[4], q[5]);
+      const Eigen::Vector3d ez = quat.toRotationMatrix().col(2);
+      const Eigen::Vector3d ex = quat.toRotationMatrix().col(0);
+      row.push_back(std::atan2(ez.y(), ez.z()) * -180.0 / M_PI);  // roll (about x)
+      row.push_back(std::atan2(-ex.z(), ex.x()) * 180.0 / M_PI);  // pitch (about y)
+      for (int c = 0; c < 2; ++c) row.push_back(simulator.normalForce(c));
+      for (int c = 0; c < 2; ++c) row.push_back(plan_force[k][c][2]);
+      // Measured centre of pressure of each sole in its frame (NaN when unloaded).
+      for (int c = 0; c < 2; ++c) {
+        Eigen::Vector3d num = Eigen::Vector3d::Zero();
+        double fz = 0.0;
+        for (size_t i = 0; i < simulator.contactPoints().size(); ++i) {
+          const auto& pt = simulator.contactPoints()[i];
+          if (pt.contact != c) continue;
+          const Eigen::Vector3d pw = fk.oMf[pt.frame].R * pt.offset + fk.oMf[pt.frame].p;
+          num += simulator.contactForces()(2, i) * pw;
+          fz += simulator.contactForces()(2, i);
+        }
+        const SE3& M = fk.oMf[sole_frame[c]];
+        const Eigen::Vector3d cop = fz > 1.0 ? Eigen::Vector3d(M.R.transpose() * (num / fz - M.p))
+                                             : Eigen::Vector3d::Constant(NAN);
+        row.push_back(cop.x());
+        row.push_back(cop.y());
+      }
+      for (int c = 0; c < 2; ++c) {
+        const Vector6d& f = plan_force[k][c];
+        const bool loaded = f[2] > 1.0;
+        row.push_back(loaded ? -f[4] / f[2] : NAN);
+        row.push_back(loaded ? f[3] / f[2] : NAN);
+      }
+      for (int c = 0; c < 2; ++c) {
+        row.push_back(fk.oMf[sole_frame[c]].p.x());
+        row.push_back(fk.oMf[sole_frame[c]].p.z());
+      }
+      for (int c = 0; c < 2; ++c) {
+        row.push_back(plan.foot[k][c].x());
+        row.push_back(plan.foot[k][c].z());
+      }
+      for (int c = 0; c < 2; ++c)
+        row.push_back(std::acos(std::clamp(fk.oMf[sole_frame[c]].R(2, 2), -1.0, 1.0)) * 180.0 /
+                      M_PI);
+      row.push_back(dx.norm());
+      row.push_back(dx.head(nv).norm());
+      row.push_back(dx.tail(nv).norm());
+      double ratio = 0.0;
+      for (int i = 0; i < nu; ++i)
+        ratio = std::max(ratio, std::abs(tau[i]) / model.effortLimit[6 + i]);
+      row.push_back(ratio);
+      row.push_back(ratio > 1.0 ? 1.0 : 0.0);
+      for (int i = 0; i < 2 * nv; ++i) row.push_back(dx[i]);
+      for (int i = 0; i < nu; ++i) row.push_back(tau[i]);
+      res.steps.push_back(std::move(row));
+    }
     for (int c = 0; c < 2; ++c) {
       const double f = simulator.normalForce(c);
       res.peak_normal_force[c] = std::max(res.peak_normal_force[c], f);
@@ -272,9 +543,8 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
         std::acos(std::clamp(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0)) * 180.0 / M_PI;
     res.max_tilt_deg = std::max(res.max_tilt_deg, tilt);
     const int k = std::min(static_cast<int>(simulator.time() / dt + 1e-9), N);
-    const Eigen::Vector3d base_ref =
-        k < N ? Eigen::Vector3d(Eigen::Map<const Eigen::Vector3d>(policy.xRef(k)))
-              : Eigen::Vector3d(q_end.head<3>());
+    const Eigen::Vector3d base_ref = k < N ? Eigen::Vector3d(solve.xs[sp.contactKnot(k)].head<3>())
+                                           : Eigen::Vector3d(q_end.head<3>());
     const double err = (q.head<3>() - base_ref).norm();
     res.max_base_error = std::max(res.max_base_error, err);
     if ((s + 1) % steps_per_knot == 0) {

@@ -6,7 +6,7 @@
 //   - KKT-DDP (this file): box-FDDP over rigid contact knots (impulse knots at touch-downs)
 //     with the paper's costs, warm-started from the IK trajectory;
 // then compared on the same measures (peak normal force per foot, peak knee torque, torque cost)
-// and the DDP motion played on the mock robot (sim/) with its feedback policy.
+// and the DDP motion played on the mock robot (sim/), closed loop (simulateStrides).
 //
 // DDP costs per contact knot (weights in StrideDdpOptions):
 //   "com"      w_com |com - c_ref|²                        CoM tracking
@@ -47,7 +47,13 @@ struct StrideDdpOptions {
   double w_terminal = 10.0;  // the terminal posture weights are the running ones times this
   double mu = 0.7;
   double sole_margin = 0.8;  // the centre of pressure stays in this fraction of the sole
-  double contact_kd = 50.0;  // Baumgarte velocity gain of the rigid contacts
+  // Baumgarte gains of the rigid contacts. kd ≤ 0: 1 / dt, which stops a contact velocity in one
+  // knot (semi-implicit Euler: v⁺ = (1 - kd dt) v; the 50 /s of 20 ms knots flips its sign every
+  // 40 ms knot). kp pulls a sole back to its planned, flat placement: a foot that lands a little
+  // tilted on its heel is flattened rather than held tilted (on the mock robot's four corners a
+  // tilted sole has its centre of pressure at the edge and tips).
+  double contact_kd = 0.0;
+  double contact_kp = 200.0;  // with kd = 25 (40 ms knots): damping ratio kd / (2 √kp) ≈ 0.9
   bool torque_limits = true;
 };
 
@@ -56,8 +62,21 @@ const std::vector<std::string>& strideCostGroups();
 
 class StrideProblem {
  public:
-  // q_nominal: the posture the regularization pulls to (robot.default_q).
+  // The whole plan: knots for samples 0..N-1, the terminal knot at sample N (posture at rest, the
+  // regularization pulls to robot.default_q).
   StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& options);
+  // A window of the plan (the closed-loop replay): `knots` contact knots for samples first,
+  // first + 1, ... (past N they repeat the final standing sample N), plus the impulse knots of
+  // the touch-downs inside the window (not one at `first`: the state there is measured); the
+  // terminal knot tracks x_terminal (posture weights × w_terminal, the CoM of its sample).
+  // With x_refs (one per knot, impulse knots included, as sampleOfKnot orders them), the
+  // "posture" term tracks those states instead of the nominal posture at rest.
+  StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& options,
+                int first, int knots, const Eigen::VectorXd& x_terminal,
+                const std::vector<Eigen::VectorXd>* x_refs = nullptr);
+  // The knots of a window: (sample, impulse) in order, without building it.
+  static std::vector<std::pair<int, bool>> windowKnots(const StridePlan& plan, int first,
+                                                       int knots);
   StrideProblem(const StrideProblem&) = delete;
   StrideProblem& operator=(const StrideProblem&) = delete;
 
@@ -65,10 +84,13 @@ class StrideProblem {
   const StridePlan& plan() const { return plan_; }
   const Model& model() const { return robot_.model; }
   // The plan sample a knot stands for; impulse knots share the sample of the contact knot after
-  // them. contactKnot(k): the contact knot of sample k (k < N).
+  // them. contactKnot(k): the contact knot of sample k (k < N; for a window, of its k-th contact
+  // knot, sample first + k).
   int sampleOfKnot(int knot) const { return sample_[knot]; }
   bool isImpulse(int knot) const { return impulse_[knot] != 0; }
   int contactKnot(int sample) const { return contact_knot_[sample]; }
+  int contactKnots() const { return static_cast<int>(contact_knot_.size()); }
+  const StrideDdpOptions& options() const { return options_; }
   const Eigen::VectorXd& controlLower() const { return u_lower_; }
   const Eigen::VectorXd& controlUpper() const { return u_upper_; }
 
@@ -84,6 +106,8 @@ class StrideProblem {
                                               const std::vector<Eigen::VectorXd>& us);
 
  private:
+  void build(int first, int knots, const Eigen::VectorXd* x_terminal,
+             const std::vector<Eigen::VectorXd>* x_refs);
   void setGroup(int group);  // -1: every term as built
 
   const Robot& robot_;
@@ -124,8 +148,11 @@ StrideSolve solveStrides(StrideProblem& sp, const IkTrajectory& ik, int iteratio
                          bool verbose = false);
 
 // The DDP motion played on the mock robot: the simulator (1 ms steps, sole corners on flat
-// ground) driven by the policy τ = u_k + K_k (x_k ⊖ x) of the contact knots, evaluated every
-// step (sim::PolicyEvaluator), then holding the last knot for `hold_s`.
+// ground, unilateral Coulomb contact, plastic impacts) driven by a policy τ = u + K (x_ref ⊖ x)
+// evaluated every step (sim::PolicyEvaluator): closed loop, that of a window of the plan re-solved
+// from the measured state every knot (StrideSimOptions); open loop, the offline solution's. Then
+// standing on the final sample for `hold_s`. Fell: base tilt over 45° or base below half its
+// final height.
 struct StrideSimResult {
   bool fell = false;
   double fall_time = -1.0;
@@ -137,10 +164,33 @@ struct StrideSimResult {
   double final_base_error = 0.0;
   double max_tilt_deg = 0.0;
   int clamped_steps = 0;
+  int resolves = 0;             // closed loop: windows solved
+  double resolve_time_s = 0.0;  // closed loop: their total wall time (build + solve)
   // Per knot period: time, mean normal force per foot, base x, base z.
   std::vector<std::array<double, 5>> trace;
+  // Per 1 ms step when asked for (record_steps): the columns of stepColumns().
+  std::vector<std::vector<double>> steps;
+  static const std::vector<std::string>& stepColumns();
+};
+struct StrideSimOptions {
+  double hold_s = 1.0;  // standing after the plan's end
+  // Closed loop (an MPC over the plan): every knot period, box-FDDP re-solves a window of the plan
+  // from the measured state, warm-started from the previous window (the offline solution beyond
+  // it), and the robot plays that window's policy until the next one. Open loop: the offline
+  // solution's policy for the whole walk.
+  bool closed_loop = true;
+  double window_s = 1.0;  // the window's horizon
+  int iterations = 2;     // box-FDDP iterations per re-solve
+  // The policy's velocity reference at the knots' middles (semi-implicit Euler knots; see
+  // fillPolicy in large_stride.cpp) instead of at the knots.
+  bool midpoint = true;
+  // The windows track the offline solution's states ("posture" term: x ⊖ x_offline) with these
+  // weights (stiffer than the offline problem's regularization; the other costs are the
+  // offline problem's).
+  double w_track_posture = 10.0, w_track_base_orientation = 10.0, w_track_velocity = 1.0;
+  bool record_steps = false;
 };
 StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,
-                                double hold_s = 1.0);
+                                const StrideSimOptions& options = {});
 
 }  // namespace stride

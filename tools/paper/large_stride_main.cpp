@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
   StrideDdpOptions dop;
   IkOptions iko;
   int iterations = 100;
-  bool verbose = false, no_sim = false;
+  bool verbose = false, no_sim = false, sim_trace = false;
   app.add_option("--robot", robot_yaml, "robot YAML")->check(CLI::ExistingFile);
   app.add_option("--out", out, "output folder (CSV, JSON); nothing written without it");
   app.add_option("--lengths", lengths, "stride lengths [m] (foot displacement per step)");
@@ -86,7 +86,26 @@ int main(int argc, char** argv) {
   app.add_option("--w-torque", dop.w_torque, "torque weight");
   app.add_option("--w-posture", dop.w_posture, "joint posture weight");
   app.add_option("--w-velocity", dop.w_velocity, "velocity weight");
+  app.add_option("--contact-kd", dop.contact_kd,
+                 "Baumgarte velocity gain of the contacts (0: 1 / dt)");
+  app.add_option("--contact-kp", dop.contact_kp, "Baumgarte position gain of the contacts");
+  app.add_option("--sole-margin", dop.sole_margin,
+                 "the centre of pressure stays in this fraction of the sole");
+  app.add_option("--mu", dop.mu, "friction coefficient of the plan");
   app.add_flag("--no-sim", no_sim, "skip the mock-robot check");
+  StrideSimOptions sim_options;
+  app.add_flag("!--open-loop", sim_options.closed_loop,
+               "play the offline policy on the mock robot instead of re-solving every knot");
+  app.add_option("--mpc-window", sim_options.window_s, "closed loop: horizon of the re-solves [s]");
+  app.add_option("--mpc-iterations", sim_options.iterations,
+                 "closed loop: box-FDDP iterations per re-solve");
+  app.add_option("--mpc-w-posture", sim_options.w_track_posture,
+                 "closed loop: weight of the joints on the offline solution's");
+  app.add_option("--mpc-w-velocity", sim_options.w_track_velocity,
+                 "closed loop: weight of the velocities on the offline solution's");
+  app.add_flag("!--no-midpoint", sim_options.midpoint,
+               "policy velocities at the knots rather than at the knots' middles");
+  app.add_flag("--sim-trace", sim_trace, "write the mock robot's 1 ms trace (sim_trace.csv)");
   app.add_flag("-v,--verbose", verbose, "print the iteration table");
   CLI11_PARSE(app, argc, argv);
 
@@ -134,15 +153,18 @@ int main(int argc, char** argv) {
             !no_sim,
             plan.mass * 9.81};
     if (!no_sim) {
-      row.sim = simulateStrides(robot, sp, solve);
+      StrideSimOptions so = sim_options;
+      so.record_steps = sim_trace && !out.empty();
+      row.sim = simulateStrides(robot, sp, solve, so);
       std::printf(
           "  sim: %s%s, peak normal force L/R %.0f / %.0f N (1 ms), %.0f / %.0f N (knot mean), "
-          "max base error %.3f m, final %.3f m, max tilt %.1f deg\n",
+          "max base error %.3f m, final %.3f m, max tilt %.1f deg; %d re-solves, %.1f s\n",
           row.sim.completed ? "completed" : "NOT completed",
           row.sim.fell ? (" (fell at " + std::to_string(row.sim.fall_time) + " s)").c_str() : "",
           row.sim.peak_normal_force[0], row.sim.peak_normal_force[1],
           row.sim.peak_normal_force_knot[0], row.sim.peak_normal_force_knot[1],
-          row.sim.max_base_error, row.sim.final_base_error, row.sim.max_tilt_deg);
+          row.sim.max_base_error, row.sim.final_base_error, row.sim.max_tilt_deg, row.sim.resolves,
+          row.sim.resolve_time_s);
     }
     rows.push_back(row);
 
@@ -157,8 +179,8 @@ int main(int argc, char** argv) {
       f << "t,closed_L,closed_R,com_ref_x,com_ref_y,com_ref_z,zmp_x,zmp_y,zmp_ref_x,zmp_ref_y,"
            "foot_L_x,foot_L_z,foot_R_x,foot_R_z,fref_L_z,fref_R_z,ik_fz_L,ik_fz_R,ddp_fz_L,"
            "ddp_fz_R,ik_knee_L,ik_knee_R,ddp_knee_L,ddp_knee_R,ik_base_x,ik_base_z,ddp_base_x,"
-           "ddp_base_z,sim_fz_L,sim_fz_R,sim_base_x,sim_base_"
-           "z\n";
+           "ddp_base_z,sim_fz_L,sim_fz_R,sim_base_x,sim_base_z,ik_cop_L_x,ik_cop_L_y,ik_cop_R_x,"
+           "ik_cop_R_y,ddp_cop_L_x,ddp_cop_L_y,ddp_cop_R_x,ddp_cop_R_y\n";
       const int kl = model.joints[model.getJointId("L_knee")].idx_v - 6;
       const int kr = model.joints[model.getJointId("R_knee")].idx_v - 6;
       for (int k = 0; k < plan.N; ++k) {
@@ -178,7 +200,29 @@ int main(int argc, char** argv) {
         } else {
           f << ",,,,";
         }
+        // Centre of pressure of each sole relative to the sole frame (world axes; empty when
+        // the foot carries less than 1 N): x = -τ_y / f_z, y = τ_x / f_z.
+        for (const auto* force : {&ik.force, &ddp_force})
+          for (int c = 0; c < 2; ++c) {
+            const Vector6d& w = (*force)[k][c];
+            if (w[2] > 1.0)
+              f << "," << -w[4] / w[2] << "," << w[3] / w[2];
+            else
+              f << ",,";
+          }
         f << "\n";
+      }
+      if (!row.sim.steps.empty()) {
+        std::ofstream st(dir + "/sim_trace.csv");
+        const auto& cols = StrideSimResult::stepColumns();
+        for (size_t i = 0; i < cols.size(); ++i) st << (i ? "," : "") << cols[i];
+        for (int i = 0; i < 2 * model.nv; ++i) st << ",dx" << i;
+        for (int i = 0; i < model.nv - 6; ++i) st << ",tau" << i;
+        st << "\n";
+        for (const auto& r : row.sim.steps) {
+          for (size_t i = 0; i < r.size(); ++i) st << (i ? "," : "") << r[i];
+          st << "\n";
+        }
       }
       std::ofstream it(dir + "/iterations.csv");
       it << "iteration,cost,gap";
@@ -208,11 +252,12 @@ int main(int argc, char** argv) {
     const Row& r = rows[i];
     std::string sim = "not run";
     if (r.sim_run) {
-      char b[160];
-      std::snprintf(b, sizeof(b), "%s, peak %.0f N (knot mean %.0f N)",
+      char b[200];
+      std::snprintf(b, sizeof(b), "%s, peak %.0f N (knot mean %.0f N; plan %.0f N)",
                     r.sim.completed ? "completed" : (r.sim.fell ? "FELL" : "not completed"),
                     std::max(r.sim.peak_normal_force[0], r.sim.peak_normal_force[1]),
-                    std::max(r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1]));
+                    std::max(r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1]),
+                    r.ddp.peak_normal_force_N);
       sim = b;
     }
     std::printf("%5.0f cm | %10.0f %10.0f | %10.1f %10.1f | %11.4g %11.4g | %s\n", 100 * r.length,
@@ -222,15 +267,24 @@ int main(int argc, char** argv) {
             << ", \"weight_N\": " << r.weight << ", \"ik\": " << json(r.ik)
             << ", \"ddp\": " << json(r.ddp);
     if (r.sim_run)
-      summary << ", \"sim\": {\"completed\": " << (r.sim.completed ? "true" : "false")
+      summary << ", \"sim\": {\"closed_loop\": " << (sim_options.closed_loop ? "true" : "false")
+              << ", \"completed\": " << (r.sim.completed ? "true" : "false")
               << ", \"fell\": " << (r.sim.fell ? "true" : "false")
               << ", \"fall_time_s\": " << r.sim.fall_time << ", \"peak_normal_force_N\": "
               << std::max(r.sim.peak_normal_force[0], r.sim.peak_normal_force[1])
               << ", \"peak_normal_force_knot_mean_N\": "
               << std::max(r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1])
+              << ", \"planned_peak_normal_force_N\": " << r.ddp.peak_normal_force_N
+              << ", \"peak_normal_force_left_N\": " << r.sim.peak_normal_force[0]
+              << ", \"peak_normal_force_right_N\": " << r.sim.peak_normal_force[1]
+              << ", \"planned_peak_normal_force_left_N\": " << r.ddp.peak_normal_force[0]
+              << ", \"planned_peak_normal_force_right_N\": " << r.ddp.peak_normal_force[1]
               << ", \"max_base_error_m\": " << r.sim.max_base_error
               << ", \"final_base_error_m\": " << r.sim.final_base_error
-              << ", \"max_tilt_deg\": " << r.sim.max_tilt_deg << "}";
+              << ", \"max_tilt_deg\": " << r.sim.max_tilt_deg
+              << ", \"clamped_steps\": " << r.sim.clamped_steps
+              << ", \"resolves\": " << r.sim.resolves
+              << ", \"resolve_time_s\": " << r.sim.resolve_time_s << "}";
     summary << "}";
   }
   summary << "\n  ]\n}\n";
