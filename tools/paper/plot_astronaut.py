@@ -4,23 +4,10 @@
 Usage: plot_astronaut.py DIR   (reads DIR/{trajectory,frames}.csv, summary.json, skeleton.json;
 writes DIR/astronaut_{torques,pitch,snapshots,sagittal}.png). matplotlib only (Debian python3-matplotlib).
 """
-import csv
 import json
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-
-def read_csv(path):
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    cols = {}
-    for key in rows[0]:
-        cols[key] = [float(r[key]) if r[key] != "" else float("nan") for r in rows]
-    return cols
+from plot_common import plt, read_csv
 
 
 def main(out):

@@ -5,23 +5,10 @@ Usage: plot_large_stride.py DIR   (reads DIR/summary.json, DIR/skeleton.json and
 DIR/stride_XXX/{trajectory,iterations,frames_ik,frames_ddp}.csv; writes, per stride,
 DIR/large_stride_XXX_{grf,cost,snapshots}.png). matplotlib only (Debian python3-matplotlib).
 """
-import csv
 import json
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-
-def read_csv(path):
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    cols = {}
-    for key in rows[0]:
-        cols[key] = [float(r[key]) if r[key] != "" else float("nan") for r in rows]
-    return cols
+from plot_common import plt, read_csv
 
 
 def plot_grf(traj, weight, title, path):

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# What every experiment script of tools/paper does (sourced by astronaut.sh and large-stride.sh):
+# builds its program if it is missing, runs it with --out DIR and the other options, then draws
+# the plots with Debian's matplotlib.
+#   run_experiment NAME PROGRAM PLOT_SCRIPT DEFAULT_OUT_SUBDIR "$@"
+run_experiment() {
+  local name="$1" program="$2" plot="$3" subdir="$4"
+  shift 4
+  local root build out args=()
+  root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+  build="${STRIDE_BUILD_DIR:-$root/build}"
+  out="$build/paper/$subdir"
+  while [ $# -gt 0 ]; do
+    case "$1" in
+      --out) out="$2"; shift 2 ;;
+      --out=*) out="${1#--out=}"; shift ;;
+      *) args+=("$1"); shift ;;
+    esac
+  done
+  local bin="$build/tools/paper/$program"
+  if [ ! -x "$bin" ]; then
+    "$root/tools/build.sh" >/dev/null
+  fi
+  mkdir -p "$out"
+  # One thread unless OMP_NUM_THREADS says otherwise (the README's timings are on one core).
+  OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}" "$bin" --out "$out" "${args[@]}"
+  # Debian's python3-matplotlib lives under /usr/bin/python3; a python3 earlier on PATH (pyenv,
+  # a venv) may not see it.
+  local py="" candidate
+  for candidate in python3 /usr/bin/python3; do
+    if "$candidate" -c "import matplotlib" 2>/dev/null; then py="$candidate"; break; fi
+  done
+  if [ -n "$py" ]; then
+    "$py" "$root/tools/paper/$plot" "$out"
+  else
+    echo "$name: python3-matplotlib missing (tools/install-deps.sh installs it): no plots" >&2
+  fi
+}
