@@ -158,7 +158,6 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   status_.iterations = 0;
   status_.solver_status = -1;
   startup_tick_ = false;
-  deadline_cut_ = false;
   solved_ = false;
   status_.prepared = 0;
   status_.prepare_ms = 0.0;
@@ -197,8 +196,8 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
       solved_ = true;
       t_last_ = t;
       const bool cut = result == SolveStatus::Deadline;
-      deadline_cut_ = cut;
-      if (cut) ++counters_.deadline_misses;
+      // A miss: the solve stopped at the deadline, or its answer is out after it all the same.
+      if (cut || Clock::now() > deadline) ++counters_.deadline_misses;
       writePolicy(state->utime, t, cut ? kPolicyDeadline : kPolicySolved);
       previous_ticks_ = 0;
       finishStatus(tick_start, policy_.status);
@@ -321,6 +320,7 @@ void Mpc::holdPolicy(std::int64_t utime, double t) {
 void Mpc::finishStatus(Clock::time_point tick_start, std::int8_t policy_status) {
   status_.policy_status = policy_status;
   status_.deadline_misses = counters_.deadline_misses;
+  status_.late_ticks = counters_.late_ticks;
   status_.fallbacks = counters_.fallbacks;
   status_.stale_states = counters_.stale_states;
   status_.ticks_without_state = counters_.ticks_without_state;

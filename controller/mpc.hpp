@@ -48,6 +48,7 @@ struct MpcCounters {
   std::int64_t ticks_without_state = 0;
   std::int64_t failed_solves = 0;
   std::int64_t unprepared_solves = 0;  // ticks after start-up that solved without a preparation
+  std::int64_t late_ticks = 0;  // started after their time (the last period's work ran over)
 };
 
 class Mpc {
@@ -79,11 +80,10 @@ class Mpc {
   const mpc_status_t& status() const { return status_; }
   mpc_status_t& status() { return status_; }
   const MpcCounters& counters() const { return counters_; }
-  // A tick that overran its period (counted by the loop that knows the period), unless its solve
-  // was already counted for reaching the deadline: one miss per tick at most.
-  void countOverrun() {
-    if (!deadline_cut_) ++counters_.deadline_misses;
-  }
+  // Counted by the real-time loop, which knows the period: a tick it skipped because its deadline
+  // had passed before it could start (a deadline miss), and a tick that started late but ran.
+  void countSkippedTick() { ++counters_.deadline_misses; }
+  void countLateTick() { ++counters_.late_ticks; }
   // The last tick made the first solve of a (re)built problem, which runs without deadline.
   bool startupTick() const { return startup_tick_; }
 
@@ -122,7 +122,6 @@ class Mpc {
   bool need_restart_ = false;  // the last solve failed: start again from standing
   bool have_solved_ = false;   // a solve of this problem succeeded (else the next is the first)
   bool startup_tick_ = false;
-  bool deadline_cut_ = false;  // the last tick's solve stopped at its deadline
   bool solved_ = false;        // the last tick solved (prepare() may follow)
   double t_last_ = 0.0;        // plan time of the last tick's state
   double prepare_ms_ = 0.0;    // its duration

@@ -1,6 +1,7 @@
 // The controller core: configuration, gait plans, ticks, fallbacks.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -256,6 +257,36 @@ TEST(Mpc, PreparedTicksAndTheirFallback) {
   ASSERT_TRUE(mpc.tick(&s, 0.0, never));
   EXPECT_EQ(mpc.status().prepared, 0);
   EXPECT_EQ(mpc.counters().unprepared_solves, 3);
+}
+
+// A deadline is on the answer: a tick whose policy goes out after it is one miss, whether its
+// solve stopped there or finished late; a tick on time is none.
+TEST(Mpc, DeadlineMissesCountAnswersAfterTheDeadline) {
+  ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  Mpc mpc(config);
+  const auto never = Mpc::Clock::time_point::max();
+  robot_state_t s = standingState(mpc.robot(), 0);
+  ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+  mpc.prepare(never);
+  s.utime += 5000;
+  ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+  EXPECT_EQ(mpc.counters().deadline_misses, 0);
+  // The deadline passed before the tick started (its state came in too late to answer on time).
+  mpc.prepare(never);
+  s.utime += 5000;
+  ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::now() - std::chrono::milliseconds(1)));
+  EXPECT_EQ(mpc.counters().deadline_misses, 1);
+  EXPECT_EQ(mpc.status().deadline_misses, 1);
+  // On time again: no new miss, and a late start the loop reports shows in the status.
+  mpc.prepare(never);
+  mpc.countLateTick();
+  s.utime += 5000;
+  ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+  EXPECT_EQ(mpc.counters().deadline_misses, 1);
+  EXPECT_EQ(mpc.status().late_ticks, 1);
+  // A tick the loop skipped is a miss.
+  mpc.countSkippedTick();
+  EXPECT_EQ(mpc.counters().deadline_misses, 2);
 }
 
 TEST(Mpc, FallbacksOnStaleStates) {

@@ -122,10 +122,11 @@ int main(int argc, char** argv) {
         fell ? "FELL" : "did not fall");
   std::printf(
       "controller: %ld ticks, tick latency p50 %.0f us, p99 %.0f us, max %.0f us, "
-      "solve p50 %.0f us, %lld deadline misses, %lld fallbacks, %lld rejected messages\n",
+      "solve p50 %.0f us, %lld deadline misses (%lld late starts), %lld fallbacks, %lld rejected "
+      "messages\n",
       statuses, p50, p99, lmax, percentile(solve_ms, 0.5) * 1e3,
       static_cast<long long>(last_status.deadline_misses),
-      static_cast<long long>(last_status.fallbacks),
+      static_cast<long long>(last_status.late_ticks), static_cast<long long>(last_status.fallbacks),
       static_cast<long long>(last_status.rejected_messages));
   // The other half of each iteration (run after the policy went out) and how the line search
   // went: a tick's latency is one rollout per step length tried.
@@ -145,6 +146,7 @@ int main(int argc, char** argv) {
       << ",\n  \"tick_latency_us\": {\"p50\": " << p50 << ", \"p99\": " << p99
       << ", \"max\": " << lmax << "},\n  \"solve_time_us_p50\": " << percentile(solve_ms, 0.5) * 1e3
       << ",\n  \"deadline_misses\": " << last_status.deadline_misses
+      << ",\n  \"late_ticks\": " << last_status.late_ticks
       << ",\n  \"fallbacks\": " << last_status.fallbacks << ",\n  \"ticks\": " << statuses
       << ",\n  \"rejected_messages\": " << last_status.rejected_messages
       << ",\n  \"prepared_ticks\": " << prepared
