@@ -196,8 +196,9 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
       solved_ = true;
       t_last_ = t;
       const bool cut = result == SolveStatus::Deadline;
-      // A miss: the solve stopped at the deadline, or its answer is out after it all the same.
-      if (cut || Clock::now() > deadline) ++counters_.deadline_misses;
+      // A miss: the solve stopped at the deadline, or its answer is out after it all the same
+      // (not the start-up solve, which runs without one before the first policy).
+      if (cut || (!startup_tick_ && Clock::now() > deadline)) ++counters_.deadline_misses;
       writePolicy(state->utime, t, cut ? kPolicyDeadline : kPolicySolved);
       previous_ticks_ = 0;
       finishStatus(tick_start, policy_.status);

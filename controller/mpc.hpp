@@ -48,7 +48,7 @@ struct MpcCounters {
   std::int64_t ticks_without_state = 0;
   std::int64_t failed_solves = 0;
   std::int64_t unprepared_solves = 0;  // ticks after start-up that solved without a preparation
-  std::int64_t late_ticks = 0;  // started after their time (the last period's work ran over)
+  std::int64_t late_ticks = 0;         // started after their time (the last period's work ran over)
 };
 
 class Mpc {
@@ -122,10 +122,10 @@ class Mpc {
   bool need_restart_ = false;  // the last solve failed: start again from standing
   bool have_solved_ = false;   // a solve of this problem succeeded (else the next is the first)
   bool startup_tick_ = false;
-  bool solved_ = false;        // the last tick solved (prepare() may follow)
-  double t_last_ = 0.0;        // plan time of the last tick's state
-  double prepare_ms_ = 0.0;    // its duration
-  int previous_ticks_ = 0;     // consecutive ticks on the previous policy
+  bool solved_ = false;      // the last tick solved (prepare() may follow)
+  double t_last_ = 0.0;      // plan time of the last tick's state
+  double prepare_ms_ = 0.0;  // its duration
+  int previous_ticks_ = 0;   // consecutive ticks on the previous policy
 
   Eigen::VectorXd x_;  // the state as a solver vector
   policy_t policy_, previous_;

@@ -150,8 +150,9 @@ void writeSummary(const MpcNode& node, const std::string& path) {
       static_cast<long long>(c.ticks), static_cast<long long>(node.acceptedStates()),
       static_cast<long long>(node.rejected()), lat.p50, lat.p99, lat.max, lat.count,
       static_cast<long long>(c.deadline_misses), static_cast<long long>(c.late_ticks),
-      static_cast<long long>(c.fallbacks), static_cast<long long>(c.stale_states), static_cast<long long>(c.failed_solves),
-      static_cast<long long>(c.unprepared_solves), static_cast<long long>(node.planUpdates()));
+      static_cast<long long>(c.fallbacks), static_cast<long long>(c.stale_states),
+      static_cast<long long>(c.failed_solves), static_cast<long long>(c.unprepared_solves),
+      static_cast<long long>(node.planUpdates()));
   if (node.rejected() > 0) {
     std::printf("stride-mpc: rejected messages by reason:");
     for (int r = 1; r <= static_cast<int>(msg::Reject::Stale); ++r)
@@ -167,8 +168,8 @@ void writeSummary(const MpcNode& node, const std::string& path) {
     << ",\n  \"tick_latency_ms\": {\"p50\": " << lat.p50 << ", \"p99\": " << lat.p99
     << ", \"max\": " << lat.max << ", \"count\": " << lat.count
     << "},\n  \"deadline_misses\": " << c.deadline_misses << ",\n  \"late_ticks\": " << c.late_ticks
-    << ",\n  \"fallbacks\": " << c.fallbacks
-    << ",\n  \"stale_states\": " << c.stale_states << ",\n  \"failed_solves\": " << c.failed_solves
+    << ",\n  \"fallbacks\": " << c.fallbacks << ",\n  \"stale_states\": " << c.stale_states
+    << ",\n  \"failed_solves\": " << c.failed_solves
     << ",\n  \"unprepared_solves\": " << c.unprepared_solves
     << ",\n  \"ticks_without_state\": " << c.ticks_without_state << "\n}\n";
   if (!f) std::fprintf(stderr, "stride-mpc: cannot write the summary to '%s'\n", path.c_str());
