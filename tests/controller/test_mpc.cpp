@@ -214,6 +214,15 @@ TEST(Mpc, StandingTicks) {
 
 // The tick answers with the iteration prepared after the last one when the state comes near the
 // expected time, and linearizes again after the state when it does not (counted).
+// One period of the real-time loop: the preparation for the next state, then the tick on that
+// state, dt_us later.
+bool preparedTick(Mpc& mpc, robot_state_t& s, std::int64_t dt_us,
+                  Mpc::Clock::time_point deadline = Mpc::Clock::time_point::max()) {
+  mpc.prepare(Mpc::Clock::time_point::max());
+  s.utime += dt_us;
+  return mpc.tick(&s, 0.0, deadline);
+}
+
 TEST(Mpc, PreparedTicksAndTheirFallback) {
   ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
   Mpc mpc(config);
@@ -222,23 +231,17 @@ TEST(Mpc, PreparedTicksAndTheirFallback) {
   ASSERT_TRUE(mpc.tick(&s, 0.0, never));  // start-up: nothing prepared yet, not counted
   EXPECT_EQ(mpc.status().prepared, 0);
   for (int i = 0; i < 4; ++i) {  // on time: every tick prepared (200 Hz, knots of 10 ms)
-    mpc.prepare(never);
-    s.utime += 5000;
-    ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+    ASSERT_TRUE(preparedTick(mpc, s, 5000));
     EXPECT_EQ(mpc.status().prepared, 1) << i;
     EXPECT_GT(mpc.status().prepare_ms, 0.0);
     EXPECT_EQ(mpc.policy().status, kPolicySolved);
   }
   EXPECT_EQ(mpc.counters().unprepared_solves, 0);
   // One period late (a skipped tick): less than a knot from the prepared knot 0, still used.
-  mpc.prepare(never);
-  s.utime += 10000;
-  ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+  ASSERT_TRUE(preparedTick(mpc, s, 10000));
   EXPECT_EQ(mpc.status().prepared, 1);
   // Three knots late: the preparation is dropped and the tick shifts and solves after the state.
-  mpc.prepare(never);
-  s.utime += 30000;
-  ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+  ASSERT_TRUE(preparedTick(mpc, s, 30000));
   EXPECT_EQ(mpc.status().prepared, 0);
   EXPECT_EQ(mpc.counters().unprepared_solves, 1);
   EXPECT_EQ(mpc.status().unprepared_solves, 1);
@@ -252,9 +255,7 @@ TEST(Mpc, PreparedTicksAndTheirFallback) {
   s.utime += 5000;
   ASSERT_TRUE(mpc.tick(&s, 1.0, never));  // stale
   EXPECT_EQ(mpc.policy().status, kPolicyPrevious);
-  mpc.prepare(never);
-  s.utime += 5000;
-  ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+  ASSERT_TRUE(preparedTick(mpc, s, 5000));
   EXPECT_EQ(mpc.status().prepared, 0);
   EXPECT_EQ(mpc.counters().unprepared_solves, 3);
 }
@@ -264,27 +265,20 @@ TEST(Mpc, PreparedTicksAndTheirFallback) {
 TEST(Mpc, DeadlineMissesCountAnswersAfterTheDeadline) {
   ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
   Mpc mpc(config);
-  const auto never = Mpc::Clock::time_point::max();
   robot_state_t s = standingState(mpc.robot(), 0);
   const auto past = [] { return Mpc::Clock::now() - std::chrono::milliseconds(1); };
   // The start-up solve runs to convergence before the first policy, without a deadline.
   ASSERT_TRUE(mpc.tick(&s, 0.0, past()));
   EXPECT_EQ(mpc.counters().deadline_misses, 0);
-  mpc.prepare(never);
-  s.utime += 5000;
-  ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+  ASSERT_TRUE(preparedTick(mpc, s, 5000));
   EXPECT_EQ(mpc.counters().deadline_misses, 0);
   // The deadline passed before the tick started (its state came in too late to answer on time).
-  mpc.prepare(never);
-  s.utime += 5000;
-  ASSERT_TRUE(mpc.tick(&s, 0.0, past()));
+  ASSERT_TRUE(preparedTick(mpc, s, 5000, past()));
   EXPECT_EQ(mpc.counters().deadline_misses, 1);
   EXPECT_EQ(mpc.status().deadline_misses, 1);
   // On time again: no new miss, and a late start the loop reports shows in the status.
-  mpc.prepare(never);
   mpc.countLateTick();
-  s.utime += 5000;
-  ASSERT_TRUE(mpc.tick(&s, 0.0, never));
+  ASSERT_TRUE(preparedTick(mpc, s, 5000));
   EXPECT_EQ(mpc.counters().deadline_misses, 1);
   EXPECT_EQ(mpc.status().late_ticks, 1);
   // A tick the loop skipped is a miss.
