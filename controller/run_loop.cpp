@@ -145,8 +145,7 @@ void writeSummary(const MpcNode& node, const std::string& path) {
   std::printf(
       "stride-mpc: %lld ticks, %lld states accepted, %lld rejected, tick latency p50 %.3f ms "
       "p99 %.3f ms max %.3f ms (%ld ticks), %lld deadline misses, %lld late ticks, %lld fallbacks, "
-      "%lld stale "
-      "states, %lld failed solves, %lld unprepared solves, %lld plan updates\n",
+      "%lld stale states, %lld failed solves, %lld unprepared solves, %lld plan updates\n",
       static_cast<long long>(c.ticks), static_cast<long long>(node.acceptedStates()),
       static_cast<long long>(node.rejected()), lat.p50, lat.p99, lat.max, lat.count,
       static_cast<long long>(c.deadline_misses), static_cast<long long>(c.late_ticks),
