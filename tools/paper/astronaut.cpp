@@ -31,6 +31,91 @@ Eigen::VectorXd postureWeights(const Model& model, double w_q, double w_v) {
   w.tail(model.nv - 6).setConstant(w_v);
   return w;
 }
+// Left/right mirror symmetry of the legs: r = [q_a - q_b; v_a - v_b; u_a - u_b] for joint pairs
+// (a, b) (1-dof joints). The robot is mirror symmetric about its sagittal plane, and so are the
+// start, the goals Ry(θ) and every other cost, so a mirror-symmetric motion keeps the whole-body
+// angular momentum's roll and yaw parts zero by symmetry: each leg's r × p about x and z is the
+// negative of the other's. Without this term the solver breaks the symmetry (see README: the
+// legs move one at a time and the base rolls and yaws by ~20°). Linear in (x, u): its Jacobian
+// rows are e_a - e_b, so addGaussNewton adds them directly.
+class MirrorResidual : public Residual {
+ public:
+  MirrorResidual(const Model& model, int nu,
+                 const std::vector<std::pair<std::string, std::string>>& pairs)
+      : Residual(3 * static_cast<int>(pairs.size()), model.nv, nu, Dependence::StateControl),
+        np_(static_cast<int>(pairs.size())),
+        nq_(model.nq),
+        nj_(model.nv - nu) {
+    for (const auto& [a, b] : pairs) {
+      const auto& ja = model.joints[model.getJointId(a)];
+      const auto& jb = model.joints[model.getJointId(b)];
+      if (ja.nv != 1 || jb.nv != 1 || ja.nq != 1 || jb.nq != 1)
+        throw std::invalid_argument("MirrorResidual: '" + a + "', '" + b + "' must be 1-dof");
+      q_.emplace_back(ja.idx_q, jb.idx_q);
+      v_.emplace_back(ja.idx_v, jb.idx_v);
+    }
+  }
+
+  void calc(ResidualData& d, const KnotContext&, const Eigen::Ref<const Eigen::VectorXd>& x,
+            const Eigen::Ref<const Eigen::VectorXd>& u) const override {
+    for (int i = 0; i < np_; ++i) {
+      d.r[i] = x[q_[i].first] - x[q_[i].second];
+      d.r[np_ + i] = x[nq_ + v_[i].first] - x[nq_ + v_[i].second];
+      // The torques act on the joints after the base's (nv - nu) velocity entries.
+      d.r[2 * np_ + i] = u.size() ? u[v_[i].first - nj_] - u[v_[i].second - nj_] : 0.0;
+    }
+  }
+  void calcDiff(ResidualData& d, const KnotContext&, const Eigen::Ref<const Eigen::VectorXd>&,
+                const Eigen::Ref<const Eigen::VectorXd>&) const override {
+    // Rewritten every time: the knots share the workspace between residuals of one type (knot.hpp).
+    d.Rx.setZero();
+    d.Ru.setZero();
+    const int nv = this->nv();
+    for (int i = 0; i < np_; ++i) {
+      const auto [a, b] = v_[i];
+      d.Rx(i, a) = 1.0;
+      d.Rx(i, b) = -1.0;
+      d.Rx(np_ + i, nv + a) = 1.0;
+      d.Rx(np_ + i, nv + b) = -1.0;
+      if (nu() > 0) {
+        d.Ru(2 * np_ + i, a - nj_) = 1.0;
+        d.Ru(2 * np_ + i, b - nj_) = -1.0;
+      }
+    }
+  }
+  void addGaussNewton(const ResidualData&, const Eigen::Ref<const Eigen::VectorXd>& g,
+                      const Eigen::Ref<const Eigen::VectorXd>& h,
+                      CostDerivatives& out) const override {
+    // Row i is e_a - e_b: gradient g_i (e_a - e_b), Hessian h_i (e_a - e_b)(e_a - e_b)ᵀ.
+    auto add = [&](auto& L, auto& H, int a, int b, double gi, double hi) {
+      L[a] += gi;
+      L[b] -= gi;
+      H(a, a) += hi;
+      H(b, b) += hi;
+      H(a, b) -= hi;
+      H(b, a) -= hi;
+    };
+    const int nv = this->nv();
+    for (int i = 0; i < np_; ++i) {
+      const auto [a, b] = v_[i];
+      add(out.Lx, out.Lxx, a, b, g[i], h[i]);
+      add(out.Lx, out.Lxx, nv + a, nv + b, g[np_ + i], h[np_ + i]);
+      if (nu() > 0) add(out.Lu, out.Luu, a - nj_, b - nj_, g[2 * np_ + i], h[2 * np_ + i]);
+    }
+  }
+
+ private:
+  int np_, nq_, nj_;
+  std::vector<std::pair<int, int>> q_, v_;
+};
+
+// Weights of the mirror residual's rows: positions, rates, torques.
+Eigen::VectorXd mirrorWeights(int pairs, double w_q, double w_v, double w_u) {
+  Eigen::VectorXd w(3 * pairs);
+  w << Eigen::VectorXd::Constant(pairs, w_q), Eigen::VectorXd::Constant(pairs, w_v),
+      Eigen::VectorXd::Constant(pairs, w_u);
+  return w;
+}
 }  // namespace
 
 AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& options, int first,
@@ -69,6 +154,9 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
     return 0;
   };
 
+  const bool mirrored =
+      !options.mirror.empty() &&
+      (options.w_mirror > 0.0 || options.w_mirror_velocity > 0.0 || options.w_mirror_control > 0.0);
   const ContactSet none;
   auto workspace = std::make_shared<SharedWorkspace>(model, std::max(omp_get_max_threads(), 2));
   std::vector<std::unique_ptr<ActionModel>> running;
@@ -85,6 +173,11 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
               Activation::quadratic(6), options.w_momentum);
     costs.add("limits", std::make_unique<JointLimitResidual>(model, nu),
               JointLimitResidual::activation(model, 1.0, options.limit_margin), options.w_limits);
+    if (mirrored)
+      costs.add("mirror", std::make_unique<MirrorResidual>(model, nu, options.mirror),
+                Activation::weightedQuadratic(
+                    mirrorWeights(static_cast<int>(options.mirror.size()), options.w_mirror,
+                                  options.w_mirror_velocity, options.w_mirror_control)));
     // Every knot carries the orientation term (one workspace slot for all); it is on only near
     // the waypoints before the terminal one.
     const int term = costs.add("orientation",
@@ -105,6 +198,11 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
   terminal->costs().add("limits", std::make_unique<JointLimitResidual>(model, 0),
                         JointLimitResidual::activation(model, 1.0, options.limit_margin),
                         options.w_limits);
+  if (mirrored)
+    terminal->costs().add("mirror", std::make_unique<MirrorResidual>(model, 0, options.mirror),
+                          Activation::weightedQuadratic(
+                              mirrorWeights(static_cast<int>(options.mirror.size()),
+                                            options.w_mirror, options.w_mirror_velocity, 0.0)));
   terminal->costs().add(
       "orientation",
       std::make_unique<FrameRotationResidual>(model, 0, options.base_frame, rotY(goal(last))),
@@ -253,6 +351,11 @@ AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::Vecto
     m.off_axis.push_back(off);
     m.tilt.push_back(std::acos(std::clamp(R(1, 1), -1.0, 1.0)));
     m.max_tilt = std::max(m.max_tilt, m.tilt.back());
+    // R = Ry(θ) Rz(ψ) Rx(φ): row 1 of R is (sin ψ, cos ψ cos φ, -cos ψ sin φ).
+    m.yaw.push_back(std::asin(std::clamp(R(1, 0), -1.0, 1.0)));
+    m.roll.push_back(std::atan2(-R(1, 2), R(1, 1)));
+    m.max_yaw = std::max(m.max_yaw, std::abs(m.yaw.back()));
+    m.max_roll = std::max(m.max_roll, std::abs(m.roll.back()));
     m.h.push_back(hg.tail<3>());
     m.com.push_back(data.com);
     m.h_left.push_back(legMomentum(left, data.com));

@@ -54,6 +54,15 @@ struct AstronautOptions {
   // +90° into -150°). The true motion keeps h_g = 0, so penalizing h_g at every knot keeps the plan
   // where the discretization is faithful; it changes nothing for the continuous-time dynamics.
   double w_momentum = 100.0;
+  // Left/right mirror symmetry (MirrorResidual in astronaut.cpp): weights on q_L - q_R, on the
+  // rates and on the torques of the `mirror` pairs. Off by default (all weights 0): with it the
+  // motion is planar (no roll, no yaw) but turns about half as fast, and DDP does not find the
+  // symmetric leg cycles from the hip-limit corner (README: "Why not planar").
+  std::vector<std::pair<std::string, std::string>> mirror = {{"L_hip_pitch", "R_hip_pitch"},
+                                                             {"L_knee", "R_knee"}};
+  double w_mirror = 0.0;
+  double w_mirror_velocity = 0.0;
+  double w_mirror_control = 0.0;
   // Receding windows (solveAstronaut): segments per window (0 or >= waypoints, with
   // window_step_deg = 0: one solve of the full problem from zero torques, the previous scheme),
   // DDP iterations per window and on the last one.
@@ -146,13 +155,18 @@ struct AstronautMotion {
   // final one differing from the final orientation's only by roll and yaw). Well defined while
   // the base's y axis stays away from x-z (tilt below).
   std::vector<double> pitch_axis;
-  std::vector<double> off_axis;    // |rotation about world x and z| accumulated, rad
-  std::vector<double> tilt;        // angle between the base's y axis and world y, rad
+  std::vector<double> off_axis;  // |rotation about world x and z| accumulated, rad
+  std::vector<double> tilt;      // angle between the base's y axis and world y, rad
+  // The base orientation as R = Ry(pitch) Rz(yaw) Rx(roll) (pitch: the forward-axis angle):
+  // yaw lifts the forward axis out of the sagittal x-z plane, roll turns the base about it. Zero
+  // for a planar (sagittal) motion.
+  std::vector<double> roll, yaw;
   std::vector<Eigen::Vector3d> h;  // whole-body angular momentum about the CoM, world axes
   // Angular momentum of each leg (the bodies its hip_pitch moves) about the whole-body CoM.
   std::vector<Eigen::Vector3d> h_left, h_right;
   std::vector<Eigen::Vector3d> com;
   double max_h = 0.0, max_h_leg = 0.0, max_com_drift = 0.0, max_tilt = 0.0;
+  double max_roll = 0.0, max_yaw = 0.0;  // largest |roll|, |yaw|, rad
 };
 
 // Unwrapped pitch: the base rotation increments of successive states, log3(R_{k+1} R_kᵀ) in world

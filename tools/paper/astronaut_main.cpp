@@ -79,6 +79,10 @@ int main(int argc, char** argv) {
   app.add_option("--w-control", o.w_control, "torque weight");
   app.add_option("--w-momentum", o.w_momentum, "centroidal momentum weight (0: off)");
   app.add_option("--margin", o.limit_margin, "fraction of the joint ranges allowed");
+  app.add_option("--w-mirror", o.w_mirror,
+                 "left/right symmetry weight on the hip_pitch and knee angles (default 0: off)");
+  app.add_option("--w-mirror-velocity", o.w_mirror_velocity, "same, on their rates");
+  app.add_option("--w-mirror-control", o.w_mirror_control, "same, on their torques");
   app.add_flag("-v,--verbose", verbose, "print the iteration table");
   CLI11_PARSE(app, argc, argv);
 
@@ -143,6 +147,8 @@ int main(int argc, char** argv) {
               max_pitch * kDeg);
   std::printf("  %-44s %12.1f\n", "max tilt of the base y axis from world y, deg",
               m.max_tilt * kDeg);
+  std::printf("  %-44s %12.1f\n", "max |roll| of the base, deg", m.max_roll * kDeg);
+  std::printf("  %-44s %12.1f\n", "max |yaw| of the base, deg", m.max_yaw * kDeg);
   std::printf("  %-44s %12.2f\n", "off-axis rotation (roll/yaw) accumulated, deg",
               m.off_axis.back() * kDeg);
   std::printf("  %-44s %12.2f\n", "final orientation error to the goal, deg", final_err * kDeg);
@@ -175,7 +181,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> joints = astro.locked().free;
 
   std::ofstream traj(out + "/trajectory.csv");
-  traj << "t,pitch_deg,pitch_sum_deg,tilt_deg,off_axis_deg,h_x,h_y,h_z,h_norm,"
+  traj << "t,pitch_deg,pitch_sum_deg,tilt_deg,roll_deg,yaw_deg,off_axis_deg,h_x,h_y,h_z,h_norm,"
           "h_left_y,h_right_y,h_left_norm,h_right_norm,com_x,com_z";
   for (const auto& j : joints) traj << ",q_" << j;
   for (const auto& j : joints) traj << ",v_" << j;
@@ -185,10 +191,11 @@ int main(int argc, char** argv) {
   for (int k = 0; k <= T; ++k) {
     const Eigen::VectorXd& x = xs[k];
     traj << m.t[k] << ',' << m.pitch_axis[k] * kDeg << ',' << m.pitch[k] * kDeg << ','
-         << m.tilt[k] * kDeg << ',' << m.off_axis[k] * kDeg << ',' << m.h[k].x() << ','
-         << m.h[k].y() << ',' << m.h[k].z() << ',' << m.h[k].norm() << ',' << m.h_left[k].y() << ','
-         << m.h_right[k].y() << ',' << m.h_left[k].norm() << ',' << m.h_right[k].norm() << ','
-         << m.com[k].x() << ',' << m.com[k].z();
+         << m.tilt[k] * kDeg << ',' << m.roll[k] * kDeg << ',' << m.yaw[k] * kDeg << ','
+         << m.off_axis[k] * kDeg << ',' << m.h[k].x() << ',' << m.h[k].y() << ',' << m.h[k].z()
+         << ',' << m.h[k].norm() << ',' << m.h_left[k].y() << ',' << m.h_right[k].y() << ','
+         << m.h_left[k].norm() << ',' << m.h_right[k].norm() << ',' << m.com[k].x() << ','
+         << m.com[k].z();
     for (int j = 0; j < nv - 6; ++j) traj << ',' << x[7 + j];
     for (int j = 0; j < nv - 6; ++j) traj << ',' << x[nq + 6 + j];
     // Torques are held over a knot: the last state has none.
@@ -237,6 +244,8 @@ int main(int argc, char** argv) {
       << "  \"base_pitch_deg\": " << m.pitch_axis.back() * kDeg << ",\n"
       << "  \"base_pitch_sum_deg\": " << m.pitch.back() * kDeg << ",\n"
       << "  \"max_tilt_deg\": " << m.max_tilt * kDeg << ",\n"
+      << "  \"max_roll_deg\": " << m.max_roll * kDeg << ",\n"
+      << "  \"max_yaw_deg\": " << m.max_yaw * kDeg << ",\n"
       << "  \"max_base_pitch_deg\": " << max_pitch * kDeg << ",\n"
       << "  \"max_angular_momentum_norm\": " << m.max_h << ",\n"
       << "  \"max_leg_angular_momentum_norm\": " << m.max_h_leg << ",\n"
