@@ -94,15 +94,17 @@ int main(int argc, char** argv) {
   app.add_option("--mu", dop.mu, "friction coefficient of the plan");
   app.add_flag("--no-sim", no_sim, "skip the mock-robot check");
   StrideSimOptions sim_options;
-  app.add_flag("!--open-loop", sim_options.closed_loop,
-               "play the offline policy on the mock robot instead of re-solving every knot");
-  app.add_option("--mpc-window", sim_options.window_s, "closed loop: horizon of the re-solves [s]");
-  app.add_option("--mpc-iterations", sim_options.iterations,
-                 "closed loop: box-FDDP iterations per re-solve");
-  app.add_option("--mpc-w-posture", sim_options.w_track_posture,
-                 "closed loop: weight of the joints on the offline solution's");
-  app.add_option("--mpc-w-velocity", sim_options.w_track_velocity,
-                 "closed loop: weight of the velocities on the offline solution's");
+  app.add_flag("!--offline-gains", sim_options.tvlqr,
+               "play the offline solve's own gains instead of the TVLQR's");
+  app.add_option("--lqr-w-posture", sim_options.w_track_posture,
+                 "TVLQR: weight of the joints on the DDP states");
+  app.add_option("--lqr-w-base-orientation", sim_options.w_track_base_orientation,
+                 "TVLQR: weight of the base orientation on the DDP states");
+  app.add_option("--lqr-w-velocity", sim_options.w_track_velocity,
+                 "TVLQR: weight of the velocities on the DDP states");
+  app.add_option("--hold", sim_options.hold_s, "standing after the walk [s]");
+  app.add_option("--state-rate", sim_options.state_rate_hz,
+                 "lock-step: state estimates per second of sim time");
   app.add_flag("!--no-midpoint", sim_options.midpoint,
                "policy velocities at the knots rather than at the knots' middles");
   app.add_flag("--sim-trace", sim_trace, "write the mock robot's 1 ms trace (sim_trace.csv)");
@@ -158,13 +160,15 @@ int main(int argc, char** argv) {
       row.sim = simulateStrides(robot, sp, solve, so);
       std::printf(
           "  sim: %s%s, peak normal force L/R %.0f / %.0f N (1 ms), %.0f / %.0f N (knot mean), "
-          "max base error %.3f m, final %.3f m, max tilt %.1f deg; %d re-solves, %.1f s\n",
+          "max base error %.3f m, final %.3f m, max tilt %.1f deg; %ld policies (%ld rejected), "
+          "%ld steps on the hold PD, %ld past a policy, %d clamped; gains %.1f s\n",
           row.sim.completed ? "completed" : "NOT completed",
           row.sim.fell ? (" (fell at " + std::to_string(row.sim.fall_time) + " s)").c_str() : "",
           row.sim.peak_normal_force[0], row.sim.peak_normal_force[1],
           row.sim.peak_normal_force_knot[0], row.sim.peak_normal_force_knot[1],
-          row.sim.max_base_error, row.sim.final_base_error, row.sim.max_tilt_deg, row.sim.resolves,
-          row.sim.resolve_time_s);
+          row.sim.max_base_error, row.sim.final_base_error, row.sim.max_tilt_deg, row.sim.policies,
+          row.sim.policies_rejected, row.sim.hold_steps, row.sim.exhausted_steps,
+          row.sim.clamped_steps, row.sim.lqr_time_s);
     }
     rows.push_back(row);
 
@@ -267,7 +271,8 @@ int main(int argc, char** argv) {
             << ", \"weight_N\": " << r.weight << ", \"ik\": " << json(r.ik)
             << ", \"ddp\": " << json(r.ddp);
     if (r.sim_run)
-      summary << ", \"sim\": {\"closed_loop\": " << (sim_options.closed_loop ? "true" : "false")
+      summary << ", \"sim\": {\"playback\": \"" << (sim_options.tvlqr ? "tvlqr" : "offline_gains")
+              << "\", \"lockstep_state_rate_hz\": " << sim_options.state_rate_hz
               << ", \"completed\": " << (r.sim.completed ? "true" : "false")
               << ", \"fell\": " << (r.sim.fell ? "true" : "false")
               << ", \"fall_time_s\": " << r.sim.fall_time << ", \"peak_normal_force_N\": "
@@ -283,8 +288,11 @@ int main(int argc, char** argv) {
               << ", \"final_base_error_m\": " << r.sim.final_base_error
               << ", \"max_tilt_deg\": " << r.sim.max_tilt_deg
               << ", \"clamped_steps\": " << r.sim.clamped_steps
-              << ", \"resolves\": " << r.sim.resolves
-              << ", \"resolve_time_s\": " << r.sim.resolve_time_s << "}";
+              << ", \"policies\": " << r.sim.policies
+              << ", \"policies_rejected\": " << r.sim.policies_rejected
+              << ", \"hold_pd_steps\": " << r.sim.hold_steps
+              << ", \"exhausted_steps\": " << r.sim.exhausted_steps
+              << ", \"lqr_time_s\": " << r.sim.lqr_time_s << "}";
     summary << "}";
   }
   summary << "\n  ]\n}\n";
