@@ -512,6 +512,7 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
   sim::SimNodeOptions no;
   no.state_rate_hz = opt.state_rate_hz;
   no.fall_tilt_deg = 45.0;
+  no.pushes = opt.pushes;
   sim::SimNode node(robot, so, no, publisher);
   node.subscribe(bus);
   PlaybackAnswerer answerer(policy, opt.answer_knots, no.utime_base, publisher, no.policy_channel);

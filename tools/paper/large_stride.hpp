@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "config/robot_config.hpp"
+#include "sim/disturbances.hpp"
 #include "solver/ddp/solver.hpp"
 #include "solver/ocp/problem.hpp"
 #include "tools/paper/centroidal_planner.hpp"
@@ -199,6 +200,7 @@ struct StrideSimOptions {
   // knot at or before the estimate's time; they must cover the time to the next estimate).
   double state_rate_hz = 50.0;
   int answer_knots = 6;
+  sim::PushSchedule pushes;  // shoves on the base (robustness of the playback; none by default)
   bool record_steps = false;
 };
 StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,

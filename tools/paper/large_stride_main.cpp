@@ -107,9 +107,24 @@ int main(int argc, char** argv) {
                  "lock-step: state estimates per second of sim time");
   app.add_flag("!--no-midpoint", sim_options.midpoint,
                "policy velocities at the knots rather than at the knots' middles");
+  std::vector<std::string> pushes;
+  app.add_option("--push", pushes,
+                 "a push on the mock robot's base: start:duration:fx,fy,fz [s, s, N] (repeatable)");
   app.add_flag("--sim-trace", sim_trace, "write the mock robot's 1 ms trace (sim_trace.csv)");
   app.add_flag("-v,--verbose", verbose, "print the iteration table");
   CLI11_PARSE(app, argc, argv);
+  for (const std::string& text : pushes) {
+    sim::Push p;
+    char c1 = 0, c2 = 0, c3 = 0, c4 = 0;
+    std::istringstream in(text);
+    if (!(in >> p.start >> c1 >> p.duration >> c2 >> p.force.x() >> c3 >> p.force.y() >> c4 >>
+          p.force.z()) ||
+        c1 != ':' || c2 != ':' || c3 != ',' || c4 != ',' || !(p.duration > 0.0)) {
+      std::fprintf(stderr, "--push %s: expected start:duration:fx,fy,fz\n", text.c_str());
+      return 2;
+    }
+    sim_options.pushes.pushes.push_back(p);
+  }
 
   const Robot robot = loadRobot(robot_yaml);
   const Model& model = robot.model;
@@ -249,19 +264,25 @@ int main(int argc, char** argv) {
   }
 
   std::printf("\n%-8s | %-21s | %-21s | %-23s | %s\n", "stride", "peak normal force [N]",
-              "peak knee torque [Nm]", "torque cost [N²m²s]", "mock robot (DDP policy)");
+              "peak knee torque [Nm]", "torque cost [N²m²s]",
+              "mock robot: DDP policy, TVLQR gains, lock-step");
   std::printf("%-8s | %10s %10s | %10s %10s | %11s %11s |\n", "", "IK", "DDP", "IK", "DDP", "IK",
               "DDP");
   for (size_t i = 0; i < rows.size(); ++i) {
     const Row& r = rows[i];
     std::string sim = "not run";
     if (r.sim_run) {
-      char b[200];
-      std::snprintf(b, sizeof(b), "%s, peak %.0f N (knot mean %.0f N; plan %.0f N)",
-                    r.sim.completed ? "completed" : (r.sim.fell ? "FELL" : "not completed"),
-                    std::max(r.sim.peak_normal_force[0], r.sim.peak_normal_force[1]),
-                    std::max(r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1]),
-                    r.ddp.peak_normal_force_N);
+      char b[300];
+      char fell[32] = "";
+      if (r.sim.fell) std::snprintf(fell, sizeof(fell), " at %.2f s", r.sim.fall_time);
+      std::snprintf(b, sizeof(b),
+                    "%s%s, peak L/R %.0f / %.0f N (knot mean %.0f / %.0f N; plan %.0f / %.0f N), "
+                    "drift %.1f cm",
+                    r.sim.completed ? "completed" : (r.sim.fell ? "FELL" : "not completed"), fell,
+                    r.sim.peak_normal_force[0], r.sim.peak_normal_force[1],
+                    r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1],
+                    r.ddp.peak_normal_force[0], r.ddp.peak_normal_force[1],
+                    100.0 * r.sim.max_base_error);
       sim = b;
     }
     std::printf("%5.0f cm | %10.0f %10.0f | %10.1f %10.1f | %11.4g %11.4g | %s\n", 100 * r.length,
@@ -282,6 +303,8 @@ int main(int argc, char** argv) {
               << ", \"planned_peak_normal_force_N\": " << r.ddp.peak_normal_force_N
               << ", \"peak_normal_force_left_N\": " << r.sim.peak_normal_force[0]
               << ", \"peak_normal_force_right_N\": " << r.sim.peak_normal_force[1]
+              << ", \"peak_normal_force_knot_mean_left_N\": " << r.sim.peak_normal_force_knot[0]
+              << ", \"peak_normal_force_knot_mean_right_N\": " << r.sim.peak_normal_force_knot[1]
               << ", \"planned_peak_normal_force_left_N\": " << r.ddp.peak_normal_force[0]
               << ", \"planned_peak_normal_force_right_N\": " << r.ddp.peak_normal_force[1]
               << ", \"max_base_error_m\": " << r.sim.max_base_error
@@ -289,6 +312,7 @@ int main(int argc, char** argv) {
               << ", \"max_tilt_deg\": " << r.sim.max_tilt_deg
               << ", \"clamped_steps\": " << r.sim.clamped_steps
               << ", \"policies\": " << r.sim.policies
+              << ", \"unanswered_states\": " << r.sim.unanswered
               << ", \"policies_rejected\": " << r.sim.policies_rejected
               << ", \"hold_pd_steps\": " << r.sim.hold_steps
               << ", \"exhausted_steps\": " << r.sim.exhausted_steps
