@@ -365,7 +365,7 @@ namespace {
 // The playback's reference, feed-forward and gains per contact sample, the policy of the whole
 // run (the walk, then standing) on the plan's clock.
 sim::Policy playbackPolicy(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,
-                           const StrideSimOptions& opt, double& lqr_time_s) {
+                           const StrideSimOptions& opt, StrideSimResult& res) {
   const Model& model = robot.model;
   const StridePlan& plan = sp.plan();
   const int nv = model.nv, N = plan.N;
@@ -409,6 +409,7 @@ sim::Policy playbackPolicy(const Robot& robot, StrideProblem& sp, const StrideSo
   stop_solver.setControlBounds(stop.controlLower(), stop.controlUpper());
   stop_solver.setWarmStart(stop_xs, stop_us);
   stop_solver.solve(opt.stop_iterations);
+  res.stop_gap = stop_solver.gap();
   std::vector<Eigen::VectorXd> xs(T + 1), us(T);
   for (int i = 0; i < T; ++i) {
     xs[i] = i <= T_off ? solve.xs[i] : stop_solver.xs()[i - T_off];
@@ -433,7 +434,7 @@ sim::Policy playbackPolicy(const Robot& robot, StrideProblem& sp, const StrideSo
     ok = solver.backwardPass();
   }
   if (!ok) throw std::runtime_error("playbackPolicy: backward pass failed");
-  lqr_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  res.lqr_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (int k = 0; k < lqr.contactKnots(); ++k) {
     const int j = lqr.contactKnot(k);
     px.push_back(&xs[j]);
@@ -502,7 +503,7 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
   const int nq = model.nq, nv = model.nv, nu = nv - 6, N = plan.N;
   const double dt = plan.options.dt;
   StrideSimResult res;
-  const sim::Policy policy = playbackPolicy(robot, sp, solve, opt, res.lqr_time_s);
+  const sim::Policy policy = playbackPolicy(robot, sp, solve, opt, res);
 
   // stride-sim's node and the playback on one in-process bus.
   lcm::LCM bus("memq://");

@@ -176,7 +176,8 @@ struct StrideSimResult {
   // stride-sim's node: policies received and rejected, steps on its hold PD (no policy) and past
   // a policy's end, estimates the playback did not answer.
   long policies = 0, policies_rejected = 0, hold_steps = 0, exhausted_steps = 0, unanswered = 0;
-  double lqr_time_s = 0.0;  // the TVLQR gains (derivatives + one backward pass)
+  double lqr_time_s = 0.0;  // the planned stop and the TVLQR gains (derivatives + backward pass)
+  double stop_gap = 0.0;    // the planned stop's dynamic infeasibility after its iterations
   // Per knot period: time, mean normal force per foot, base x, base z.
   std::vector<std::array<double, 5>> trace;
   // Per 1 ms step when asked for (record_steps): the columns of stepColumns().

@@ -176,14 +176,15 @@ int main(int argc, char** argv) {
       std::printf(
           "  sim: %s%s, peak normal force L/R %.0f / %.0f N (1 ms), %.0f / %.0f N (knot mean), "
           "max base error %.3f m, final %.3f m, max tilt %.1f deg; %ld policies (%ld rejected), "
-          "%ld steps on the hold PD, %ld past a policy, %d clamped; gains %.1f s\n",
+          "%ld steps on the hold PD, %ld past a policy, %d clamped; stop gap %.1g, stop + gains "
+          "%.1f s\n",
           row.sim.completed ? "completed" : "NOT completed",
           row.sim.fell ? (" (fell at " + std::to_string(row.sim.fall_time) + " s)").c_str() : "",
           row.sim.peak_normal_force[0], row.sim.peak_normal_force[1],
           row.sim.peak_normal_force_knot[0], row.sim.peak_normal_force_knot[1],
           row.sim.max_base_error, row.sim.final_base_error, row.sim.max_tilt_deg, row.sim.policies,
           row.sim.policies_rejected, row.sim.hold_steps, row.sim.exhausted_steps,
-          row.sim.clamped_steps, row.sim.lqr_time_s);
+          row.sim.clamped_steps, row.sim.stop_gap, row.sim.lqr_time_s);
     }
     rows.push_back(row);
 
@@ -316,7 +317,8 @@ int main(int argc, char** argv) {
               << ", \"policies_rejected\": " << r.sim.policies_rejected
               << ", \"hold_pd_steps\": " << r.sim.hold_steps
               << ", \"exhausted_steps\": " << r.sim.exhausted_steps
-              << ", \"lqr_time_s\": " << r.sim.lqr_time_s << "}";
+              << ", \"stop_gap\": " << r.sim.stop_gap << ", \"lqr_time_s\": " << r.sim.lqr_time_s
+              << "}";
     summary << "}";
   }
   summary << "\n  ]\n}\n";
