@@ -399,6 +399,8 @@ sim::Policy playbackPolicy(const Robot& robot, StrideProblem& sp, const StrideSo
   // that state's configuration at rest.
   const auto t0 = std::chrono::steady_clock::now();
   const int H = samples - N;
+  if (T != T_off + H)  // a touch-down at the final sample would add an impulse knot
+    throw std::logic_error("playbackPolicy: the stop's knots do not follow the plan's");
   Eigen::VectorXd x_stand = solve.xs.back();
   x_stand.tail(nv).setZero();
   StrideProblem stop(robot, plan, sp.options(), N, H, x_stand);
