@@ -3,11 +3,12 @@
 // reference on a 100 cm stride. Asserted is the physics, not exact numbers: the IK motion is
 // kinematically exact and its forces carry the robot's weight, DDP, which plans the swing leg's
 // momentum over the horizon, needs a lower peak normal ground reaction force than the IK, and the
-// mock robot (sim/: sole corners, unilateral Coulomb contact, plastic impacts) walks the DDP
-// motion without falling, with the forces that were planned.
+// mock robot (stride-sim's node in lock-step: sole corners, unilateral Coulomb contact, plastic
+// impacts) plays the DDP motion's policy without falling, with the forces that were planned.
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <memory>
 
 #include "tools/paper/large_stride.hpp"
@@ -89,22 +90,36 @@ TEST_F(large_stride, DdpLowersThePeakNormalForceOfTheIkBaseline) {
       << "IK " << m_ik.peak_normal_force_N << " N, DDP " << m_ddp.peak_normal_force_N << " N";
 }
 
-// The DDP motion on the mock robot, closed loop (a window of the plan re-solved from the measured
-// state every knot, tracking the DDP solution), then standing: no fall, both feet down where the
-// walk ends, and the measured peak normal force (mean over a knot) within 10% of the planned one.
-TEST_F(large_stride, MockRobotWalksTheDdpStrideWithThePlannedForces) {
+// The DDP motion's policy (feed-forward and states of the DDP solution, TVLQR gains) played open
+// loop on stride-sim's node in lock-step, then standing: every estimate answered, every policy
+// accepted, no fall, both feet down where the walk ends, the base within 3 cm of the plan, and the
+// measured peak normal force within 5% of the planned one as a mean over a knot (the plan's
+// resolution) and within 10% per 1 ms step (no impact spikes: with the velocity reference at the
+// knots instead of their middles the 1 ms peak is 2-4 times the plan's).
+TEST_F(large_stride, MockRobotPlaysTheDdpStrideWithThePlannedForces) {
   StrideSimOptions so;
   so.hold_s = 0.5;
   const StrideSimResult sim = simulateStrides(*robot_, *sp_, *solve_, so);
   EXPECT_FALSE(sim.fell) << "fell at " << sim.fall_time << " s";
   EXPECT_TRUE(sim.completed) << "final base error " << sim.final_base_error << " m";
-  EXPECT_LT(sim.max_base_error, 0.1);
+  EXPECT_LT(sim.max_base_error, 0.03);
+  EXPECT_GT(sim.policies, 0);
+  EXPECT_EQ(sim.unanswered, 0);
+  EXPECT_EQ(sim.policies_rejected, 0);
+  EXPECT_EQ(sim.hold_steps, 0) << "the node applied its hold PD: a step had no policy";
+  EXPECT_EQ(sim.exhausted_steps, 0) << "a step ran past the policy it had";
   const auto force = sp_->forces(solve_->xs, solve_->us);
   std::vector<Eigen::VectorXd> tau(plan_->N);
   for (int k = 0; k < plan_->N; ++k) tau[k] = solve_->us[sp_->contactKnot(k)];
   const double planned = strideMetrics(robot_->model, *plan_, tau, force).peak_normal_force_N;
   const double measured = std::max(sim.peak_normal_force_knot[0], sim.peak_normal_force_knot[1]);
-  EXPECT_NEAR(measured, planned, 0.1 * planned);
+  std::printf(
+      "playback: peak normal force %.0f N (knot mean; 1 ms %.0f N), planned %.0f N, "
+      "max base drift %.3f m, max tilt %.1f deg\n",
+      measured, std::max(sim.peak_normal_force[0], sim.peak_normal_force[1]), planned,
+      sim.max_base_error, sim.max_tilt_deg);
+  EXPECT_NEAR(measured, planned, 0.05 * planned);
+  EXPECT_NEAR(std::max(sim.peak_normal_force[0], sim.peak_normal_force[1]), planned, 0.1 * planned);
 }
 
 }  // namespace

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The paper's large strides on flat ground (§V-A, Fig. 2-4) with one command: builds
 # stride-paper-large-stride if it is missing, runs the IK baseline and KKT-DDP for each stride
-# length, walks the DDP motion on the mock robot (closed loop), prints the table, writes the trajectories
-# (CSV / JSON) and the plots (PNG) into --out DIR. Other options go to the program
-# (stride-paper-large-stride --help), e.g. --lengths 0.8 1.0 --iterations 100.
+# length, plays the DDP motion's policy on the mock robot (stride-sim's node, lock-step), prints
+# the table, writes the trajectories (CSV / JSON) and the plots (PNG) into --out DIR. Other
+# options go to the program (stride-paper-large-stride --help), e.g. --lengths 0.8 1.0.
 #   tools/paper/large-stride.sh --out build/paper/large_stride
 set -euo pipefail
 source "$(dirname "$0")/run_experiment.sh"

@@ -8,7 +8,10 @@
 #include <limits>
 #include <stdexcept>
 
+#include "messages/publisher.hpp"
+#include "messages/validate.hpp"
 #include "sim/policy.hpp"
+#include "sim/sim_node.hpp"
 #include "sim/simulator.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/lie_group.hpp"
@@ -358,121 +361,193 @@ const std::vector<std::string>& StrideSimResult::stepColumns() {
   return c;
 }
 
+namespace {
+// The playback's reference, feed-forward and gains per contact sample, the policy of the whole
+// run (the walk, then standing) on the plan's clock.
+sim::Policy playbackPolicy(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,
+                           const StrideSimOptions& opt, StrideSimResult& res) {
+  const Model& model = robot.model;
+  const StridePlan& plan = sp.plan();
+  const int nv = model.nv, N = plan.N;
+  const double dt = plan.options.dt;
+  sim::Policy policy;
+  std::vector<const Eigen::VectorXd*> px, pu;
+  std::vector<const Eigen::MatrixXd*> pK;
+  if (!opt.tvlqr) {  // the offline solve's gains; past the walk the node holds its last knot
+    for (int k = 0; k < N; ++k) {
+      const int j = sp.contactKnot(k);
+      px.push_back(&solve.xs[j]);
+      pu.push_back(&solve.us[j]);
+      pK.push_back(&solve.K[j]);
+    }
+    fillPolicy(model, px, pu, pK, 0.0, dt, opt.midpoint, policy);
+    return policy;
+  }
+  // The tracking problem: the plan's knots (the same as the offline problem's: windowKnots from
+  // sample 0), then standing on the final sample through the hold and a tail beyond it.
+  const int samples = N + static_cast<int>(std::lround((opt.hold_s + opt.lqr_tail_s) / dt));
+  const auto knots = StrideProblem::windowKnots(plan, 0, samples);
+  const int T = static_cast<int>(knots.size()), T_off = sp.problem().horizon();
+  for (int i = 0; i < T_off; ++i)
+    if (knots[i].first != sp.sampleOfKnot(i) || knots[i].second != sp.isImpulse(i))
+      throw std::logic_error("playbackPolicy: the tracking knots are not the plan's");
+  // Standing: the walk ends in motion (the DDP's terminal state is only pulled towards rest), so
+  // a reference that stops dead at the last sample asks for an impulse no sole can give. The stop
+  // is planned like the walk: the plan's problem from sample N on (standing on its final contacts,
+  // CoM and feet held, posture and velocities to rest, forces towards the plan's final ones, the
+  // sole's centre of pressure and friction cone), box-FDDP from the DDP's final state, ending at
+  // that state's configuration at rest.
+  const auto t0 = std::chrono::steady_clock::now();
+  const int H = samples - N;
+  if (T != T_off + H)  // a touch-down at the final sample would add an impulse knot
+    throw std::logic_error("playbackPolicy: the stop's knots do not follow the plan's");
+  Eigen::VectorXd x_stand = solve.xs.back();
+  x_stand.tail(nv).setZero();
+  StrideProblem stop(robot, plan, sp.options(), N, H, x_stand);
+  stop.problem().setX0(solve.xs.back());
+  std::vector<Eigen::VectorXd> stop_xs(H + 1, x_stand), stop_us(H, solve.us.back());
+  stop_xs[0] = solve.xs.back();
+  Solver stop_solver(stop.problem(), SolverKind::BoxFddp);
+  stop_solver.setControlBounds(stop.controlLower(), stop.controlUpper());
+  stop_solver.setWarmStart(stop_xs, stop_us);
+  stop_solver.solve(opt.stop_iterations);
+  res.stop_gap = stop_solver.gap();
+  std::vector<Eigen::VectorXd> xs(T + 1), us(T);
+  for (int i = 0; i < T; ++i) {
+    xs[i] = i <= T_off ? solve.xs[i] : stop_solver.xs()[i - T_off];
+    us[i] = i < T_off ? solve.us[i] : stop_solver.us()[i - T_off];
+  }
+  xs[T] = stop_solver.xs()[H];
+  const std::vector<Eigen::VectorXd> x_refs(xs.begin(), xs.begin() + T);
+  StrideDdpOptions track = sp.options();
+  track.w_posture = opt.w_track_posture;
+  track.w_base_orientation = opt.w_track_base_orientation;
+  track.w_velocity = opt.w_track_velocity;
+  StrideProblem lqr(robot, plan, track, 0, samples, xs[T], &x_refs);
+  lqr.problem().setX0(xs[0]);
+  // Unconstrained gains: the node clamps the torques; box-FDDP would zero the gain rows of
+  // controls at their bounds for the whole knot.
+  Solver solver(lqr.problem(), SolverKind::Fddp);
+  if (!solver.setWarmStart(xs, us) || !solver.computeDerivatives())
+    throw std::runtime_error("playbackPolicy: derivatives at the DDP solution failed");
+  bool ok = false;
+  for (double mu = 1e-9; mu <= 1e3 && !ok; mu *= 10.0) {
+    solver.setRegularization(mu);
+    ok = solver.backwardPass();
+  }
+  if (!ok) throw std::runtime_error("playbackPolicy: backward pass failed");
+  res.lqr_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (int k = 0; k < lqr.contactKnots(); ++k) {
+    const int j = lqr.contactKnot(k);
+    px.push_back(&xs[j]);
+    pu.push_back(&us[j]);
+    pK.push_back(&solver.K()[j]);
+  }
+  fillPolicy(model, px, pu, pK, 0.0, dt, opt.midpoint, policy);
+  return policy;
+}
+
+// The controller's side of the lock-step: answers each state estimate with the knots of the
+// playback policy from the one at or before the estimate's time (robot clock: utime_base + t).
+class PlaybackAnswerer {
+ public:
+  PlaybackAnswerer(const sim::Policy& policy, int knots, std::int64_t utime_base, Publisher& out,
+                   const std::string& policy_channel)
+      : policy_(policy),
+        knots_(std::min(knots, policy.knots)),
+        utime_base_(utime_base),
+        out_(out),
+        channel_(policy_channel) {
+    msg::shape(msg_, knots_, policy.nq, policy.nv, policy.nu);
+    buffer_.resize(msg::policyWireSize(knots_, policy.nq, policy.nv, policy.nu));
+  }
+  void onState(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    if (!msg::decode(rbuf->data, static_cast<int>(rbuf->data_size), state_)) return;
+    const double t = static_cast<double>(state_.utime - utime_base_) * 1e-6;
+    const int first =
+        std::clamp(static_cast<int>(std::floor(t / policy_.dt + 1e-9)), 0, policy_.knots - knots_);
+    const int nx = policy_.nq + policy_.nv, nk = policy_.nu * 2 * policy_.nv;
+    msg_.utime = state_.utime;
+    msg_.knot0_utime = utime_base_ + static_cast<std::int64_t>(
+                                         std::llround((policy_.t0 + first * policy_.dt) * 1e6));
+    msg_.tick = ticks_++;
+    msg_.t0 = policy_.t0 + first * policy_.dt;
+    msg_.dt = policy_.dt;
+    for (int k = 0; k < knots_; ++k) {
+      std::copy(policy_.xRef(first + k), policy_.xRef(first + k) + nx, msg_.x_ref[k].begin());
+      std::copy(policy_.uFf(first + k), policy_.uFf(first + k) + policy_.nu, msg_.u_ff[k].begin());
+      std::copy(policy_.gain(first + k), policy_.gain(first + k) + nk, msg_.K[k].begin());
+    }
+    msg_.phase = 0;
+    msg_.status = 0;
+    const int n = msg_.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
+    if (n > 0) out_.publish(channel_, buffer_.data(), n);
+  }
+
+ private:
+  const sim::Policy& policy_;
+  int knots_;
+  std::int64_t utime_base_;
+  Publisher& out_;
+  std::string channel_;
+  robot_state_t state_;
+  policy_t msg_;
+  std::vector<unsigned char> buffer_;
+  std::int64_t ticks_ = 0;
+};
+}  // namespace
+
 StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,
                                 const StrideSimOptions& opt) {
-  const double hold_s = opt.hold_s;
   const bool record_steps = opt.record_steps;
   const Model& model = robot.model;
   const StridePlan& plan = sp.plan();
   const int nq = model.nq, nv = model.nv, nu = nv - 6, N = plan.N;
   const double dt = plan.options.dt;
-  sim::Policy policy;  // the offline solution's (open loop; and the reference of the trace)
-  {
-    std::vector<const Eigen::VectorXd*> x, u;
-    std::vector<const Eigen::MatrixXd*> K;
-    for (int k = 0; k < N; ++k) {
-      const int j = sp.contactKnot(k);
-      x.push_back(&solve.xs[j]);
-      u.push_back(&solve.us[j]);
-      K.push_back(&solve.K[j]);
-    }
-    fillPolicy(model, x, u, K, 0.0, dt, opt.midpoint, policy);
-  }
-  // Closed loop: windows of `window` knots; the policy covers their first kPolicyKnots.
-  const int window = std::max(1, static_cast<int>(std::lround(opt.window_s / dt)));
-  constexpr int kPolicyKnots = 3;
-  sim::Policy mpc;
-  std::unique_ptr<StrideProblem> prev;  // the last window and its solution
-  std::vector<Eigen::VectorXd> prev_xs, prev_us;
-  // The offline solution's state and control of (sample, impulse); past N standing still where
-  // the walk ends (its base position, the nominal posture, zero velocity) with the last control.
-  auto offline = [&](int s, bool impulse, Eigen::VectorXd& x, Eigen::VectorXd& u) {
-    if (s >= N) {  // standing still where the walk ends, in the nominal posture
-      x = solve.xs.back();
-      x.segment(3, nq - 3) = robot.default_q.segment(3, nq - 3);
-      x.tail(nv).setZero();
-      u = solve.us.back();
-      return;
-    }
-    const int j = sp.contactKnot(s) - (impulse ? 1 : 0);
-    x = solve.xs[j];
-    u = solve.us[j];
-  };
-  StrideDdpOptions track = sp.options();
-  track.w_posture = opt.w_track_posture;
-  track.w_base_orientation = opt.w_track_base_orientation;
-  track.w_velocity = opt.w_track_velocity;
-  auto resolve = [&](int first, const Eigen::VectorXd& x_measured, double t) {
-    first = std::min(first, N);
-    Eigen::VectorXd x_term, u_unused;
-    offline(first + window, false, x_term, u_unused);
-    const auto knots = StrideProblem::windowKnots(plan, first, window);
-    const int T = static_cast<int>(knots.size());
-    std::vector<Eigen::VectorXd> x_refs(T), xs(T + 1), us(T);
-    for (int i = 0; i < T; ++i) {
-      const auto [s_i, imp] = knots[i];
-      offline(s_i, imp, x_refs[i], us[i]);
-      xs[i] = x_refs[i];
-      // The previous window's solution where it covers this knot: one knot period later, its
-      // second contact knot is this window's first (the impulse knot before it, if any, is
-      // behind).
-      if (!prev || prev->contactKnots() < 2) continue;
-      const int p = prev->contactKnot(1) + i;
-      if (p < prev->problem().horizon()) {
-        xs[i] = prev_xs[p];
-        us[i] = prev_us[p];
-      }
-    }
-    xs[T] = x_term;
-    xs[0] = x_measured;
-    auto w = std::make_unique<StrideProblem>(robot, plan, track, first, window, x_term, &x_refs);
-    w->problem().setX0(x_measured);
-    Solver solver(w->problem(), SolverKind::BoxFddp);
-    solver.setControlBounds(w->controlLower(), w->controlUpper());
-    solver.setWarmStart(xs, us);
-    solver.solve(opt.iterations);
-    prev_xs = solver.xs();
-    prev_us = solver.us();
-    const int P = std::min(kPolicyKnots, w->contactKnots());
-    std::vector<const Eigen::VectorXd*> px, pu;
-    std::vector<const Eigen::MatrixXd*> pK;
-    for (int k = 0; k < P; ++k) {
-      const int j = w->contactKnot(k);
-      px.push_back(&prev_xs[j]);
-      pu.push_back(&prev_us[j]);
-      pK.push_back(&solver.K()[j]);
-    }
-    fillPolicy(model, px, pu, pK, t, dt, opt.midpoint, mpc);
-    prev = std::move(w);
-  };
   StrideSimResult res;
+  const sim::Policy policy = playbackPolicy(robot, sp, solve, opt, res);
+
+  // stride-sim's node and the playback on one in-process bus.
+  lcm::LCM bus("memq://");
+  if (!bus.good()) throw std::runtime_error("simulateStrides: no in-process LCM bus");
+  LcmPublisher publisher(bus);
   sim::SimOptions so;
-  sim::Simulator simulator(robot, so);
-  simulator.reset(solve.xs[0].head(nq), solve.xs[0].tail(nv));
+  sim::SimNodeOptions no;
+  no.state_rate_hz = opt.state_rate_hz;
+  no.fall_tilt_deg = 45.0;
+  no.pushes = opt.pushes;
+  sim::SimNode node(robot, so, no, publisher);
+  node.subscribe(bus);
+  PlaybackAnswerer answerer(policy, opt.answer_knots, no.utime_base, publisher, no.policy_channel);
+  bus.subscribe(no.state_channel, &PlaybackAnswerer::onState, &answerer);
+  node.reset(solve.xs[0].head(nq), solve.xs[0].tail(nv));
+  const int per_state = node.stepsPerState();
+  if ((opt.answer_knots - 1) * policy.dt < per_state * so.dt - 1e-9)
+    throw std::invalid_argument("simulateStrides: the answers do not reach the next estimate");
+
+  const sim::Simulator& simulator = node.simulator();
+  // What the node computes, for the trace (x_ref ⊖ x, τ before clamping) and the drift.
   sim::PolicyEvaluator evaluator(model, nu);
   Eigen::VectorXd tau(nu);
   const int steps_per_knot = static_cast<int>(std::lround(dt / so.dt));
-  const int total = static_cast<int>(std::lround((N * dt + hold_s) / so.dt));
+  const int total = static_cast<int>(std::lround((N * dt + opt.hold_s) / so.dt));
   std::array<double, 2> acc{0.0, 0.0};
-  const Eigen::VectorXd q_end = solve.xs.back().head(nq);
   std::vector<std::array<Vector6d, 2>> plan_force;
   if (record_steps) plan_force = sp.forces(solve.xs, solve.us);
   Data fk(model);
   const int sole_frame[2] = {model.getFrameId(plan.feet[0]), model.getFrameId(plan.feet[1])};
-  for (int s = 0; s < total; ++s) {
-    const double t = simulator.time();
-    if (opt.closed_loop && s % steps_per_knot == 0) {
-      const auto a = std::chrono::steady_clock::now();
-      Eigen::VectorXd x(nq + nv);
-      x << simulator.q(), simulator.v();
-      resolve(s / steps_per_knot, x, t);
-      ++res.resolves;
-      res.resolve_time_s +=
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+  bool running = true;
+  for (int s = 0; s < total && running; ++s) {
+    if (s % per_state == 0) {  // lock-step: an estimate out, its answer in, before stepping on
+      const std::int64_t stamp = node.publishState();
+      while (!node.answered(stamp) && bus.handleTimeout(0) > 0) {
+      }
+      if (!node.answered(stamp)) ++res.unanswered;
     }
-    evaluator.evaluate(opt.closed_loop ? mpc : policy, t, simulator.q(), simulator.v(), tau);
+    const double t = simulator.time();
+    evaluator.evaluate(policy, t, simulator.q(), simulator.v(), tau);
     const Eigen::VectorXd dx = evaluator.stateError();
-    simulator.step(tau);
+    running = node.advance(1);
     if (record_steps) {
       const Eigen::VectorXd& q = simulator.q();
       framesForwardKinematics(model, fk, q);
@@ -538,29 +613,26 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
       acc[c] += f / steps_per_knot;
     }
     const Eigen::VectorXd& q = simulator.q();
-    const double qx = q[3], qy = q[4];
-    const double tilt =
-        std::acos(std::clamp(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0)) * 180.0 / M_PI;
-    res.max_tilt_deg = std::max(res.max_tilt_deg, tilt);
-    const int k = std::min(static_cast<int>(simulator.time() / dt + 1e-9), N);
-    const Eigen::Vector3d base_ref = k < N ? Eigen::Vector3d(solve.xs[sp.contactKnot(k)].head<3>())
-                                           : Eigen::Vector3d(q_end.head<3>());
-    const double err = (q.head<3>() - base_ref).norm();
-    res.max_base_error = std::max(res.max_base_error, err);
+    // Drift: from the base position the policy asked for at the start of the step (the DDP
+    // solution's during the walk, the planned stop's after it).
+    res.final_base_error = (q.head<3>() - evaluator.qRef().head<3>()).norm();
+    res.max_base_error = std::max(res.max_base_error, res.final_base_error);
     if ((s + 1) % steps_per_knot == 0) {
       for (int c = 0; c < 2; ++c)
         res.peak_normal_force_knot[c] = std::max(res.peak_normal_force_knot[c], acc[c]);
       res.trace.push_back({simulator.time(), acc[0], acc[1], q[0], q[2]});
       acc = {0.0, 0.0};
     }
-    if (!res.fell && (tilt > 45.0 || q[2] < 0.5 * q_end[2])) {
-      res.fell = true;
-      res.fall_time = simulator.time();
-      break;
-    }
   }
+  const sim::SimNodeStats& st = node.stats();
+  res.fell = st.fell || st.diverged;
+  if (res.fell) res.fall_time = simulator.time();
+  res.max_tilt_deg = st.max_tilt_deg;
+  res.policies = st.policies;
+  res.policies_rejected = st.policies_rejected;
+  res.hold_steps = st.hold_steps;
+  res.exhausted_steps = st.exhausted_steps;
   res.clamped_steps = static_cast<int>(simulator.counters().clamped_steps);
-  res.final_base_error = (simulator.q().head<3>() - q_end.head<3>()).norm();
   const bool feet_down = simulator.normalForce(0) > 0.0 && simulator.normalForce(1) > 0.0;
   res.completed = !res.fell && feet_down && res.final_base_error < 0.1;
   return res;

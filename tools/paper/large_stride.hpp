@@ -6,7 +6,7 @@
 //   - KKT-DDP (this file): box-FDDP over rigid contact knots (impulse knots at touch-downs)
 //     with the paper's costs, warm-started from the IK trajectory;
 // then compared on the same measures (peak normal force per foot, peak knee torque, torque cost)
-// and the DDP motion played on the mock robot (sim/), closed loop (simulateStrides).
+// and the DDP motion played on the mock robot (stride-sim's node, lock-step; simulateStrides).
 //
 // DDP costs per contact knot (weights in StrideDdpOptions):
 //   "com"      w_com |com - c_ref|²                        CoM tracking
@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "config/robot_config.hpp"
+#include "sim/disturbances.hpp"
 #include "solver/ddp/solver.hpp"
 #include "solver/ocp/problem.hpp"
 #include "tools/paper/centroidal_planner.hpp"
@@ -65,9 +66,10 @@ class StrideProblem {
   // The whole plan: knots for samples 0..N-1, the terminal knot at sample N (posture at rest, the
   // regularization pulls to robot.default_q).
   StrideProblem(const Robot& robot, const StridePlan& plan, const StrideDdpOptions& options);
-  // A window of the plan (the closed-loop replay): `knots` contact knots for samples first,
-  // first + 1, ... (past N they repeat the final standing sample N), plus the impulse knots of
-  // the touch-downs inside the window (not one at `first`: the state there is measured); the
+  // A window of the plan (the playback's stop after the walk, from first = N, and its TVLQR, from
+  // first = 0 past N): `knots` contact knots for samples first, first + 1, ... (past N they
+  // repeat the final standing sample N), plus the impulse knots of the touch-downs inside the
+  // window (not one at `first`: the window starts from a given state there); the
   // terminal knot tracks x_terminal (posture weights × w_terminal, the CoM of its sample).
   // With x_refs (one per knot, impulse knots included, as sampleOfKnot orders them), the
   // "posture" term tracks those states instead of the nominal posture at rest.
@@ -147,12 +149,19 @@ struct StrideSolve {
 StrideSolve solveStrides(StrideProblem& sp, const IkTrajectory& ik, int iterations,
                          bool verbose = false);
 
-// The DDP motion played on the mock robot: the simulator (1 ms steps, sole corners on flat
-// ground, unilateral Coulomb contact, plastic impacts) driven by a policy τ = u + K (x_ref ⊖ x)
-// evaluated every step (sim::PolicyEvaluator): closed loop, that of a window of the plan re-solved
-// from the measured state every knot (StrideSimOptions); open loop, the offline solution's. Then
-// standing on the final sample for `hold_s`. Fell: base tilt over 45° or base below half its
-// final height.
+// The DDP motion played on the mock robot through stride-sim's node (sim::SimNode: policy
+// decoding and validation, interpolation, torque clamping, contacts from the sole corners on flat
+// ground, unilateral Coulomb friction, plastic impacts, 1 ms steps), in lock-step over an
+// in-process LCM bus: the node publishes a state estimate, the playback answers it with a
+// policy_t, τ = u + K (x_ref ⊖ x), cut from one time-varying policy computed offline, and the
+// node steps until the next estimate. Then the robot stands on the final sample for `hold_s`.
+// Fell: base tilt over 45° or base below half its start height.
+//
+// The playback policy (StrideSimOptions::tvlqr): feed-forward and reference the DDP solution's
+// (u = us, x_ref = xs), gains from a time-varying LQR around it: the plan's problem rebuilt with
+// stiffer state tracking (x ⊖ xs, the other terms as offline), its derivatives at (xs, us) and one
+// backward pass, no forward pass. Without tvlqr, the gains of the offline solve's last backward
+// pass (the paper's regularization weights).
 struct StrideSimResult {
   bool fell = false;
   double fall_time = -1.0;
@@ -164,8 +173,11 @@ struct StrideSimResult {
   double final_base_error = 0.0;
   double max_tilt_deg = 0.0;
   int clamped_steps = 0;
-  int resolves = 0;             // closed loop: windows solved
-  double resolve_time_s = 0.0;  // closed loop: their total wall time (build + solve)
+  // stride-sim's node: policies received and rejected, steps on its hold PD (no policy) and past
+  // a policy's end, estimates the playback did not answer.
+  long policies = 0, policies_rejected = 0, hold_steps = 0, exhausted_steps = 0, unanswered = 0;
+  double lqr_time_s = 0.0;  // the planned stop and the TVLQR gains (derivatives + backward pass)
+  double stop_gap = 0.0;    // the planned stop's dynamic infeasibility after its iterations
   // Per knot period: time, mean normal force per foot, base x, base z.
   std::vector<std::array<double, 5>> trace;
   // Per 1 ms step when asked for (record_steps): the columns of stepColumns().
@@ -174,20 +186,22 @@ struct StrideSimResult {
 };
 struct StrideSimOptions {
   double hold_s = 1.0;  // standing after the plan's end
-  // Closed loop (an MPC over the plan): every knot period, box-FDDP re-solves a window of the plan
-  // from the measured state, warm-started from the previous window (the offline solution beyond
-  // it), and the robot plays that window's policy until the next one. Open loop: the offline
-  // solution's policy for the whole walk.
-  bool closed_loop = true;
-  double window_s = 1.0;  // the window's horizon
-  int iterations = 2;     // box-FDDP iterations per re-solve
+  // TVLQR gains (false: the offline solve's). The state weights of the tracking problem
+  // (joints, base orientation, velocities on x ⊖ xs; the base position is left to the CoM and
+  // feet terms) and how far its horizon runs past the hold, so that the gains of the hold are
+  // those of standing still rather than of a horizon about to end.
+  bool tvlqr = true;
+  double w_track_posture = 10.0, w_track_base_orientation = 10.0, w_track_velocity = 1.0;
+  double lqr_tail_s = 1.0;
+  int stop_iterations = 50;  // box-FDDP iterations of the stop (the standing after the walk)
   // The policy's velocity reference at the knots' middles (semi-implicit Euler knots; see
   // fillPolicy in large_stride.cpp) instead of at the knots.
   bool midpoint = true;
-  // The windows track the offline solution's states ("posture" term: x ⊖ x_offline) with these
-  // weights (stiffer than the offline problem's regularization; the other costs are the
-  // offline problem's).
-  double w_track_posture = 10.0, w_track_base_orientation = 10.0, w_track_velocity = 1.0;
+  // Lock-step: estimates per second of sim time, and the knots of each answer (from the policy
+  // knot at or before the estimate's time; they must cover the time to the next estimate).
+  double state_rate_hz = 50.0;
+  int answer_knots = 6;
+  sim::PushSchedule pushes;  // shoves on the base (robustness of the playback; none by default)
   bool record_steps = false;
 };
 StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,

@@ -94,20 +94,37 @@ int main(int argc, char** argv) {
   app.add_option("--mu", dop.mu, "friction coefficient of the plan");
   app.add_flag("--no-sim", no_sim, "skip the mock-robot check");
   StrideSimOptions sim_options;
-  app.add_flag("!--open-loop", sim_options.closed_loop,
-               "play the offline policy on the mock robot instead of re-solving every knot");
-  app.add_option("--mpc-window", sim_options.window_s, "closed loop: horizon of the re-solves [s]");
-  app.add_option("--mpc-iterations", sim_options.iterations,
-                 "closed loop: box-FDDP iterations per re-solve");
-  app.add_option("--mpc-w-posture", sim_options.w_track_posture,
-                 "closed loop: weight of the joints on the offline solution's");
-  app.add_option("--mpc-w-velocity", sim_options.w_track_velocity,
-                 "closed loop: weight of the velocities on the offline solution's");
+  app.add_flag("!--offline-gains", sim_options.tvlqr,
+               "play the offline solve's own gains instead of the TVLQR's");
+  app.add_option("--lqr-w-posture", sim_options.w_track_posture,
+                 "TVLQR: weight of the joints on the DDP states");
+  app.add_option("--lqr-w-base-orientation", sim_options.w_track_base_orientation,
+                 "TVLQR: weight of the base orientation on the DDP states");
+  app.add_option("--lqr-w-velocity", sim_options.w_track_velocity,
+                 "TVLQR: weight of the velocities on the DDP states");
+  app.add_option("--hold", sim_options.hold_s, "standing after the walk [s]");
+  app.add_option("--state-rate", sim_options.state_rate_hz,
+                 "lock-step: state estimates per second of sim time");
   app.add_flag("!--no-midpoint", sim_options.midpoint,
                "policy velocities at the knots rather than at the knots' middles");
+  std::vector<std::string> pushes;
+  app.add_option("--push", pushes,
+                 "a push on the mock robot's base: start:duration:fx,fy,fz [s, s, N] (repeatable)");
   app.add_flag("--sim-trace", sim_trace, "write the mock robot's 1 ms trace (sim_trace.csv)");
   app.add_flag("-v,--verbose", verbose, "print the iteration table");
   CLI11_PARSE(app, argc, argv);
+  for (const std::string& text : pushes) {
+    sim::Push p;
+    char c1 = 0, c2 = 0, c3 = 0, c4 = 0;
+    std::istringstream in(text);
+    if (!(in >> p.start >> c1 >> p.duration >> c2 >> p.force.x() >> c3 >> p.force.y() >> c4 >>
+          p.force.z()) ||
+        c1 != ':' || c2 != ':' || c3 != ',' || c4 != ',' || !(p.duration > 0.0)) {
+      std::fprintf(stderr, "--push %s: expected start:duration:fx,fy,fz\n", text.c_str());
+      return 2;
+    }
+    sim_options.pushes.pushes.push_back(p);
+  }
 
   const Robot robot = loadRobot(robot_yaml);
   const Model& model = robot.model;
@@ -158,13 +175,16 @@ int main(int argc, char** argv) {
       row.sim = simulateStrides(robot, sp, solve, so);
       std::printf(
           "  sim: %s%s, peak normal force L/R %.0f / %.0f N (1 ms), %.0f / %.0f N (knot mean), "
-          "max base error %.3f m, final %.3f m, max tilt %.1f deg; %d re-solves, %.1f s\n",
+          "max base error %.3f m, final %.3f m, max tilt %.1f deg; %ld policies (%ld rejected), "
+          "%ld steps on the hold PD, %ld past a policy, %d clamped; stop gap %.1g, stop + gains "
+          "%.1f s\n",
           row.sim.completed ? "completed" : "NOT completed",
           row.sim.fell ? (" (fell at " + std::to_string(row.sim.fall_time) + " s)").c_str() : "",
           row.sim.peak_normal_force[0], row.sim.peak_normal_force[1],
           row.sim.peak_normal_force_knot[0], row.sim.peak_normal_force_knot[1],
-          row.sim.max_base_error, row.sim.final_base_error, row.sim.max_tilt_deg, row.sim.resolves,
-          row.sim.resolve_time_s);
+          row.sim.max_base_error, row.sim.final_base_error, row.sim.max_tilt_deg, row.sim.policies,
+          row.sim.policies_rejected, row.sim.hold_steps, row.sim.exhausted_steps,
+          row.sim.clamped_steps, row.sim.stop_gap, row.sim.lqr_time_s);
     }
     rows.push_back(row);
 
@@ -245,19 +265,25 @@ int main(int argc, char** argv) {
   }
 
   std::printf("\n%-8s | %-21s | %-21s | %-23s | %s\n", "stride", "peak normal force [N]",
-              "peak knee torque [Nm]", "torque cost [N²m²s]", "mock robot (DDP policy)");
+              "peak knee torque [Nm]", "torque cost [N²m²s]",
+              "mock robot: DDP policy, TVLQR gains, lock-step");
   std::printf("%-8s | %10s %10s | %10s %10s | %11s %11s |\n", "", "IK", "DDP", "IK", "DDP", "IK",
               "DDP");
   for (size_t i = 0; i < rows.size(); ++i) {
     const Row& r = rows[i];
     std::string sim = "not run";
     if (r.sim_run) {
-      char b[200];
-      std::snprintf(b, sizeof(b), "%s, peak %.0f N (knot mean %.0f N; plan %.0f N)",
-                    r.sim.completed ? "completed" : (r.sim.fell ? "FELL" : "not completed"),
-                    std::max(r.sim.peak_normal_force[0], r.sim.peak_normal_force[1]),
-                    std::max(r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1]),
-                    r.ddp.peak_normal_force_N);
+      char b[300];
+      char fell[32] = "";
+      if (r.sim.fell) std::snprintf(fell, sizeof(fell), " at %.2f s", r.sim.fall_time);
+      std::snprintf(b, sizeof(b),
+                    "%s%s, peak L/R %.0f / %.0f N (knot mean %.0f / %.0f N; plan %.0f / %.0f N), "
+                    "drift %.1f cm",
+                    r.sim.completed ? "completed" : (r.sim.fell ? "FELL" : "not completed"), fell,
+                    r.sim.peak_normal_force[0], r.sim.peak_normal_force[1],
+                    r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1],
+                    r.ddp.peak_normal_force[0], r.ddp.peak_normal_force[1],
+                    100.0 * r.sim.max_base_error);
       sim = b;
     }
     std::printf("%5.0f cm | %10.0f %10.0f | %10.1f %10.1f | %11.4g %11.4g | %s\n", 100 * r.length,
@@ -267,7 +293,8 @@ int main(int argc, char** argv) {
             << ", \"weight_N\": " << r.weight << ", \"ik\": " << json(r.ik)
             << ", \"ddp\": " << json(r.ddp);
     if (r.sim_run)
-      summary << ", \"sim\": {\"closed_loop\": " << (sim_options.closed_loop ? "true" : "false")
+      summary << ", \"sim\": {\"playback\": \"" << (sim_options.tvlqr ? "tvlqr" : "offline_gains")
+              << "\", \"lockstep_state_rate_hz\": " << sim_options.state_rate_hz
               << ", \"completed\": " << (r.sim.completed ? "true" : "false")
               << ", \"fell\": " << (r.sim.fell ? "true" : "false")
               << ", \"fall_time_s\": " << r.sim.fall_time << ", \"peak_normal_force_N\": "
@@ -277,14 +304,21 @@ int main(int argc, char** argv) {
               << ", \"planned_peak_normal_force_N\": " << r.ddp.peak_normal_force_N
               << ", \"peak_normal_force_left_N\": " << r.sim.peak_normal_force[0]
               << ", \"peak_normal_force_right_N\": " << r.sim.peak_normal_force[1]
+              << ", \"peak_normal_force_knot_mean_left_N\": " << r.sim.peak_normal_force_knot[0]
+              << ", \"peak_normal_force_knot_mean_right_N\": " << r.sim.peak_normal_force_knot[1]
               << ", \"planned_peak_normal_force_left_N\": " << r.ddp.peak_normal_force[0]
               << ", \"planned_peak_normal_force_right_N\": " << r.ddp.peak_normal_force[1]
               << ", \"max_base_error_m\": " << r.sim.max_base_error
               << ", \"final_base_error_m\": " << r.sim.final_base_error
               << ", \"max_tilt_deg\": " << r.sim.max_tilt_deg
               << ", \"clamped_steps\": " << r.sim.clamped_steps
-              << ", \"resolves\": " << r.sim.resolves
-              << ", \"resolve_time_s\": " << r.sim.resolve_time_s << "}";
+              << ", \"policies\": " << r.sim.policies
+              << ", \"unanswered_states\": " << r.sim.unanswered
+              << ", \"policies_rejected\": " << r.sim.policies_rejected
+              << ", \"hold_pd_steps\": " << r.sim.hold_steps
+              << ", \"exhausted_steps\": " << r.sim.exhausted_steps
+              << ", \"stop_gap\": " << r.sim.stop_gap << ", \"lqr_time_s\": " << r.sim.lqr_time_s
+              << "}";
     summary << "}";
   }
   summary << "\n  ]\n}\n";
