@@ -79,26 +79,32 @@ LockedRobot lockJoints(const Robot& robot, const std::vector<std::string>& free_
   return out;
 }
 
-Eigen::VectorXd reduceConfiguration(const Model& full, const Model& reduced,
-                                    const Eigen::VectorXd& q_full) {
-  Eigen::VectorXd q(reduced.nq);
+namespace {
+// The entries of the joints the reduced model kept, by joint name: configuration (idx_q, nq) or
+// velocity (idx_v, nv) coordinates.
+Eigen::VectorXd keepJoints(const Model& full, const Model& reduced, const Eigen::VectorXd& x_full,
+                           bool configuration) {
+  Eigen::VectorXd x(configuration ? reduced.nq : reduced.nv);
   for (int i = 1; i < reduced.njoints(); ++i) {
     const Joint& jr = reduced.joints[i];
     const Joint& jf = full.joints[full.getJointId(jr.name)];
-    q.segment(jr.idx_q, jr.nq) = q_full.segment(jf.idx_q, jf.nq);
+    if (configuration)
+      x.segment(jr.idx_q, jr.nq) = x_full.segment(jf.idx_q, jf.nq);
+    else
+      x.segment(jr.idx_v, jr.nv) = x_full.segment(jf.idx_v, jf.nv);
   }
-  return q;
+  return x;
+}
+}  // namespace
+
+Eigen::VectorXd reduceConfiguration(const Model& full, const Model& reduced,
+                                    const Eigen::VectorXd& q_full) {
+  return keepJoints(full, reduced, q_full, true);
 }
 
 Eigen::VectorXd reduceVelocity(const Model& full, const Model& reduced,
                                const Eigen::VectorXd& v_full) {
-  Eigen::VectorXd v(reduced.nv);
-  for (int i = 1; i < reduced.njoints(); ++i) {
-    const Joint& jr = reduced.joints[i];
-    const Joint& jf = full.joints[full.getJointId(jr.name)];
-    v.segment(jr.idx_v, jr.nv) = v_full.segment(jf.idx_v, jf.nv);
-  }
-  return v;
+  return keepJoints(full, reduced, v_full, false);
 }
 
 }  // namespace stride
