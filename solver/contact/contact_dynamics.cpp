@@ -35,9 +35,9 @@ ContactData::ContactData(const Model& model, const ContactSet& contacts) {
   ddq_dq = ddq_dv = ddq_dtau = Eigen::MatrixXd::Zero(nv, nv);
   lambda_dq = lambda_dv = lambda_dtau = Yt = dacc_dq = dacc_dv = Eigen::MatrixXd::Zero(m, nv);
   rhs3 = RowMatrixXd::Zero(nv, 3 * nv);
-  work = Eigen::MatrixXd::Zero(m, nv);
+  work = Eigen::MatrixXd::Zero(m, 3 * nv);
   Kinv = Eigen::MatrixXd::Zero(m, m);
-  dual_rows = RowMatrixXd::Zero(m, nv);
+  dual_rows = RowMatrixXd::Zero(m, 3 * nv);
   K = Eigen::MatrixXd::Zero(m, m);
   Jframe = dv_dq = dv_dv = da_dq = da_dv = Matrix6Xd::Zero(6, nv);
   rows3 = Eigen::Matrix3Xd::Zero(3, nv);
@@ -274,67 +274,67 @@ void kktDerivatives(const Model& model, Data& data, const ContactSet& contacts, 
                     Eigen::MatrixXd* primal_dtau, Eigen::MatrixXd* dual_dtau, int tau_first,
                     bool primal_matrices = true) {
   const int nc = cd.nc, nv = model.nv;
-  // K^-1 explicitly: it is at most a few dozen rows, and one small product per block is cheaper
-  // than a triangular solve per block.
+  // K^-1 explicitly: it is at most a few dozen rows, and one small product is cheaper than a
+  // triangular solve.
   invertSchur(cd);
   const auto Kinv = cd.Kinv.topLeftCorner(nc, nc);
-  const struct {
+  // The requested blocks side by side, [q | v | τ columns tau_first..nv-1], in cd.work (for ∂λ)
+  // and cd.rhs3 (for ∂v̇): ∂λ then takes one product with K^-1 and the Jc^T update one pass over
+  // long rows, instead of one each per block (at these sizes, the calls and the packing of small
+  // products cost as much as their arithmetic).
+  struct Block {
     const Eigen::MatrixXd* R;  // null for τ
     const Eigen::MatrixXd* A;
     Eigen::MatrixXd* primal;
     Eigen::MatrixXd* dual;
+    int cols = 0, offset = 0;
   } blocks[] = {{&data.dtau_dq, &cd.dacc_dq, &primal_dq, &dual_dq},
                 {&data.dtau_dv, &cd.dacc_dv, primal_dv, dual_dv},
                 {nullptr, nullptr, primal_dtau, dual_dtau}};
-  const Eigen::Index stride = cd.rhs3.outerStride();
   int used = 0;
-  for (const auto& b : blocks) {
+  for (Block& b : blocks) {
     if (!b.primal) continue;
-    const int first = b.R ? 0 : tau_first, cols = nv - first;
-    double* rhs = cd.rhs3.data() + used;
+    b.cols = b.R ? nv : nv - tau_first;
+    b.offset = used;
+    used += b.cols;
+    auto work = cd.work.block(0, b.offset, nc, b.cols);
+    auto rhs = cd.rhs3.middleCols(b.offset, b.cols);
     if (b.R) {
-      auto work = cd.work.topLeftCorner(nc, nv);
       work.noalias() = cd.Yt.topRows(nc) * *b.R;
       work -= b.A->topRows(nc);
-      cd.rhs3.middleCols(used, nv) = -*b.R;
+      rhs = -*b.R;
     } else {
-      cd.work.topLeftCorner(nc, cols) = -cd.Yt.topRows(nc).rightCols(cols);
-      auto id = cd.rhs3.middleCols(used, cols);
-      id.setZero();
-      id.bottomRows(cols).diagonal().setOnes();
+      work = -cd.Yt.topRows(nc).rightCols(b.cols);
+      rhs.setZero();
+      rhs.bottomRows(b.cols).diagonal().setOnes();
     }
-    // ∂λ/∂x, row-major for the row updates below, then to its output.
-    auto dual = cd.dual_rows.topLeftCorner(nc, cols);
-    dual.noalias() = Kinv * cd.work.topLeftCorner(nc, cols);
-    b.dual->topRows(nc).rightCols(cols) = dual;
-    // rhs += Jc^T dual on the supporting rows of each contact.
-    const Eigen::Index ldd = cd.dual_rows.outerStride();
-    int r = 0;
-    for (int c = 0; c < contacts.size(); ++c) {
-      if (!contacts.isActive(c)) continue;
-      const ContactModel& cm = contacts[c];
-      const Joint& jt = model.joints[model.frames[cm.frame].parentJoint];
-      const double* d = cd.dual_rows.data() + r * ldd;
-      for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
-        double* row = rhs + k * stride;
-        if (cm.dim == 3)
-          addTransposedRows<3>(&cd.Jc(r, k), d, ldd, row, cols);
-        else
-          addTransposedRows<6>(&cd.Jc(r, k), d, ldd, row, cols);
-      }
-      r += cm.dim;
+  }
+  // ∂λ/∂x, row-major for the row updates below, then to its outputs.
+  auto dual = cd.dual_rows.topLeftCorner(nc, used);
+  dual.noalias() = Kinv * cd.work.topLeftCorner(nc, used);
+  for (const Block& b : blocks)
+    if (b.primal) b.dual->topRows(nc).rightCols(b.cols) = dual.middleCols(b.offset, b.cols);
+  // rhs += Jc^T dual on the supporting rows of each contact.
+  const Eigen::Index stride = cd.rhs3.outerStride(), ldd = cd.dual_rows.outerStride();
+  int r = 0;
+  for (int c = 0; c < contacts.size(); ++c) {
+    if (!contacts.isActive(c)) continue;
+    const ContactModel& cm = contacts[c];
+    const Joint& jt = model.joints[model.frames[cm.frame].parentJoint];
+    const double* d = cd.dual_rows.data() + r * ldd;
+    for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
+      double* row = cd.rhs3.data() + k * stride;
+      if (cm.dim == 3)
+        addTransposedRows<3>(&cd.Jc(r, k), d, ldd, row, used);
+      else
+        addTransposedRows<6>(&cd.Jc(r, k), d, ldd, row, used);
     }
-    used += cols;
+    r += cm.dim;
   }
   solveMassMatrixRows(model, data, cd.rhs3.leftCols(used));
   if (!primal_matrices) return;
-  used = 0;
-  for (Eigen::MatrixXd* p : {&primal_dq, primal_dv, primal_dtau}) {
-    if (!p) continue;
-    const int cols = p == primal_dtau ? nv - tau_first : nv;
-    p->rightCols(cols) = cd.rhs3.middleCols(used, cols);
-    used += cols;
-  }
+  for (const Block& b : blocks)
+    if (b.primal) b.primal->rightCols(b.cols) = cd.rhs3.middleCols(b.offset, b.cols);
 }
 
 // The factorizations both solves share: M (crba + tree-sparse L^T D L), the constraint rows and
@@ -509,6 +509,14 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
   // and rotated at the end (rotateForces).
   const ContactStatus status = contactDynamics(model, data, contacts, cd, q, v, tau, damping);
   if (status != ContactStatus::Ok) return status;
+  contactDynamicsDerivativesAtSolution(model, data, contacts, cd, v, tau_first, primal);
+  return ContactStatus::Ok;
+}
+
+void contactDynamicsDerivativesAtSolution(const Model& model, Data& data,
+                                          const ContactSet& contacts, ContactData& cd,
+                                          const Eigen::Ref<const Eigen::VectorXd>& v, int tau_first,
+                                          PrimalDerivatives primal) {
   localForcesToJointWrenches(model, data, contacts, cd, cd.lambda);
   // R_x = ∂(RNEA(q, v, v̇) - Jc^T λ)/∂x at the solution; also the world sweep the frame
   // derivatives read. contactDynamics has just run crba(q), so data.oMi and data.J hold q's
@@ -520,7 +528,6 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
   // Back to the contacts' force frames (λ itself is already rotated by contactDynamics).
   rotateForces(model, data, contacts, cd.rhs, &cd.lambda_dq, &cd.lambda_dv, &cd.lambda_dtau,
                tau_first);
-  return ContactStatus::Ok;
 }
 
 ContactStatus impulseDynamics(const Model& model, Data& data, const ContactSet& contacts,

@@ -53,9 +53,9 @@ struct ContactData {
   Eigen::MatrixXd K;                 // Schur complement, maxNc x maxNc (factorized in place)
   Eigen::MatrixXd dacc_dq, dacc_dv;  // constraint acceleration (or velocity) derivatives
   RowMatrixXd rhs3;                  // nv x 3nv, right-hand sides of the primal derivatives
-  Eigen::MatrixXd work;              // maxNc x nv
+  Eigen::MatrixXd work;              // maxNc x 3nv
   Eigen::MatrixXd Kinv;              // K^-1 (derivatives only)
-  RowMatrixXd dual_rows;             // maxNc x nv, a block of ∂λ/∂x row by row
+  RowMatrixXd dual_rows;             // maxNc x 3nv, ∂λ/∂x row by row
   Matrix6Xd Jframe, dv_dq, dv_dv, da_dq, da_dv;
   Eigen::Matrix3Xd rows3;
   std::vector<Vector6d> fext;  // contact forces as joint wrenches
@@ -89,6 +89,15 @@ ContactStatus contactDynamicsDerivatives(const Model& model, Data& data, const C
                                          const Eigen::Ref<const Eigen::VectorXd>& tau,
                                          double damping, int tau_first,
                                          PrimalDerivatives primal = PrimalDerivatives::Matrices);
+// Only the derivatives part of contactDynamicsDerivatives, at the solution that contactDynamics
+// (same q, v, τ, damping) has just left in data and cdata: what it reads there is the kinematics
+// (data.oMi, J, oYbody), the factor of M (data.Ltdl), the constraint rows and Schur factor
+// (cdata.nc, Jc, Yt, K) and the solution (cdata.ddq, lambda). A knot whose calc kept those
+// (KnotModel::calcDiff) skips the solve this way.
+void contactDynamicsDerivativesAtSolution(const Model& model, Data& data,
+                                          const ContactSet& contacts, ContactData& cdata,
+                                          const Eigen::Ref<const Eigen::VectorXd>& v, int tau_first,
+                                          PrimalDerivatives primal = PrimalDerivatives::Matrices);
 
 // v⁺ and Λ (cdata.v_after, cdata.impulses) when the active contacts close at velocity v⁻.
 ContactStatus impulseDynamics(const Model& model, Data& data, const ContactSet& contacts,

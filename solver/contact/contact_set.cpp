@@ -28,6 +28,7 @@ int ContactSet::add(const Model& model, const std::string& frame, int dim, Refer
   active_.push_back(1);
   nc_ += dim;
   max_nc_ += dim;
+  ++version_;
   return size() - 1;
 }
 
@@ -36,6 +37,7 @@ bool ContactSet::setActive(int contact, bool active) {
   if (isActive(contact) == active) return true;
   active_[contact] = active ? 1 : 0;
   nc_ += (active ? 1 : -1) * contacts_[contact].dim;
+  ++version_;
   return true;
 }
 

@@ -10,6 +10,7 @@
 // A ContactSet is built once with every contact a problem may use; contacts are switched on and
 // off per phase without reallocating anything.
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -37,18 +38,25 @@ class ContactSet {
   // Switches a contact on or off; false (and no change) for an index out of range.
   bool setActive(int contact, bool active);
   bool isActive(int contact) const { return active_[contact] != 0; }
-  void setReference(int contact, const SE3& placement) { contacts_[contact].reference = placement; }
+  void setReference(int contact, const SE3& placement) {
+    contacts_[contact].reference = placement;
+    ++version_;
+  }
   int size() const { return static_cast<int>(contacts_.size()); }
   const ContactModel& operator[](int contact) const { return contacts_[contact]; }
   int find(const std::string& name) const;  // -1 when absent
 
   int nc() const { return nc_; }         // stacked dimension of the active contacts
   int maxNc() const { return max_nc_; }  // of all contacts
+  // Changes with every change to the set (a contact added, switched, its reference moved): a
+  // contact solve kept for later (KnotModel) is valid only while the version is the same.
+  std::uint64_t version() const { return version_; }
 
  private:
   std::vector<ContactModel> contacts_;
   std::vector<char> active_;
   int nc_ = 0, max_nc_ = 0;
+  std::uint64_t version_ = 0;
 };
 
 }  // namespace stride

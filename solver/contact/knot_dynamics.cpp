@@ -24,12 +24,10 @@ KnotData::KnotData(const Model& model, const ContactSet& contacts)
   Jq = Jv = Eigen::MatrixXd::Identity(nv, nv);
 }
 
-namespace {
-ContactStatus step(const Model& model, Data& data, const ContactSet& contacts, KnotData& kd,
-                   const Eigen::Ref<const Eigen::VectorXd>& q,
-                   const Eigen::Ref<const Eigen::VectorXd>& v,
-                   const Eigen::Ref<const Eigen::VectorXd>& u, double dt, double damping,
-                   bool derivatives) {
+ContactStatus knotDynamics(const Model& model, Data& data, const ContactSet& contacts, KnotData& kd,
+                           const Eigen::Ref<const Eigen::VectorXd>& q,
+                           const Eigen::Ref<const Eigen::VectorXd>& v,
+                           const Eigen::Ref<const Eigen::VectorXd>& u, double dt, double damping) {
   if (u.size() != kd.nu) throwSizeError("knotDynamics", "u", kd.nu, u.size());
   if (!std::isfinite(dt) || !u.allFinite()) {
     kd.q_next = q;
@@ -40,10 +38,8 @@ ContactStatus step(const Model& model, Data& data, const ContactSet& contacts, K
   const int off = model.nv - kd.nu;
   kd.tau.head(off).setZero();
   kd.tau.tail(kd.nu) = u;
-  ContactStatus status =
-      derivatives ? contactDynamicsDerivatives(model, data, contacts, kd.contact, q, v, kd.tau,
-                                               damping, off, PrimalDerivatives::Rows)
-                  : contactDynamics(model, data, contacts, kd.contact, q, v, kd.tau, damping);
+  const ContactStatus status =
+      contactDynamics(model, data, contacts, kd.contact, q, v, kd.tau, damping);
   if (status != ContactStatus::Ok) {
     kd.q_next = q;
     kd.v_next = v;
@@ -56,23 +52,24 @@ ContactStatus step(const Model& model, Data& data, const ContactSet& contacts, K
   integrate(model, q, kd.step, kd.q_next);
   return status;
 }
-}  // namespace
-
-ContactStatus knotDynamics(const Model& model, Data& data, const ContactSet& contacts, KnotData& kd,
-                           const Eigen::Ref<const Eigen::VectorXd>& q,
-                           const Eigen::Ref<const Eigen::VectorXd>& v,
-                           const Eigen::Ref<const Eigen::VectorXd>& u, double dt, double damping) {
-  return step(model, data, contacts, kd, q, v, u, dt, damping, false);
-}
 
 ContactStatus knotDynamicsDerivatives(const Model& model, Data& data, const ContactSet& contacts,
                                       KnotData& kd, const Eigen::Ref<const Eigen::VectorXd>& q,
                                       const Eigen::Ref<const Eigen::VectorXd>& v,
                                       const Eigen::Ref<const Eigen::VectorXd>& u, double dt,
                                       double damping) {
-  const ContactStatus status = step(model, data, contacts, kd, q, v, u, dt, damping, true);
-  if (status != ContactStatus::Ok) return status;
-  const int nv = model.nv, nu = kd.nu, nc = kd.contact.nc;
+  const ContactStatus status = knotDynamics(model, data, contacts, kd, q, v, u, dt, damping);
+  if (status == ContactStatus::Ok) knotDerivativesAtSolution(model, data, contacts, kd, v, dt);
+  return status;
+}
+
+void knotDerivativesAtSolution(const Model& model, Data& data, const ContactSet& contacts,
+                               KnotData& kd, const Eigen::Ref<const Eigen::VectorXd>& v,
+                               double dt) {
+  const int nv = model.nv, nu = kd.nu;
+  contactDynamicsDerivativesAtSolution(model, data, contacts, kd.contact, v, nv - nu,
+                                       PrimalDerivatives::Rows);
+  const int nc = kd.contact.nc;
   const ContactData& cd = kd.contact;
   // dIntegrate(q, dt v⁺) without rewriting its identity part (set at construction).
   const int nb = model.hasFreeFlyer() ? 6 : 0;
@@ -109,7 +106,6 @@ ContactStatus knotDynamicsDerivatives(const Model& model, Data& data, const Cont
   kd.Gx.topLeftCorner(nc, nv) = cd.lambda_dq.topRows(nc);
   kd.Gx.topRightCorner(nc, nv) = cd.lambda_dv.topRows(nc);
   kd.Gu.topRows(nc) = cd.lambda_dtau.topRows(nc).rightCols(nu);
-  return status;
 }
 
 }  // namespace stride

@@ -41,5 +41,9 @@ ContactStatus knotDynamicsDerivatives(const Model& model, Data& data, const Cont
                                       const Eigen::Ref<const Eigen::VectorXd>& v,
                                       const Eigen::Ref<const Eigen::VectorXd>& u, double dt,
                                       double damping = 0.0);
+// Only the Jacobians, for data and kd exactly as knotDynamics (same q, v, u, dt, damping) left
+// them: contactDynamicsDerivativesAtSolution's inputs, and kd.step.
+void knotDerivativesAtSolution(const Model& model, Data& data, const ContactSet& contacts,
+                               KnotData& kd, const Eigen::Ref<const Eigen::VectorXd>& v, double dt);
 
 }  // namespace stride

@@ -322,8 +322,9 @@ bool Solver::backwardPass() {
     }
     Qx_ = d.Lx;
     Qx_.noalias() += d.Fx.transpose() * Vx_gap_;
-    Vx_ = Qx_;
-    Vxx_ = Qxx_;
+    // V starts from Q (Qx, Qxx are not read again): traded, not copied.
+    Vx_.swap(Qx_);
+    Vxx_.swap(Qxx_);
     if (nu > 0) {
       auto VFu = VFu_.leftCols(nu);
       auto Quu = Quu_.topLeftCorner(nu, nu);

@@ -20,10 +20,34 @@ KnotStatus knotStatus(ContactStatus s) {
 KnotWorkspace::KnotWorkspace(const Model& model, const ContactSet& contacts, const CostModel& costs)
     : data(model), knot(model, contacts), costs(costs.createData()) {}
 
+KeptSolve::KeptSolve(const Model& model, const ContactSet& contacts) {
+  // The buffers as the workspace's start: they take turns in it.
+  Data data(model);
+  ContactData cd(model, contacts);
+  x = Eigen::VectorXd::Zero(model.nq + model.nv);
+  u = Eigen::VectorXd::Zero(actuatedDimension(model));
+  trade(data, cd);
+}
+
+void KeptSolve::trade(Data& data, ContactData& cd) {
+  std::swap(nc, cd.nc);
+  oMi.swap(data.oMi);
+  J.swap(data.J);
+  oYbody.swap(data.oYbody);
+  v.swap(data.v);
+  a.swap(data.a);
+  Ltdl.swap(data.Ltdl);
+  Jc.swap(cd.Jc);
+  Yt.swap(cd.Yt);
+  K.swap(cd.K);
+  ddq.swap(cd.ddq);
+}
+
 KnotActionData::KnotActionData(const Model& model, const ContactSet& contacts,
                                const CostModel& costs, int slot)
     : ActionData(model.nq + model.nv, 2 * model.nv, actuatedDimension(model)),
       forces_(Eigen::VectorXd::Zero(contacts.maxNc())),
+      kept_(model, contacts),
       slot_(slot) {
   if (slot < 0) own_ = std::make_unique<KnotWorkspace>(model, contacts, costs);
 }
@@ -102,11 +126,24 @@ bool KnotModel::dynamics(KnotActionData& d, KnotWorkspace& w,
   ContactData& cd = kd.contact;
   ContactStatus s;
   if (mode_ == KnotMode::Contact) {
-    s = derivatives ? knotDynamicsDerivatives(model_, data, contacts_, kd, q, v, u, dt_, damping)
-                    : knotDynamics(model_, data, contacts_, kd, q, v, u, dt_, damping);
+    d.solve_reused = derivatives && keptSolveMatches(d, x, u);
+    if (d.solve_reused) {
+      // calc's solve at this point (x⁺ and λ are still in d): only the Jacobians. keepSolve
+      // trades the buffers back afterwards.
+      d.kept_.trade(data, cd);
+      cd.lambda = d.forces_;
+      kd.step = dt_ * d.x_next.tail(nv);
+      knotDerivativesAtSolution(model_, data, contacts_, kd, v, dt_);
+      s = ContactStatus::Ok;
+    } else {
+      s = derivatives ? knotDynamicsDerivatives(model_, data, contacts_, kd, q, v, u, dt_, damping)
+                      : knotDynamics(model_, data, contacts_, kd, q, v, u, dt_, damping);
+      if (s == ContactStatus::Ok) {
+        d.x_next.head(nq) = kd.q_next;
+        d.x_next.tail(nv) = kd.v_next;
+      }
+    }
     if (s == ContactStatus::Ok) {
-      d.x_next.head(nq) = kd.q_next;
-      d.x_next.tail(nv) = kd.v_next;
       if (derivatives) {
         // Swapped, not copied: knotDynamicsDerivatives rewrites every entry of kd.Fx, kd.Fu on each
         // call, so the two buffers can trade places (O(1), no allocation; the workspace's pair then
@@ -125,6 +162,7 @@ bool KnotModel::dynamics(KnotActionData& d, KnotWorkspace& w,
     }
     d.forces_ = cd.lambda;
   } else {
+    d.solve_reused = false;
     s = derivatives
             ? impulseDynamicsDerivatives(model_, data, contacts_, cd, q, v, restitution, damping)
             : impulseDynamics(model_, data, contacts_, cd, q, v, restitution, damping);
@@ -161,28 +199,61 @@ bool KnotModel::dynamics(KnotActionData& d, KnotWorkspace& w,
   return true;
 }
 
+bool KnotModel::keptSolveMatches(const KnotActionData& d,
+                                 const Eigen::Ref<const Eigen::VectorXd>& x,
+                                 const Eigen::Ref<const Eigen::VectorXd>& u) const {
+  const KeptSolve& k = d.kept_;
+  // Exact comparisons: the kept solve is reused only where it is bit for bit the one calcDiff
+  // would compute.
+  return k.valid && k.knot == this && k.contacts_version == contacts_.version() && k.dt == dt_ &&
+         k.damping == damping && u.size() == k.u.size() && k.x == x && k.u == u;
+}
+
+// After the knot's dynamics and costs: the workspace's solve goes to the knot (contact mode), for
+// a calcDiff at the same point.
+void KnotModel::keepSolve(KnotActionData& d, KnotWorkspace& w,
+                          const Eigen::Ref<const Eigen::VectorXd>& x,
+                          const Eigen::Ref<const Eigen::VectorXd>& u) const {
+  KeptSolve& k = d.kept_;
+  k.valid = mode_ == KnotMode::Contact && d.contact_status == ContactStatus::Ok;
+  if (!k.valid) return;
+  k.trade(w.data, w.knot.contact);
+  k.knot = this;
+  k.contacts_version = contacts_.version();
+  k.dt = dt_;
+  k.damping = damping;
+  k.x = x;
+  k.u = u;
+}
+
 void KnotModel::calc(ActionData& data, const Eigen::Ref<const Eigen::VectorXd>& x,
                      const Eigen::Ref<const Eigen::VectorXd>& u) const {
   auto& d = static_cast<KnotActionData&>(data);
   KnotWorkspace& w = workspace(d);
-  if (!dynamics(d, w, x, u, false)) return;
-  d.cost = costs_.calc(w.costs, context(d, w), x, u);
-  if (!std::isfinite(d.cost)) {
-    d.status = KnotStatus::NonFinite;
-    d.cost = kInfinity;
+  const bool ok = dynamics(d, w, x, u, false);
+  if (ok) {
+    d.cost = costs_.calc(w.costs, context(d, w), x, u);
+    if (!std::isfinite(d.cost)) {
+      d.status = KnotStatus::NonFinite;
+      d.cost = kInfinity;
+    }
   }
+  keepSolve(d, w, x, u);
 }
 
 void KnotModel::calcDiff(ActionData& data, const Eigen::Ref<const Eigen::VectorXd>& x,
                          const Eigen::Ref<const Eigen::VectorXd>& u) const {
   auto& d = static_cast<KnotActionData&>(data);
   KnotWorkspace& w = workspace(d);
-  if (!dynamics(d, w, x, u, true)) return;
-  d.cost = costs_.calcDiff(w.costs, context(d, w), x, u, d.Lx, d.Lu, d.Lxx, d.Lxu, d.Luu);
-  if (!std::isfinite(d.cost) || !d.Lx.allFinite() || !d.Lu.allFinite()) {
-    d.status = KnotStatus::NonFinite;
-    d.cost = kInfinity;
+  const bool ok = dynamics(d, w, x, u, true);
+  if (ok) {
+    d.cost = costs_.calcDiff(w.costs, context(d, w), x, u, d.Lx, d.Lu, d.Lxx, d.Lxu, d.Luu);
+    if (!std::isfinite(d.cost) || !d.Lx.allFinite() || !d.Lu.allFinite()) {
+      d.status = KnotStatus::NonFinite;
+      d.cost = kInfinity;
+    }
   }
+  keepSolve(d, w, x, u);
 }
 
 TerminalActionData::TerminalActionData(const Model& model, const CostModel& costs)

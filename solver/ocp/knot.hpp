@@ -63,9 +63,36 @@ class SharedWorkspace {
   std::vector<Slot> slots_;
 };
 
-// What a knot keeps between calls: the ActionData results, the contact forces and the status of
-// the contact solve. (The scratch lives in a KnotWorkspace: the problem's shared one, or `own` for
-// a knot built without one.)
+// The contact solve of a knot's last calc (or calcDiff), kept so that its calcDiff at the same
+// point computes only the Jacobians: in a DDP iteration calcDiff runs at the point of the
+// accepted rollout, whose calc has just solved the KKT system there (solo: the solve is a
+// quarter of calcDiff). It holds the buffers contactDynamicsDerivativesAtSolution and the costs
+// read (kinematics, the factors of M and of the Schur complement, the constraint rows, v̇),
+// traded with the workspace's by swapping (O(1), no copy): after calc the knot keeps the
+// workspace's fresh buffers and the workspace gets the knot's old ones, which the next knot
+// overwrites. Valid only for the same knot model, x, u, dt, damping and contact set version.
+struct KeptSolve {
+  KeptSolve(const Model& model, const ContactSet& contacts);
+  // Swaps the buffers with the workspace's (its own inverse).
+  void trade(Data& data, ContactData& cd);
+
+  bool valid = false;
+  const void* knot = nullptr;
+  std::uint64_t contacts_version = 0;
+  double dt = 0.0, damping = 0.0;
+  Eigen::VectorXd x, u;
+  int nc = 0;
+  std::vector<SE3> oMi;
+  Matrix6Xd J;
+  std::vector<Inertia> oYbody;
+  std::vector<Vector6d> v, a;
+  Eigen::MatrixXd Ltdl, Jc, Yt, K;
+  Eigen::VectorXd ddq;
+};
+
+// What a knot keeps between calls: the ActionData results, the contact forces, the status of
+// the contact solve and the solve itself (KeptSolve). (The scratch lives in a KnotWorkspace: the
+// problem's shared one, or `own` for a knot built without one.)
 struct KnotActionData : ActionData {
   KnotActionData(const Model& model, const ContactSet& contacts, const CostModel& costs, int slot);
   // The contact forces of the last calc / calcDiff, each contact's in its force frame, the active
@@ -74,11 +101,15 @@ struct KnotActionData : ActionData {
   const Eigen::VectorXd& forces() const { return forces_; }
   int nc() const { return nc_; }
   ContactStatus contact_status = ContactStatus::Ok;
+  // Whether the last calcDiff took the contact solve kept from calc (KeptSolve) instead of
+  // solving again.
+  bool solve_reused = false;
 
  private:
   friend class KnotModel;
   Eigen::VectorXd forces_;  // maxNc
   int nc_ = 0;
+  KeptSolve kept_;
   int slot_;                            // of the shared workspace, -1 without one
   std::unique_ptr<KnotWorkspace> own_;  // without a shared workspace only
 };
@@ -118,6 +149,10 @@ class KnotModel : public ActionModel {
                 const Eigen::Ref<const Eigen::VectorXd>& u, bool derivatives) const;
   KnotContext context(KnotActionData& d, KnotWorkspace& w) const;
   KnotWorkspace& workspace(KnotActionData& d) const;
+  bool keptSolveMatches(const KnotActionData& d, const Eigen::Ref<const Eigen::VectorXd>& x,
+                        const Eigen::Ref<const Eigen::VectorXd>& u) const;
+  void keepSolve(KnotActionData& d, KnotWorkspace& w, const Eigen::Ref<const Eigen::VectorXd>& x,
+                 const Eigen::Ref<const Eigen::VectorXd>& u) const;
 
   const Model& model_;
   ContactSet contacts_;

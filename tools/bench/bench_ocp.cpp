@@ -143,6 +143,10 @@ void runPart(benchmark::State& state, const KnotsSpec& spec, Part part) {
   double alpha = 1.0;
   while (alpha > 1e-3 && !std::isfinite(solver.forwardPass(alpha))) alpha *= 0.5;
   state.counters["alpha"] = alpha;
+  // In a DDP iteration calcDiff runs at the point of the accepted rollout, whose calc has just
+  // solved each knot's contact dynamics there; the knots keep that solve (KeptSolve in
+  // solver/ocp/knot.hpp), as the field's libraries keep calc's results for calcDiff.
+  if (part == Part::CalcDiff) kp->problem->calc(solver.xs(), solver.us());
   for (auto _ : state) {
     switch (part) {
       case Part::Calc:
