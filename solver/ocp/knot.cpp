@@ -206,7 +206,8 @@ bool KnotModel::keptSolveMatches(const KnotActionData& d,
   // Exact comparisons: the kept solve is reused only where it is bit for bit the one calcDiff
   // would compute.
   return k.valid && k.knot == this && k.contacts_version == contacts_.version() && k.dt == dt_ &&
-         k.damping == damping && u.size() == k.u.size() && k.x == x && k.u == u;
+         k.damping == damping && x.size() == k.x.size() && u.size() == k.u.size() && k.x == x &&
+         k.u == u;
 }
 
 // After the knot's dynamics and costs: the workspace's solve goes to the knot (contact mode), for
