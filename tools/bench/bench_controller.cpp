@@ -4,7 +4,8 @@
 // Only the tick is timed (manual time): the latency. The preparation that follows it (the
 // derivatives and backward pass of the next tick's iteration, Mpc::prepare) is reported as the
 // counter prepare_ms; tick + prepare_ms is the controller's work per period. The simulation
-// between ticks is not timed.
+// between ticks is not timed. The counter reused is the share of knots whose calcDiff in the
+// preparation took the contact solve of the rollout before it (KeptSolve, solver/ocp/README.md).
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -12,6 +13,7 @@
 
 #include "controller/mpc_node.hpp"
 #include "sim/sim_node.hpp"
+#include "solver/ocp/knot.hpp"
 
 namespace stride::bench {
 namespace {
@@ -81,6 +83,7 @@ void controllerTick(benchmark::State& state, const char* robot, double warmup) {
     if (!loop.period()) loop.reset();
   double seconds = 0.0, prepare = 0.0, prepare_total = 0.0;
   long backward = 0, forward = 0;
+  double reused = 0.0, knots = 0.0;  // knots whose preparation took the rollout's contact solve
   const Solver& solver = *loop.mpc.mpc().solver();
   for (auto _ : state) {
     if (!loop.period(seconds, prepare))
@@ -89,7 +92,16 @@ void controllerTick(benchmark::State& state, const char* robot, double warmup) {
     prepare_total += prepare;
     forward += solver.forwardPasses();
     backward += solver.backwardPasses();
+    // Outside the timed part (manual time): did calcDiff reuse calc's solve (KeptSolve)?
+    const ShootingProblem& problem = loop.mpc.mpc().problem()->problem();
+    for (int k = 0; k < problem.horizon(); ++k) {
+      if (const auto* d = dynamic_cast<const KnotActionData*>(&problem.data(k))) {
+        reused += d->solve_reused ? 1.0 : 0.0;
+        knots += 1.0;
+      }
+    }
   }
+  state.counters["reused"] = reused / std::max(1.0, knots);  // share of the knots
   const auto per_tick = [&](double x) { return x / static_cast<double>(state.iterations()); };
   state.counters["rollouts"] = per_tick(static_cast<double>(forward));
   state.counters["backward"] = per_tick(static_cast<double>(backward));

@@ -1,11 +1,12 @@
 // stride-log-summary: what happened in a recorded session (an lcm-logger log of the demo, a replay
 // output, or a robot's session): how far the robot went, whether it fell, how the controller kept
 // up. Reads the state and status channels only; prints a summary and optionally writes JSON.
-//   stride-log-summary session.lcmlog [--summary summary.json]
+//   stride-log-summary session.lcmlog [--summary summary.json] [--windows 5]
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
@@ -23,13 +24,40 @@ double percentile(std::vector<double> v, double p) {
   return v[std::min(i, v.size() - 1)];
 }
 
+// A stretch of the session (--windows): how the controller kept up in it. Misses come in stretches
+// where a period's work (the tick and the preparation before it) outgrows the period; this puts the
+// two next to each other.
+struct Window {
+  double start = 0.0;  // [s] from the first status
+  long ticks = 0;
+  long long misses = 0, late = 0;  // cumulative counters at the window's start
+  std::vector<double> latency_ms, prepare_ms, work_ms;
+};
+
+void printWindows(const std::vector<Window>& windows, double width, long long misses_end,
+                  long long late_end) {
+  std::printf(
+      "by %.0f s window: start [s], ticks, deadline misses, late starts, tick latency p50 "
+      "[us], preparation p50 / p99 [us], tick + preparation p50 [us]\n",
+      width);
+  for (std::size_t i = 0; i < windows.size(); ++i) {
+    const Window& w = windows[i];
+    const long long m1 = i + 1 < windows.size() ? windows[i + 1].misses : misses_end;
+    const long long l1 = i + 1 < windows.size() ? windows[i + 1].late : late_end;
+    std::printf("  %6.1f %6ld %6lld %6lld %7.0f %7.0f / %5.0f %7.0f\n", w.start, w.ticks,
+                m1 - w.misses, l1 - w.late, percentile(w.latency_ms, 0.5) * 1e3,
+                percentile(w.prepare_ms, 0.5) * 1e3, percentile(w.prepare_ms, 0.99) * 1e3,
+                percentile(w.work_ms, 0.5) * 1e3);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"stride-log-summary: distance, base height, falls and controller timing of a log"};
   std::string log_path, summary_path, state_channel = "STRIDE_STATE",
                                       status_channel = "STRIDE_STATUS";
-  double fall_height = 0.5, fall_tilt_deg = 60.0;
+  double fall_height = 0.5, fall_tilt_deg = 60.0, window = 0.0;
   app.add_option("log", log_path, "LCM log file")->required()->check(CLI::ExistingFile);
   app.add_option("--summary", summary_path, "write the summary as JSON here");
   app.add_option("--state-channel", state_channel);
@@ -37,6 +65,9 @@ int main(int argc, char** argv) {
   app.add_option("--fall-height", fall_height,
                  "fallen: base below this fraction of its first height");
   app.add_option("--fall-tilt", fall_tilt_deg, "fallen: base tilted more than this [deg]");
+  app.add_option("--windows", window,
+                 "also print the controller's timing and misses per window of this many seconds")
+      ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
 
   lcm::LogFile log(log_path, "r");
@@ -51,6 +82,8 @@ int main(int argc, char** argv) {
   std::vector<double> latency_ms, solve_ms, prepare_ms;
   long prepared = 0, full_steps = 0, short_steps = 0, no_steps = 0;
   stride::mpc_status_t last_status{};
+  std::vector<Window> windows;
+  std::int64_t status_t0 = -1;
   for (const lcm::LogEvent* e = log.readNextEvent(); e != nullptr; e = log.readNextEvent()) {
     if (e->channel == state_channel) {
       stride::robot_state_t s;
@@ -84,6 +117,17 @@ int main(int argc, char** argv) {
         continue;
       }
       ++statuses;
+      if (window > 0.0) {
+        if (status_t0 < 0) status_t0 = e->timestamp;
+        const double t = 1e-6 * static_cast<double>(e->timestamp - status_t0);
+        while (windows.empty() || t >= windows.back().start + window) {
+          Window w;
+          w.start = windows.empty() ? 0.0 : windows.back().start + window;
+          w.misses = last_status.deadline_misses;
+          w.late = last_status.late_ticks;
+          windows.push_back(std::move(w));
+        }
+      }
       last_status = st;
       // The first published policy comes from the start-up solve (no deadline): not a tick.
       if (st.policy_status >= 0) {
@@ -93,6 +137,15 @@ int main(int argc, char** argv) {
           if (st.prepared) {
             ++prepared;
             prepare_ms.push_back(st.prepare_ms);
+          }
+          if (!windows.empty()) {
+            Window& w = windows.back();
+            ++w.ticks;
+            w.latency_ms.push_back(st.tick_ms);
+            if (st.prepared) {
+              w.prepare_ms.push_back(st.prepare_ms);
+              w.work_ms.push_back(st.tick_ms + st.prepare_ms);
+            }
           }
           if (st.solver_status >= 0)
             (st.step >= 1.0 ? full_steps : st.step > 0.0 ? short_steps : no_steps)++;
@@ -137,6 +190,8 @@ int main(int argc, char** argv) {
       "us); steps: full %.0f%%, shorter %.0f%%, none %.0f%%\n",
       prepared, latency_ms.size(), percentile(prepare_ms, 0.5) * 1e3,
       percentile(prepare_ms, 0.99) * 1e3, pct(full_steps), pct(short_steps), pct(no_steps));
+  if (!windows.empty())
+    printWindows(windows, window, last_status.deadline_misses, last_status.late_ticks);
   if (bad > 0) std::printf("log: %ld undecodable events skipped\n", bad);
   if (!summary_path.empty()) {
     std::ofstream f(summary_path);
