@@ -27,6 +27,8 @@ double percentile(std::vector<double> v, double p) {
 // A stretch of the session (--windows): how the controller kept up in it. Misses come in stretches
 // where a period's work (the tick and the preparation before it) outgrows the period; this puts the
 // two next to each other.
+constexpr std::size_t kMaxWindows = 100000;
+
 struct Window {
   double start = 0.0;  // [s] from the first status
   long ticks = 0;
@@ -67,7 +69,7 @@ int main(int argc, char** argv) {
   app.add_option("--fall-tilt", fall_tilt_deg, "fallen: base tilted more than this [deg]");
   app.add_option("--windows", window,
                  "also print the controller's timing and misses per window of this many seconds")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, 3600.0));
   CLI11_PARSE(app, argc, argv);
 
   lcm::LogFile log(log_path, "r");
@@ -120,7 +122,10 @@ int main(int argc, char** argv) {
       if (window > 0.0) {
         if (status_t0 < 0) status_t0 = e->timestamp;
         const double t = 1e-6 * static_cast<double>(e->timestamp - status_t0);
-        while (windows.empty() || t >= windows.back().start + window) {
+        // A time stamp far ahead (a corrupt log) must not open millions of windows: past the cap
+        // a status joins the last window.
+        while ((windows.empty() || t >= windows.back().start + window) &&
+               windows.size() < kMaxWindows) {
           Window w;
           w.start = windows.empty() ? 0.0 : windows.back().start + window;
           w.misses = last_status.deadline_misses;
