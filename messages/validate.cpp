@@ -101,6 +101,13 @@ Reject checkPlanWire(const void* buf, int size, int max_contacts, int max_phases
   return at == size ? Reject::None : Reject::WrongSize;
 }
 
+Reject checkCommandWire(const void* buf, int size) {
+  std::int32_t len;  // the string's length field counts its terminating NUL
+  if (!readInt32(buf, size, kHash + 32, len)) return Reject::Undecodable;
+  if (len < 1 || len > kMaxGaitName + 1) return Reject::WrongSize;
+  return size == kHash + 32 + 4 + len + 8 ? Reject::None : Reject::WrongSize;
+}
+
 Reject checkState(const robot_state_t& m, bool floating_base) {
   if (m.nq != static_cast<int>(m.q.size()) || m.nv != static_cast<int>(m.v.size()) ||
       m.ncontacts != static_cast<int>(m.contact.size()))
@@ -141,6 +148,12 @@ Reject checkPlan(const contact_plan_t& m) {
       if (c != 0 && c != 1) return Reject::BadField;
   }
   return m.cyclic == 0 || m.cyclic == 1 ? Reject::None : Reject::BadField;
+}
+
+Reject checkCommand(const command_t& m) {
+  for (double x : {m.vx, m.vy, m.yaw_rate, m.body_height})
+    if (!std::isfinite(x)) return Reject::NonFinite;
+  return m.utime >= 0 ? Reject::None : Reject::BadField;
 }
 
 bool decode(const void* buf, int size, robot_state_t& m) {

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 
+#include "stride/command_t.hpp"
 #include "stride/contact_plan_t.hpp"
 #include "stride/mpc_status_t.hpp"
 #include "stride/policy_t.hpp"
@@ -38,11 +39,17 @@ constexpr double kQuaternionTolerance = 1e-4;
 Reject checkStateWire(const void* buf, int size, int nq, int nv, int max_contacts);
 Reject checkPolicyWire(const void* buf, int size, int nq, int nv, int nu, int max_knots);
 Reject checkPlanWire(const void* buf, int size, int max_contacts, int max_phases);
+// A command whose gait name has at most kMaxGaitName characters.
+constexpr int kMaxGaitName = 31;
+Reject checkCommandWire(const void* buf, int size);
 
 // Content checks on decoded messages. floating_base: q[3..7) is a quaternion (x y z w).
 Reject checkState(const robot_state_t& m, bool floating_base);
 Reject checkPolicy(const policy_t& m, bool floating_base);
 Reject checkPlan(const contact_plan_t& m);
+// Finite numbers, a stamp >= 0. The gait name and the limits are the receiver's (its robot's gaits,
+// its configuration's limits).
+Reject checkCommand(const command_t& m);
 
 // The encoded size of a state / policy with these dimensions (hash included): what a publisher
 // preallocates its buffer for.

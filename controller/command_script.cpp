@@ -1,0 +1,72 @@
+#include "controller/command_script.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <set>
+
+#include "config/robot_config.hpp"
+
+namespace stride {
+
+std::vector<ScriptedCommand> loadCommandScript(const std::string& path) {
+  auto fail = [&](const std::string& what) {
+    throw ConfigError("command script '" + path + "': " + what);
+  };
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    fail("file does not exist or cannot be read");
+  } catch (const YAML::Exception& e) {
+    fail(std::string("malformed YAML: ") + e.what());
+  }
+  if (!root.IsSequence() || root.size() == 0)
+    fail("must be a non-empty list of {at, vx, vy, yaw_rate, gait, body_height}");
+  static const std::set<std::string> keys = {"at", "vx", "vy", "yaw_rate", "gait", "body_height"};
+  std::vector<ScriptedCommand> script;
+  ScriptedCommand c;
+  for (std::size_t i = 0; i < root.size(); ++i) {
+    const YAML::Node e = root[i];
+    const std::string where = "entry " + std::to_string(i);
+    if (!e.IsMap()) fail(where + ": must be a mapping");
+    for (const auto& kv : e)
+      if (!keys.count(kv.first.as<std::string>()))
+        fail(where + ": unknown key '" + kv.first.as<std::string>() + "'");
+    if (!e["at"]) fail(where + ": missing key 'at'");
+    auto number = [&](const char* key, double& out) {
+      if (!e[key]) return;
+      try {
+        out = e[key].as<double>();
+      } catch (const YAML::Exception&) {
+        fail(where + ": " + key + " must be a number");
+      }
+      if (!std::isfinite(out)) fail(where + ": " + key + " must be finite");
+    };
+    number("at", c.at);
+    number("vx", c.vx);
+    number("vy", c.vy);
+    number("yaw_rate", c.yaw_rate);
+    number("body_height", c.body_height);
+    if (e["gait"]) {
+      try {
+        c.gait = e["gait"].as<std::string>();
+      } catch (const YAML::Exception&) {
+        fail(where + ": gait must be a string");
+      }
+    }
+    if (c.at < 0.0) fail(where + ": at must be non-negative");
+    if (!script.empty() && !(c.at > script.back().at))
+      fail(where + ": at must be later than the previous entry's");
+    script.push_back(c);
+  }
+  return script;
+}
+
+int commandAt(const std::vector<ScriptedCommand>& script, double t) {
+  int i = 0;
+  while (i + 1 < static_cast<int>(script.size()) && script[i + 1].at <= t) ++i;
+  return i;
+}
+
+}  // namespace stride

@@ -1,0 +1,34 @@
+#pragma once
+// A timed command script (YAML), as stride-teleop --commands, tools/demo.sh --commands and the
+// tests play it:
+//
+//   - {at: 0.0, gait: stand}
+//   - {at: 2.0, gait: trot, vx: 0.5}
+//   - {at: 6.0, yaw_rate: 1.0}          # vx stays 0.5, gait stays trot
+//   - {at: 9.0, vx: 0.0, yaw_rate: 0.0, gait: stand}
+//
+// Each entry holds from `at` (seconds from the script's start) until the next one; a field an
+// entry does not give keeps its previous value (initially 0 and gait "stand"). Keys: at, vx, vy,
+// yaw_rate, gait, body_height. Times must increase strictly.
+
+#include <string>
+#include <vector>
+
+namespace stride {
+
+struct ScriptedCommand {
+  double at = 0.0;
+  double vx = 0.0, vy = 0.0, yaw_rate = 0.0;  // heading frame [m/s, m/s, rad/s]
+  std::string gait = "stand";
+  double body_height = 0.0;  // [m]
+};
+
+// Every entry with all its fields resolved. Throws ConfigError naming the file, the entry and the
+// key: not a list, an unknown key, a wrong type, a non-finite number, times not increasing, or
+// an empty script.
+std::vector<ScriptedCommand> loadCommandScript(const std::string& path);
+
+// The entry in force at time t (the last with at <= t; the first before it).
+int commandAt(const std::vector<ScriptedCommand>& script, double t);
+
+}  // namespace stride
