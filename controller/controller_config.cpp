@@ -81,7 +81,7 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   if (!root.IsMap()) r.fail("", "the top level must be a mapping");
   r.onlyKeys(root, "",
              {"robot", "rate_hz", "horizon", "policy_knots", "solver", "contacts", "weights",
-              "gait", "lcm", "safety", "realtime"});
+              "gait", "command", "lcm", "safety", "realtime"});
 
   ControllerConfig c;
   c.path = yaml_path;
@@ -145,19 +145,20 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   if (contacts) {
     r.get(contacts, "mu", "contacts", lo.mu);
     r.get(contacts, "min_normal_force", "contacts", lo.min_normal_force);
-    r.get(contacts, "swing_height", "contacts", lo.swing_height);
+    r.get(contacts, "swing_height", "contacts", c.generator.swing_height);
     r.get(contacts, "impulses", "contacts", lo.impulses);
     r.get(contacts, "torque_limits", "contacts", lo.torque_limits);
   }
   r.positive(lo.mu, "contacts.mu");
   r.nonNegative(lo.min_normal_force, "contacts.min_normal_force");
-  r.nonNegative(lo.swing_height, "contacts.swing_height");
+  r.nonNegative(c.generator.swing_height, "contacts.swing_height");
   if (c.solver == SolverKind::BoxFddp) lo.torque_limits = true;
 
   const YAML::Node weights = root["weights"];
-  r.onlyKeys(weights, "weights",
-             {"base_position", "base_orientation", "joint_position", "base_velocity",
-              "joint_velocity", "control", "swing", "friction", "cop", "com", "terminal_state"});
+  r.onlyKeys(
+      weights, "weights",
+      {"base_position", "base_orientation", "joint_position", "base_velocity", "joint_velocity",
+       "control", "swing", "swing_rotation", "friction", "cop", "com", "terminal_state"});
   LocomotionWeights& w = lo.weights;
   if (weights) {
     r.get(weights, "base_position", "weights", w.base_position);
@@ -167,6 +168,7 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(weights, "joint_velocity", "weights", w.joint_velocity);
     r.get(weights, "control", "weights", w.control);
     r.get(weights, "swing", "weights", w.swing);
+    r.get(weights, "swing_rotation", "weights", w.swing_rotation);
     r.get(weights, "friction", "weights", w.friction);
     r.get(weights, "cop", "weights", w.cop);
     r.get(weights, "com", "weights", w.com);
@@ -174,36 +176,30 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   }
   for (double v :
        {w.base_position, w.base_orientation, w.joint_position, w.base_velocity, w.joint_velocity,
-        w.control, w.swing, w.friction, w.cop, w.com, w.terminal_state})
+        w.control, w.swing, w.swing_rotation, w.friction, w.cop, w.com, w.terminal_state})
     r.nonNegative(v, "weights");
 
   const YAML::Node gait = root["gait"];
   r.onlyKeys(gait, "gait",
-             {"type", "stand", "support", "swing", "duration", "step", "step_after", "footsteps",
-              "plan_file"});
+             {"trot", "walk", "pace", "foothold_gain", "max_foothold_correction", "plan_file"});
   GaitConfig& g = c.gait;
+  GaitGeneratorOptions& gen = c.generator;
+  for (const char* name : {"trot", "walk", "pace"}) g.timing[name] = GaitTiming{};
   if (gait) {
-    r.get(gait, "type", "gait", g.type);
-    r.get(gait, "stand", "gait", g.stand);
-    r.get(gait, "support", "gait", g.support);
-    r.get(gait, "swing", "gait", g.swing);
-    r.get(gait, "duration", "gait", g.duration);
-    r.get(gait, "step_after", "gait", g.step_after);
-    if (gait["step"]) {
-      std::vector<double> s;
-      r.get(gait, "step", "gait", s);
-      if (s.size() != 3) r.fail("gait.step", "must be [x, y, z]");
-      g.step = Eigen::Vector3d(s[0], s[1], s[2]);
+    for (const char* name : {"trot", "walk", "pace"}) {
+      const YAML::Node t = gait[name];
+      const std::string where = std::string("gait.") + name;
+      r.onlyKeys(t, where, {"support", "swing"});
+      if (!t) continue;
+      r.get(t, "support", where, g.timing[name].support);
+      r.get(t, "swing", where, g.timing[name].swing);
+      r.positive(g.timing[name].support, where + ".support");
+      r.positive(g.timing[name].swing, where + ".swing");
     }
-    if (gait["footsteps"]) {
-      std::vector<std::vector<double>> list;
-      r.get(gait, "footsteps", "gait", list);
-      for (const auto& f : list) {
-        if (f.size() != 3 || !std::isfinite(f[0]) || !std::isfinite(f[1]) || !std::isfinite(f[2]))
-          r.fail("gait.footsteps", "each footstep must be [dx, dy, dz], finite");
-        g.footsteps.emplace_back(f[0], f[1], f[2]);
-      }
-    }
+    r.get(gait, "foothold_gain", "gait", gen.foothold_gain);
+    r.get(gait, "max_foothold_correction", "gait", gen.max_foothold_correction);
+    if (gait["foothold_gain"]) r.nonNegative(gen.foothold_gain, "gait.foothold_gain");
+    r.nonNegative(gen.max_foothold_correction, "gait.max_foothold_correction");
     if (gait["plan_file"]) {
       std::string file;
       r.get(gait, "plan_file", "gait", file);
@@ -211,20 +207,42 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
           (std::filesystem::path(yaml_path).parent_path() / file).lexically_normal().string();
     }
   }
-  if (g.type != "stand" && g.type != "trot" && g.type != "walk")
-    r.fail("gait.type", "'" + g.type + "' is not one of stand, trot, walk");
-  r.nonNegative(g.stand, "gait.stand");
-  r.positive(g.support, "gait.support");
-  r.positive(g.swing, "gait.swing");
-  r.positive(g.duration, "gait.duration");
-  r.nonNegative(g.step_after, "gait.step_after");
-  if (!g.step.allFinite()) r.fail("gait.step", "must be finite");
-  lo.step = g.step;
-  lo.step_after = g.step_after;
-  lo.footsteps = g.footsteps;
+
+  const YAML::Node command = root["command"];
+  r.onlyKeys(command, "command",
+             {"timeout_ms", "max_velocity", "max_body_height", "acceleration", "body_height_rate"});
+  CommandConfig& cmd = c.command;
+  if (command) {
+    double timeout_ms = cmd.timeout * 1e3;
+    r.get(command, "timeout_ms", "command", timeout_ms);
+    r.positive(timeout_ms, "command.timeout_ms");
+    cmd.timeout = timeout_ms * 1e-3;
+    auto triple = [&](const char* key, double& a, double& b, double& d) {
+      if (!command[key]) return;
+      std::vector<double> v;
+      r.get(command, key, "command", v);
+      if (v.size() != 3) r.fail(std::string("command.") + key, "must be [x, y, yaw]");
+      for (double x : v) r.nonNegative(x, std::string("command.") + key);
+      a = v[0];
+      b = v[1];
+      d = v[2];
+    };
+    triple("max_velocity", cmd.max_vx, cmd.max_vy, cmd.max_yaw_rate);
+    triple("acceleration", cmd.accel_x, cmd.accel_y, cmd.accel_yaw);
+    r.get(command, "max_body_height", "command", cmd.max_height);
+    r.get(command, "body_height_rate", "command", cmd.height_rate);
+  }
+  r.nonNegative(cmd.max_height, "command.max_body_height");
+  for (double a : {cmd.accel_x, cmd.accel_y, cmd.accel_yaw, cmd.height_rate})
+    r.positive(a, "command.acceleration / body_height_rate");
+  // The references ramp over the horizon as the command does between ticks.
+  gen.acceleration = Eigen::Vector3d(cmd.accel_x, cmd.accel_y, cmd.accel_yaw);
+  gen.height_rate = cmd.height_rate;
+  gen.horizon = lo.knots * lo.dt;
+  gen.sample_dt = lo.dt;
 
   const YAML::Node lcm = root["lcm"];
-  r.onlyKeys(lcm, "lcm", {"input", "output", "state", "policy", "status", "plan"});
+  r.onlyKeys(lcm, "lcm", {"input", "output", "state", "policy", "status", "plan", "command"});
   if (lcm) {
     r.get(lcm, "input", "lcm", c.input_url);
     r.get(lcm, "output", "lcm", c.output_url);
@@ -232,9 +250,10 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(lcm, "policy", "lcm", c.policy_channel);
     r.get(lcm, "status", "lcm", c.status_channel);
     r.get(lcm, "plan", "lcm", c.plan_channel);
+    r.get(lcm, "command", "lcm", c.command_channel);
   }
-  for (const std::string* ch :
-       {&c.state_channel, &c.policy_channel, &c.status_channel, &c.plan_channel})
+  for (const std::string* ch : {&c.state_channel, &c.policy_channel, &c.status_channel,
+                                &c.plan_channel, &c.command_channel})
     if (ch->empty() || ch->size() > 63) r.fail("lcm", "channel names must have 1 to 63 characters");
 
   const YAML::Node safety = root["safety"];

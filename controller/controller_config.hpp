@@ -1,28 +1,26 @@
 #pragma once
 // The controller's configuration (config/controller/<name>.yaml): which robot, how fast, the
-// horizon, the cost weights, the solver budget, the gait, LCM channels and URLs, safety limits and
-// real-time settings. Loaded once at start-up; every error names the file and the key.
+// horizon, the cost weights, the solver budget, the gaits, the command limits, LCM channels and
+// URLs, safety limits and real-time settings. Loaded once at start-up; every error names the file
+// and the key.
 
+#include <map>
 #include <string>
 #include <vector>
 
 #include "config/robot_config.hpp"
+#include "controller/command.hpp"
+#include "controller/gait.hpp"
 #include "solver/ddp/solver.hpp"
 #include "solver/ocp/locomotion.hpp"
 
 namespace stride {
 
-// The gait the controller plans with, unless a plan arrives on the plan channel. Times in s.
+// How the robot steps: the timing of each gait (gait.hpp), or a planner's plan file, and where the
+// feet land (solver/ocp/gait_generator.hpp). Times in s.
 struct GaitConfig {
-  std::string type = "trot";  // stand | trot | walk (quadruped); stand | walk (biped)
-  double stand = 1.0;         // standing first
-  double support = 0.1;       // all-feet (quadruped) / double-support (biped) phase
-  double swing = 0.2;         // one swing phase
-  double duration = 60.0;     // of the whole plan; then the robot stands
-  Eigen::Vector3d step = Eigen::Vector3d::Zero();  // foot displacement per touch-down
-  double step_after = 0.0;                         // steps in place until this plan time
-  std::vector<Eigen::Vector3d> footsteps;  // instead of `step`: successive touch-downs' moves
-  std::string plan_file;  // a contact plan file instead of the generated gait (resolved path)
+  std::map<std::string, GaitTiming> timing;  // by gait name: trot, walk, pace
+  std::string plan_file;  // a contact plan file instead of the gaits (resolved path)
 };
 
 enum class Fallback { Previous, Hold };
@@ -33,7 +31,9 @@ struct ControllerConfig {
   double rate_hz = 100.0;
   int policy_knots = 8;  // knots sent in each policy message
   LocomotionOptions locomotion;
+  GaitGeneratorOptions generator;  // horizon, accelerations and height rate follow the rest
   GaitConfig gait;
+  CommandConfig command;
 
   SolverKind solver = SolverKind::BoxFddp;
   int max_iterations = 1;          // per tick
@@ -48,7 +48,8 @@ struct ControllerConfig {
   int threads = 1;
 
   std::string state_channel = "STRIDE_STATE", policy_channel = "STRIDE_POLICY",
-              status_channel = "STRIDE_STATUS", plan_channel = "STRIDE_PLAN";
+              status_channel = "STRIDE_STATUS", plan_channel = "STRIDE_PLAN",
+              command_channel = "STRIDE_COMMAND";
   std::string input_url, output_url;  // empty: LCM_DEFAULT_URL
 
   double max_state_age = 0.05;  // s; an older state is stale

@@ -2,58 +2,52 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace stride {
 
-ContactPlan makeGaitPlan(const GaitConfig& gait, const std::vector<ContactSpec>& contacts) {
+std::vector<std::string> gaitNames(int contacts) {
+  if (contacts == 4) return {"stand", "trot", "walk", "pace"};
+  if (contacts == 2) return {"stand", "walk"};
+  return {"stand"};
+}
+
+ContactPlan makeGaitPattern(const std::string& gait, const GaitTiming& timing,
+                            const std::vector<ContactSpec>& contacts) {
   const int nc = static_cast<int>(contacts.size());
+  const std::vector<std::string> known = gaitNames(nc);
+  if (std::find(known.begin(), known.end(), gait) == known.end())
+    throw ConfigError("gait '" + gait + "' is not one a robot with " + std::to_string(nc) +
+                      " contacts walks with");
+  if (!(timing.support > 0.0) || !(timing.swing > 0.0) || !std::isfinite(timing.support) ||
+      !std::isfinite(timing.swing))
+    throw ConfigError("gait '" + gait + "': support and swing must be positive");
   std::vector<std::string> all;
   for (const ContactSpec& c : contacts) all.push_back(c.frame);
   auto without = [&](std::initializer_list<int> lifted) {
     std::vector<std::string> closed;
-    for (int c = 0; c < nc; ++c) {
-      bool up = false;
-      for (int l : lifted) up = up || l == c;
-      if (!up) closed.push_back(all[c]);
-    }
+    for (int c = 0; c < nc; ++c)
+      if (std::find(lifted.begin(), lifted.end(), c) == lifted.end()) closed.push_back(all[c]);
     return closed;
   };
-
-  std::vector<ContactPhase> cycle;
-  if (gait.type == "trot") {
-    if (nc != 4) throw ConfigError("gait 'trot' needs 4 contacts (FL, FR, HL, HR)");
-    cycle = {{gait.support, all},
-             {gait.swing, without({0, 3})},
-             {gait.support, all},
-             {gait.swing, without({1, 2})}};
-  } else if (gait.type == "walk" && nc == 4) {
-    for (int foot : {2, 0, 3, 1}) {
-      cycle.push_back({gait.support, all});
-      cycle.push_back({gait.swing, without({foot})});
-    }
-  } else if (gait.type == "walk" && nc == 2) {
-    cycle = {{gait.support, all},
-             {gait.swing, without({0})},
-             {gait.support, all},
-             {gait.swing, without({1})}};
-  } else if (gait.type == "walk") {
-    throw ConfigError("gait 'walk' needs 2 (biped) or 4 (quadruped) contacts");
-  }
-
   ContactPlan plan;
-  plan.cyclic = false;
-  // Never a zero-length phase: a plan of only standing still has one phase.
-  plan.phases.push_back({std::max(gait.stand, 1e-3), all});
-  if (!cycle.empty()) {
-    double cycle_time = 0.0;
-    for (const ContactPhase& p : cycle) cycle_time += p.duration;
-    const long cycles =
-        std::max(0L, static_cast<long>(std::floor((gait.duration - gait.stand) / cycle_time)));
-    for (long i = 0; i < cycles; ++i)
-      for (const ContactPhase& p : cycle) plan.phases.push_back(p);
+  plan.cyclic = true;
+  const double s = timing.support, w = timing.swing;
+  if (gait == "stand") {
+    plan.phases = {{s, all}};
+  } else if (gait == "trot") {
+    plan.phases = {{s, all}, {w, without({0, 3})}, {s, all}, {w, without({1, 2})}};
+  } else if (gait == "pace") {
+    plan.phases = {{s, all}, {w, without({0, 2})}, {s, all}, {w, without({1, 3})}};
+  } else if (nc == 4) {  // walk
+    for (int foot : {2, 0, 3, 1}) {
+      plan.phases.push_back({s, all});
+      plan.phases.push_back({w, without({foot})});
+    }
+  } else {  // biped walk
+    plan.phases = {{s, all}, {w, without({0})}, {s, all}, {w, without({1})}};
   }
-  plan.phases.push_back({1.0, all});  // stand at the end (held past it)
   return plan;
 }
 
@@ -89,10 +83,6 @@ ContactPlan loadContactPlan(const std::string& path) {
     return fail(e.what());
   }
   return plan;
-}
-
-ContactPlan makePlan(const GaitConfig& gait, const std::vector<ContactSpec>& contacts) {
-  return gait.plan_file.empty() ? makeGaitPlan(gait, contacts) : loadContactPlan(gait.plan_file);
 }
 
 }  // namespace stride

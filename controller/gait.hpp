@@ -1,22 +1,37 @@
 #pragma once
-// Gait generator: the contact plan the controller follows unless a planner sends one.
+// The gaits a commanded robot walks with, as cyclic contact patterns for its ContactTimeline
+// (solver/ocp/contact_timeline.hpp). Every pattern starts with a phase where every foot is down,
+// so the controller can switch between gaits there.
 //
 //   quadruped (4 contacts, YAML order front-left, front-right, hind-left, hind-right):
-//     stand; trot = all feet, the FL-HR pair swings, all feet, the FR-HL pair swings;
-//     walk  = one foot at a time (HL, FL, HR, FR), all feet between swings;
+//     stand;
+//     trot = all feet, the FL-HR pair swings, all feet, the FR-HL pair swings;
+//     pace = all feet, the left pair (FL-HL) swings, all feet, the right pair swings;
+//     walk = one foot at a time (HL, FL, HR, FR), all feet between swings;
 //   biped (2 contacts, YAML order left, right):
-//     stand; walk = double support, the left foot swings, double support, the right swings.
-// The plan stands for gait.stand seconds, repeats the cycle until gait.duration, then stands
-// (the last phase is held). It is written out phase by phase (not cyclic) so that standing,
-// stepping in place and walking are one plan; the controller's tick only queries it.
+//     stand; walk = double support, the left foot swings, double support, the right swings;
+//   any other number of contacts: stand.
 
-#include "controller/controller_config.hpp"
+#include <string>
+#include <vector>
+
+#include "config/robot_config.hpp"
 #include "solver/ocp/contact_plan.hpp"
 
 namespace stride {
 
-// Throws ConfigError for a gait the robot's contacts cannot do (e.g. trot on two feet).
-ContactPlan makeGaitPlan(const GaitConfig& gait, const std::vector<ContactSpec>& contacts);
+struct GaitTiming {
+  double support = 0.1;  // each all-feet (double support) phase [s]
+  double swing = 0.2;    // each swing phase [s]
+};
+
+// The gaits a robot with these contacts can walk with; "stand" first.
+std::vector<std::string> gaitNames(int contacts);
+
+// The cyclic pattern of a gait. Throws ConfigError for a gait the contacts cannot do (e.g. trot
+// on two feet) or a timing that is not positive.
+ContactPlan makeGaitPattern(const std::string& gait, const GaitTiming& timing,
+                            const std::vector<ContactSpec>& contacts);
 
 // A contact plan from a YAML file (gait.plan_file):
 //   cyclic: false
@@ -26,8 +41,5 @@ ContactPlan makeGaitPlan(const GaitConfig& gait, const std::vector<ContactSpec>&
 // Throws ConfigError naming the file and the phase. The contact names are checked against the
 // robot when the controller compiles the plan.
 ContactPlan loadContactPlan(const std::string& path);
-
-// The plan the configuration asks for: the file when gait.plan_file is set, else the gait.
-ContactPlan makePlan(const GaitConfig& gait, const std::vector<ContactSpec>& contacts);
 
 }  // namespace stride

@@ -10,6 +10,8 @@
 namespace stride {
 
 namespace {
+// The gait reported while a planner's plan replaces the gaits.
+const std::string kPlanGait = "plan";
 // Velocity-level Baumgarte term of the controller's contact model (a + kd v = 0 at the foot): a
 // foot's drift velocity decays in 1/kd = 20 ms instead of growing over the 1 s horizon.
 constexpr double kContactDamping = 50.0;
@@ -30,12 +32,24 @@ Mpc::Mpc(const ControllerConfig& config) : config_(config), robot_(loadRobot(con
   for (const ContactSpec& c : robot_.contacts)
     contacts_.add(model, c.frame, c.dim, ReferenceFrame::LocalWorldAligned, 0.0, kContactDamping);
   config_.locomotion.sole_half_extents = kSoleMargin * robot_.sole_half_extents;
-  plan_ = makePlan(config_.gait, robot_.contacts);
-  try {
-    plan_.validate(contacts_);
-  } catch (const std::invalid_argument& e) {
-    throw ConfigError(config_.path + ": the contact plan does not fit the robot: " + e.what());
+  gaits_ = gaitNames(static_cast<int>(robot_.contacts.size()));
+  for (const std::string& g : gaits_) {  // a bad timing fails here, not at the first state
+    const auto timing = config_.gait.timing.find(g);
+    makeGaitPattern(g, timing == config_.gait.timing.end() ? GaitTiming{} : timing->second,
+                    robot_.contacts);
   }
+  if (!config_.gait.plan_file.empty()) {
+    plan_ = loadContactPlan(config_.gait.plan_file);
+    have_plan_ = true;
+    try {
+      plan_.validate(contacts_);
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError(config_.path + ": the contact plan does not fit the robot: " + e.what());
+    }
+  }
+  if (!robot_.model.hasFreeFlyer())
+    throw ConfigError(config_.path + ": the robot '" + robot_.name +
+                      "' has a fixed base: stride-mpc walks legged robots");
   x_ = Eigen::VectorXd::Zero(nq_ + nv_);
   msg::shape(policy_, config_.policy_knots, nq_, nv_, nu_);
   msg::shape(previous_, config_.policy_knots, nq_, nv_, nu_);
@@ -48,9 +62,16 @@ Mpc::~Mpc() = default;
 void Mpc::setPlan(const ContactPlan& plan, std::int64_t start_utime) {
   plan.validate(contacts_);
   plan_ = plan;
+  have_plan_ = true;
   plan_start_utime_ = start_utime;
   plan_start_set_ = true;
   rebuild_ = true;
+}
+
+void Mpc::setCommand(const BodyCommand& now, const BodyCommand& target, int gait) {
+  command_ = now;
+  command_target_ = target;
+  if (gait >= 0 && gait < static_cast<int>(gaits_.size())) gait_ = gait;
 }
 
 void Mpc::start(std::int64_t utime) {
@@ -58,25 +79,24 @@ void Mpc::start(std::int64_t utime) {
     plan_start_utime_ = utime;
     plan_start_set_ = true;
   }
-  // The plan is made around where the robot stands now: the default posture, moved to the
-  // measured base position and heading on the ground (footholds and base references follow).
+  // The nominal posture at the origin: the references are anchored on the measured state at
+  // every tick (GaitGenerator::plan), so where the robot stands now needs no rebuild.
   Eigen::VectorXd x_nominal = Eigen::VectorXd::Zero(nq_ + nv_);
   x_nominal.head(nq_) = robot_.default_q;
-  if (robot_.model.hasFreeFlyer()) {
-    x_nominal[0] = x_[0];
-    x_nominal[1] = x_[1];
-    const Eigen::Quaterniond q(x_[6], x_[3], x_[4], x_[5]);
-    const double yaw = std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()),
-                                  1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
-    const Eigen::Quaterniond heading(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
-    const Eigen::Quaterniond q0(x_nominal[6], x_nominal[3], x_nominal[4], x_nominal[5]);
-    const Eigen::Quaterniond qn = heading * q0;
-    x_nominal.segment<4>(3) << qn.x(), qn.y(), qn.z(), qn.w();
-  }
   solver_.reset();
-  loco_ = std::make_unique<LocomotionProblem>(robot_.model, contacts_, plan_, x_nominal,
-                                              config_.locomotion);
+  loco_ =
+      std::make_unique<LocomotionProblem>(robot_.model, contacts_, x_nominal, config_.locomotion);
   loco_->problem().setThreads(config_.threads);
+  gen_ = std::make_unique<GaitGenerator>(robot_.model, contacts_, x_nominal, config_.generator);
+  ContactTimeline& timeline = gen_->timeline();
+  gait_pattern_.clear();
+  for (const std::string& g : gaits_) {
+    const auto timing = config_.gait.timing.find(g);
+    gait_pattern_.push_back(timeline.addPattern(makeGaitPattern(
+        g, timing == config_.gait.timing.end() ? GaitTiming{} : timing->second, robot_.contacts)));
+  }
+  // A plan starts at plan time 0 (the plan's start); the gaits start standing.
+  timeline.reset(have_plan_ ? timeline.addPattern(plan_) : gait_pattern_[0], 0.0);
   SolverOptions options;
   options.line_search_steps = config_.line_search_steps;
   solver_ = std::make_unique<Solver>(loco_->problem(), config_.solver, options);
@@ -90,12 +110,16 @@ void Mpc::start(std::int64_t utime) {
   have_solved_ = false;
 }
 
+bool Mpc::replan(double t) {
+  return gen_->plan(t, x_, t_warm_, t_warm_ + loco_->span()) && loco_->update(t_warm_, *gen_);
+}
+
 void Mpc::restartWarmStart(double t) {
-  loco_->update(t);
-  loco_->standingWarmStart(xs_warm_, us_warm_);
+  t_warm_ = t;
+  if (!replan(t)) return;
+  loco_->referenceWarmStart(*gen_, xs_warm_, us_warm_);
   solver_->setWarmStart(xs_warm_, us_warm_);
   solver_->setRegularization(solver_->options.reg_initial);
-  t_warm_ = t;
   need_restart_ = false;
 }
 
@@ -133,7 +157,7 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, SolveStatus& result) {
     // t_warm_. Updated for t instead, a touch-down half a knot away would land on the next knot
     // while the shifted trajectory has its velocity jump on this one: a gap of tens of rad/s at
     // every impulse knot after each shift, and line searches that stall.
-    if (!loco_->update(t_warm_)) return false;
+    if (need_restart_ || !replan(t)) return false;
   }
   startup_tick_ = first;
   // The start-up solve may backtrack as far as it needs; the ticks' line search is bounded.
@@ -176,7 +200,18 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   if (!started() || rebuild_) start(state->utime);
   const double t = planTime(state->utime);
   status_.plan_time = t;
-  status_.phase = static_cast<std::int32_t>(loco_->schedule().phaseAt(t));
+  // The gait asked for: a switch at the next instant every foot is down (ContactTimeline).
+  ContactTimeline& timeline = gen_->timeline();
+  if (!have_plan_ && timeline.lastPattern() != gait_pattern_[gait_])
+    timeline.switchTo(gait_pattern_[gait_], t);
+  gen_->setCommand(command_, command_target_);
+  status_.phase = static_cast<std::int32_t>(timeline.mask(t));
+  const int in_force = timeline.patternAt(t);
+  status_.gait = have_plan_ ? kPlanGait : gaits_[std::min<int>(in_force, gaits_.size() - 1)];
+  status_.command[0] = command_.vx;
+  status_.command[1] = command_.vy;
+  status_.command[2] = command_.yaw_rate;
+  status_.command[3] = command_.height;
 
   if (age > config_.max_state_age) {
     ++counters_.stale_states;
@@ -222,7 +257,7 @@ void Mpc::prepare(Clock::time_point deadline) {
   solved_ = false;  // one preparation per solved tick
   // For when the next state is expected; past the horizon the next tick restarts anyway.
   if (!shiftTo(t_last_ + 1.0 / config_.rate_hz)) return;
-  if (!loco_->update(t_warm_)) return;  // on the trajectory's grid, as in solveTick
+  if (!replan(t_last_)) return;  // on the trajectory's grid, as in solveTick
   const Clock::time_point start = Clock::now();
   SolveStatus why = SolveStatus::MaxIterations;
   if (solver_->prepare(deadline, why)) {
@@ -295,8 +330,8 @@ bool Mpc::previousPolicy(std::int64_t utime) {
 void Mpc::holdPolicy(std::int64_t utime, double t) {
   // Joint PD to the default posture around the measured base, with the torques that hold the
   // default posture on the current phase's contacts as feed-forward.
-  const long phase = loco_->schedule().phaseAt(t);
-  const Eigen::VectorXd& u_hold = loco_->holdingControl(loco_->schedule().localPhase(phase));
+  const unsigned phase = gen_->mask(t);
+  const Eigen::VectorXd& u_hold = loco_->holdingControl(phase);
   const int ndx = 2 * nv_, base = robot_.model.hasFreeFlyer() ? 6 : 0;
   policy_.utime = utime;
   policy_.knot0_utime = utime;

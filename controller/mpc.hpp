@@ -7,7 +7,9 @@
 //   1. plan time t of the state (its stamp minus the plan's start);
 //   2. shift the horizon and the warm start by the whole knots elapsed since the last solve
 //      (the remainder, under half a knot, stays as an FDDP gap), set x0 = the state;
-//   3. rewrite every knot's phase, contacts and references for time t (LocomotionProblem::update);
+//   3. re-plan the references from the state and the command (GaitGenerator::plan: contact timing
+//      with gait switches, footholds, swing arcs, base pose and twist) and rewrite every knot's
+//      contacts and references for them (LocomotionProblem::update);
 //   4. at most max_iterations of (box-)FDDP, stopped at the deadline;
 //   5. the policy: u_ff, K, x_ref of the first contact knots (impulse knots take no time and have
 //      no control, so they are skipped);
@@ -64,9 +66,15 @@ class Mpc {
   int nu() const { return nu_; }
   bool started() const { return loco_ != nullptr; }
 
-  // Replaces the contact plan, starting at start_utime on the robot's clock. Rebuilds the
-  // problem at the next tick (allocates: between ticks only). Throws std::invalid_argument.
+  // Replaces the gaits by a planner's contact plan, starting at start_utime on the robot's clock
+  // (the command still sets the velocity). Rebuilds the problem at the next tick (allocates:
+  // between ticks only). Throws std::invalid_argument.
   void setPlan(const ContactPlan& plan, std::int64_t start_utime);
+  // The body command in force and its target (the node's CommandFilter), and the gait asked for
+  // (an index into gaits()). Takes effect at the next tick's re-planning.
+  void setCommand(const BodyCommand& now, const BodyCommand& target, int gait);
+  // The gaits the robot walks with ("stand" first).
+  const std::vector<std::string>& gaits() const { return gaits_; }
 
   // One tick. state: the newest valid estimate (null: none yet); age: seconds since it arrived;
   // deadline: for the solve (Clock::time_point::max() when replaying a log). Fills policy() and
@@ -91,10 +99,14 @@ class Mpc {
   const Solver* solver() const { return solver_.get(); }
   Solver* solver() { return solver_.get(); }  // tools/bench times the solver's parts
   const LocomotionProblem* problem() const { return loco_.get(); }
+  const GaitGenerator* reference() const { return gen_.get(); }
   double planTime(std::int64_t utime) const { return (utime - plan_start_utime_) * 1e-6; }
 
  private:
-  void start(std::int64_t utime);  // builds the problem around x_ (allocates)
+  void start(std::int64_t utime);  // builds the problem and the gaits (allocates)
+  // Re-plans the references from the state x_ at plan time t for the horizon from t_warm_, and
+  // rewrites the knots for them. False when either refuses (non-finite time or state).
+  bool replan(double t);
   // Shifts the horizon and the warm start by the whole knots from the warm start's knot 0 to t
   // (the remainder, under half a knot, is left to FDDP as a gap at x0). False, and nothing
   // shifted, when t is past the horizon: the warm start is used up.
@@ -110,20 +122,26 @@ class Mpc {
   Robot robot_;
   ContactSet contacts_;
   ContactPlan plan_;
+  bool have_plan_ = false;  // a plan file or a planner's plan replaces the gaits
+  std::vector<std::string> gaits_;
   std::int64_t plan_start_utime_ = 0;
   bool plan_start_set_ = false;
   bool rebuild_ = false;
   int nq_, nv_, nu_;
 
   std::unique_ptr<LocomotionProblem> loco_;
+  std::unique_ptr<GaitGenerator> gen_;
+  std::vector<int> gait_pattern_;  // timeline pattern of each gait
+  BodyCommand command_, command_target_;
+  int gait_ = 0;
   std::unique_ptr<Solver> solver_;
-  std::vector<Eigen::VectorXd> xs_warm_, us_warm_;  // standing warm start (restarts)
+  std::vector<Eigen::VectorXd> xs_warm_, us_warm_;  // warm start on the references (restarts)
   double t_warm_ = 0.0;                             // plan time of the warm start's knot 0
   bool need_restart_ = false;  // the last solve failed: start again from standing
   bool have_solved_ = false;   // a solve of this problem succeeded (else the next is the first)
   bool startup_tick_ = false;
   bool solved_ = false;      // the last tick solved (prepare() may follow)
-  double t_last_ = 0.0;      // plan time of the last tick's state
+  double t_last_ = 0.0;      // plan time of the last tick's state (x_ holds it)
   double prepare_ms_ = 0.0;  // its duration
   int previous_ticks_ = 0;   // consecutive ticks on the previous policy
 

@@ -15,7 +15,11 @@ constexpr std::int64_t kMaxStampLeadUs = 1000000;  // stamps may run 1 s ahead o
 }  // namespace
 
 MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time)
-    : config_(config), mpc_(config), out_(out), time_(time) {
+    : config_(config),
+      mpc_(config),
+      out_(out),
+      time_(time),
+      commands_(config.command, mpc_.gaits()) {
   const Model& model = mpc_.robot().model;
   floating_ = model.hasFreeFlyer();
   msg::shape(incoming_, model.nq, model.nv, kMaxContactFlags);
@@ -24,6 +28,12 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
   buffer_.resize(std::max(msg::policyWireSize(config.policy_knots, model.nq, model.nv, mpc_.nu()),
                           status.getEncodedSize()));
   latencies_.reserve(kLatencyCapacity);
+  command_msg_.gait.reserve(msg::kMaxGaitName + 1);  // decoding a gait name then never allocates
+}
+
+double MpcNode::now() const {
+  return time_ == TimeSource::RealTime ? static_cast<double>(monotonicMicros()) * 1e-6
+                                       : static_cast<double>(newest_.utime) * 1e-6;
 }
 
 std::int64_t MpcNode::monotonicMicros() {
@@ -35,6 +45,7 @@ std::int64_t MpcNode::monotonicMicros() {
 void MpcNode::subscribe(lcm::LCM& in) {
   in.subscribe(config_.state_channel, &MpcNode::onState, this)->setQueueCapacity(kQueueCapacity);
   in.subscribe(config_.plan_channel, &MpcNode::onPlan, this)->setQueueCapacity(10);
+  in.subscribe(config_.command_channel, &MpcNode::onCommand, this)->setQueueCapacity(100);
 }
 
 void MpcNode::reject(msg::Reject reason) {
@@ -83,6 +94,23 @@ void MpcNode::onPlan(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   plan_pending_ = true;
 }
 
+void MpcNode::onCommand(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  const int size = static_cast<int>(rbuf->data_size);
+  msg::Reject why = msg::checkCommandWire(rbuf->data, size);
+  if (why == msg::Reject::None && command_msg_.decode(rbuf->data, 0, size) < 0)
+    why = msg::Reject::Undecodable;
+  if (why == msg::Reject::None) why = msg::checkCommand(command_msg_);
+  if (why == msg::Reject::None && command_msg_.utime <= last_command_utime_)
+    why = msg::Reject::OutOfOrder;
+  if (why != msg::Reject::None) {
+    reject(why);
+    ++commands_malformed_;
+    return;
+  }
+  last_command_utime_ = command_msg_.utime;
+  if (!commands_.receive(command_msg_, now())) reject(msg::Reject::BadField);  // unknown gait
+}
+
 void MpcNode::applyPendingPlan() {
   if (!plan_pending_) return;
   plan_pending_ = false;
@@ -112,6 +140,8 @@ void MpcNode::tick(Clock::time_point deadline) {
   const double age = !have_state_ || time_ == TimeSource::Stamps
                          ? 0.0
                          : static_cast<double>(monotonicMicros() - newest_arrival_us_) * 1e-6;
+  commands_.update(now());
+  mpc_.setCommand(commands_.command(), commands_.target(), commands_.gait());
   const bool publish = mpc_.tick(state, age, deadline);
   new_state_ = false;
   if (have_state_) {
@@ -138,6 +168,11 @@ void MpcNode::tick(Clock::time_point deadline) {
   }
   mpc_status_t& status = mpc_.status();
   status.rejected_messages = rejected_total_;
+  const CommandCounters& cc = commands_.counters();
+  status.commands_accepted = cc.accepted;
+  status.commands_rejected = cc.rejected + commands_malformed_;
+  status.commands_clamped = cc.clamped;
+  status.command_timeouts = cc.timeouts;
   status.tick_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   const int n = status.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
   if (n > 0) out_.publish(config_.status_channel, buffer_.data(), n);

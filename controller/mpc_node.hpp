@@ -1,12 +1,15 @@
 #pragma once
-// stride-mpc's LCM side: receives state estimates and contact plans, validates every message
-// before the controller sees it, runs the controller's tick and publishes its policy and status.
+// stride-mpc's LCM side: receives state estimates, body commands and contact plans, validates
+// every message before the controller sees it, runs the controller's tick and publishes its
+// policy and status.
 //
 // Messages arrive as raw bytes (lcm's raw subscribe), are size-checked on the wire, decoded into
 // preallocated objects and content-checked (messages/validate.hpp); a rejected message is counted
 // by reason and dropped, never passed on. Out-of-order stamps (not newer than the last accepted
 // state) are rejected; staleness is measured on the controller's side (the state's arrival time),
-// so it needs no clock shared with the robot. Two ways to run:
+// so it needs no clock shared with the robot. Commands go through a CommandFilter (limits, deadman,
+// smoothing) on the same clock: their arrival time, never the sender's stamp, feeds the deadman.
+// Two ways to run:
 //   real time  a fixed-rate loop on CLOCK_MONOTONIC (controller/main.cpp);
 //   stamps     time is the newest state's stamp: a tick is due whenever a state reaches the next
 //              tick time. Lock-step with the mock robot and log replay use it, so both are
@@ -34,6 +37,7 @@ class MpcNode {
   // The raw handlers (public for tests, which feed them bytes directly).
   void onState(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void onPlan(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void onCommand(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
 
   // Stamps mode: a state has reached the next tick time.
   bool tickDue() const;
@@ -51,6 +55,9 @@ class MpcNode {
   std::int64_t rejected(msg::Reject reason) const { return rejected_[static_cast<int>(reason)]; }
   std::int64_t acceptedStates() const { return accepted_; }
   std::int64_t planUpdates() const { return plan_updates_; }
+  const CommandFilter& commands() const { return commands_; }
+  // Commands refused before the filter saw them (malformed, non-finite, out of order).
+  std::int64_t commandsMalformed() const { return commands_malformed_; }
   // Tick latencies [ms] of every tick that published a policy (capacity fixed at construction;
   // the oldest are overwritten beyond it).
   const std::vector<float>& latencies() const { return latencies_; }
@@ -59,6 +66,7 @@ class MpcNode {
  private:
   void reject(msg::Reject reason);
   static std::int64_t monotonicMicros();
+  double now() const;  // the controller's clock [s]: monotonic, or the newest state's stamp
 
   ControllerConfig config_;
   Mpc mpc_;
@@ -74,6 +82,9 @@ class MpcNode {
   std::array<std::int64_t, 8> rejected_{};
   contact_plan_t plan_msg_;
   bool plan_pending_ = false;
+  command_t command_msg_;
+  CommandFilter commands_;
+  std::int64_t last_command_utime_ = -1, commands_malformed_ = 0;
   std::vector<unsigned char> buffer_;  // encoded policy / status
   std::vector<float> latencies_;
   long latency_count_ = 0;

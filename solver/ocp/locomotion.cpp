@@ -21,8 +21,6 @@
 namespace stride {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
-
 Eigen::VectorXd stateWeights(const Model& model, const LocomotionWeights& w) {
   const int nv = model.nv;
   if (w.state.size() > 0) {
@@ -53,64 +51,36 @@ void checkOptions(const Model& model, const Eigen::VectorXd& x_nominal,
     throw std::invalid_argument("LocomotionProblem: dt must be positive and finite");
   if (o.knots < 1) throw std::invalid_argument("LocomotionProblem: knots must be at least 1");
   if (!(o.mu > 0.0)) throw std::invalid_argument("LocomotionProblem: mu must be positive");
-  if (!o.step.allFinite() || !std::isfinite(o.swing_height) || !std::isfinite(o.step_after))
-    throw std::invalid_argument(
-        "LocomotionProblem: step, step_after and swing height must be finite");
 }
 }  // namespace
 
 LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& contacts,
-                                     const ContactPlan& plan, const Eigen::VectorXd& x_nominal,
+                                     const Eigen::VectorXd& x_nominal,
                                      const LocomotionOptions& options)
-    : model_(model),
-      contacts_(contacts),
-      schedule_(plan, contacts),
-      x_nominal_(x_nominal),
-      options_(options) {
+    : model_(model), contacts_(contacts), x_nominal_(x_nominal), options_(options) {
   checkOptions(model, x_nominal, options);
   const int nq = model.nq, nv = model.nv, nu = actuatedDimension(model);
   const int nc = contacts_.size();
+  if (nc > kMaxContacts)
+    throw std::invalid_argument("LocomotionProblem: at most " + std::to_string(kMaxContacts) +
+                                " contacts");
   const LocomotionWeights& w = options.weights;
   const Eigen::VectorXd w_state = stateWeights(model, w);
   const auto q = x_nominal.head(nq);
 
   Data data(model);
   framesForwardKinematics(model, data, q);
-  for (int c = 0; c < nc; ++c) initial_feet_.push_back(data.oMf[contacts_[c].frame].p);
-  com_nominal_ = centerOfMass(model, data, q);
-  const long g_fixed = schedule_.phaseAt(options.step_after);
-  for (int c = 0; c < nc; ++c)
-    fixed_steps_.push_back(options.step_after > 0.0 ? schedule_.touchdowns(c, g_fixed) : 0L);
-  if (!options.footsteps.empty()) {
-    // Hand out the footsteps to the touch-downs after step_after in plan order.
-    foot_offsets_.assign(nc, {Eigen::Vector3d::Zero()});
-    size_t next = 0;
-    const long last_phase = schedule_.cyclic() ? std::numeric_limits<long>::max()
-                                               : static_cast<long>(schedule_.phases()) - 1;
-    for (long g = 1; g <= last_phase && next < options.footsteps.size(); ++g) {
-      const bool moving = schedule_.phaseStart(g) > options.step_after + kPlanTimeEpsilon;
-      for (int c = 0; c < nc && next < options.footsteps.size(); ++c) {
-        if (!schedule_.closed(c, g) || schedule_.closed(c, g - 1)) continue;
-        const Eigen::Vector3d& before = foot_offsets_[c].back();
-        foot_offsets_[c].push_back(moving ? Eigen::Vector3d(before + options.footsteps[next++])
-                                          : before);
-      }
-      // Each pass of a cyclic plan takes at least one footstep, or never will.
-      if (g >
-          static_cast<long>(schedule_.phases()) * static_cast<long>(options.footsteps.size() + 1))
-        break;
-    }
-  }
+  const Eigen::Vector3d com_nominal = centerOfMass(model, data, q);
 
-  // Holding torques per phase: g(q) = Sᵀ u + Jcᵀ λ at rest; the base rows fix λ (minimum norm
-  // among the forces that carry the weight), the joint rows then give u.
+  // Holding torques per contact mask: g(q) = Sᵀ u + Jcᵀ λ at rest; the base rows fix λ (minimum
+  // norm among the forces that carry the weight), the joint rows then give u.
   const Eigen::VectorXd g = computeGeneralizedGravity(model, data, q);
   ContactSet set = contacts_;
   ContactData cd(model, set);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(nv);
   const int na = nv - nu;  // unactuated (base) dofs
-  for (int i = 0; i < schedule_.phases(); ++i) {
-    for (int c = 0; c < nc; ++c) set.setActive(c, schedule_.closed(c, i));
+  for (unsigned mask = 0; mask < (1u << nc); ++mask) {
+    for (int c = 0; c < nc; ++c) set.setActive(c, (mask >> c) & 1u);
     Eigen::VectorXd u = g.tail(nu);
     if (na > 0 && set.nc() > 0 &&
         contactDynamics(model, data, set, cd, q, zero, zero) == ContactStatus::Ok) {
@@ -125,6 +95,7 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   cone_term_.resize(nc);
   swing_term_.resize(nc);
   cop_term_.assign(nc, -1);
+  swing_rot_term_.assign(nc, -1);
   const bool with_cop = options.sole_half_extents.minCoeff() > 0.0;
   std::vector<std::unique_ptr<ActionModel>> running;
   // One multibody workspace per thread the problem may use (knots.hpp, SharedWorkspace).
@@ -137,7 +108,7 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
     control_term_ = costs.add("control", std::make_unique<ControlResidual>(model, nu),
                               Activation::quadratic(nu), w.control);
     if (w.com > 0.0)
-      com_term_ = costs.add("com", std::make_unique<ComPositionResidual>(model, nu, com_nominal_),
+      com_term_ = costs.add("com", std::make_unique<ComPositionResidual>(model, nu, com_nominal),
                             Activation::quadratic(3), w.com);
     for (int c = 0; c < nc; ++c) {
       const std::string& name = contacts_[c].name;
@@ -151,10 +122,15 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
                                  std::make_unique<CenterOfPressureResidual>(
                                      model, nu, contacts_, name, options.sole_half_extents),
                                  CenterOfPressureResidual::activation(), w.cop);
-      swing_term_[c] =
-          costs.add("swing_" + name,
-                    std::make_unique<FrameTranslationResidual>(model, nu, name, initial_feet_[c]),
-                    Activation::quadratic(3), w.swing);
+      swing_term_[c] = costs.add("swing_" + name,
+                                 std::make_unique<FrameTranslationResidual>(
+                                     model, nu, name, data.oMf[contacts_[c].frame].p),
+                                 Activation::quadratic(3), w.swing);
+      if (w.swing_rotation > 0.0 && contacts_[c].dim == 6)
+        swing_rot_term_[c] = costs.add("swing_rot_" + name,
+                                       std::make_unique<FrameRotationResidual>(
+                                           model, nu, name, data.oMf[contacts_[c].frame].R),
+                                       Activation::quadratic(3), w.swing_rotation);
     }
     running.push_back(std::move(knot));
   }
@@ -172,61 +148,9 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   }
   x_ref_ = x_nominal_;
   knot_time_.assign(options.knots + 1, 0.0);
-  update(0.0);
 }
 
-Eigen::Vector3d LocomotionProblem::foothold(int contact, long n) const {
-  if (foot_offsets_.empty())
-    return initial_feet_[contact] +
-           static_cast<double>(std::max(0L, n - fixed_steps_[contact])) * options_.step;
-  const auto& offsets = foot_offsets_[contact];
-  const size_t i = std::min(static_cast<size_t>(std::max(0L, n)), offsets.size() - 1);
-  return initial_feet_[contact] + offsets[i];
-}
-
-Eigen::Vector3d LocomotionProblem::footReference(int contact, double t) const {
-  const long g = schedule_.phaseAt(t);
-  if (schedule_.closed(contact, g)) return foothold(contact, schedule_.touchdowns(contact, g));
-  const ContactSchedule::Swing s = schedule_.swing(contact, g);
-  Eigen::Vector3d p = foothold(contact, s.footholds);
-  if (!std::isfinite(s.touch_down)) return p;  // never lands again: hold the lift-off point
-  const double r = std::clamp((t - s.lift_off) / (s.touch_down - s.lift_off), 0.0, 1.0);
-  // Forward on a cosine ramp (no horizontal speed at lift-off and touch-down, so landing needs no
-  // tangential impulse), up and down on a sine arch.
-  p += 0.5 * (1.0 - std::cos(kPi * r)) * (foothold(contact, s.footholds + 1) - p);
-  p.z() += options_.swing_height * std::sin(kPi * r);
-  return p;
-}
-
-Eigen::Vector3d LocomotionProblem::bodyDisplacement(double t) const {
-  const int nc = contacts_.size();
-  Eigen::Vector3d d = Eigen::Vector3d::Zero();
-  if (nc == 0) return d;
-  // The mean planned progress of the feet, fractional during a swing (on the same ramp as the
-  // foot), so it is continuous through lift-offs and touch-downs.
-  const long g = schedule_.phaseAt(t);
-  for (int c = 0; c < nc; ++c) {
-    if (schedule_.closed(c, g)) {
-      d += foothold(c, schedule_.touchdowns(c, g)) - initial_feet_[c];
-      continue;
-    }
-    const ContactSchedule::Swing s = schedule_.swing(c, g);
-    const Eigen::Vector3d from = foothold(c, s.footholds);
-    d += from - initial_feet_[c];
-    if (std::isfinite(s.touch_down))
-      d += std::clamp((t - s.lift_off) / (s.touch_down - s.lift_off), 0.0, 1.0) *
-           (foothold(c, s.footholds + 1) - from);
-  }
-  return d / nc;
-}
-
-void LocomotionProblem::setStateReference(Eigen::VectorXd& x_ref, double t) const {
-  x_ref = x_nominal_;
-  // The base follows the feet.
-  if (model_.hasFreeFlyer()) x_ref.head<3>() += bodyDisplacement(t);
-}
-
-bool LocomotionProblem::update(double t0) {
+bool LocomotionProblem::update(double t0, const GaitGenerator& reference) {
   // A clock that is not finite (or absurdly far) would index the plan out of range: refuse it.
   if (!std::isfinite(t0) || std::abs(t0) > 1e9) return false;
   t0_ = t0;
@@ -241,19 +165,32 @@ bool LocomotionProblem::update(double t0) {
     // Every running knot was built as a KnotModel (shift only reorders them).
     auto& knot = static_cast<KnotModel&>(problem_->knot(k));
     CostModel& costs = knot.costs();
-    const long g = schedule_.phaseAt(t), g_before = schedule_.phaseAt(t - dt);
+    const unsigned mask = reference.mask(t), before = reference.mask(t - dt);
     bool touchdown = false;
     for (int c = 0; c < nc; ++c) {
-      const bool closed = schedule_.closed(c, g);
-      const bool lands = closed && !schedule_.closed(c, g_before);
+      const bool closed = (mask >> c) & 1u;
+      const bool lands = closed && !((before >> c) & 1u);
       touchdown = touchdown || lands;
       knot.contacts().setActive(c, closed);
       costs[cone_term_[c]].active = closed;
-      if (cop_term_[c] >= 0) costs[cop_term_[c]].active = closed;
+      if (cop_term_[c] >= 0) {
+        costs[cop_term_[c]].active = closed;
+        // The sole's heading where it stands (or will land), for its centre of pressure.
+        if (closed)
+          static_cast<CenterOfPressureResidual&>(*costs[cop_term_[c]].residual)
+              .setSurface(reference.footRotation(c, t));
+      }
       CostTerm& swing = costs[swing_term_[c]];
       swing.active = !closed || lands;
       if (swing.active)
-        static_cast<FrameTranslationResidual&>(*swing.residual).setReference(footReference(c, t));
+        static_cast<FrameTranslationResidual&>(*swing.residual).setReference(reference.foot(c, t));
+      if (swing_rot_term_[c] >= 0) {
+        CostTerm& turn = costs[swing_rot_term_[c]];
+        turn.active = swing.active;
+        if (turn.active)
+          static_cast<FrameRotationResidual&>(*turn.residual)
+              .setReference(reference.footRotation(c, t));
+      }
     }
     const bool impulse = touchdown && options_.impulses && !after_impulse;
     knot.setMode(impulse ? KnotMode::Impulse : KnotMode::Contact);
@@ -268,30 +205,28 @@ bool LocomotionProblem::update(double t0) {
       if (cop_term_[c] >= 0)
         costs[cop_term_[c]].weight = options_.weights.cop / (impulse ? dt * dt : 1.0);
     }
-    static_cast<ControlResidual&>(*costs[control_term_].residual)
-        .setReference(u_hold_[schedule_.localPhase(g)]);
-    const Eigen::Vector3d moved = bodyDisplacement(t);
-    x_ref_ = x_nominal_;
-    if (model_.hasFreeFlyer()) x_ref_.head<3>() += moved;
+    static_cast<ControlResidual&>(*costs[control_term_].residual).setReference(u_hold_[mask]);
+    reference.state(t, x_ref_);
     static_cast<StateResidual&>(*costs[state_term_].residual).setReference(x_ref_);
     if (com_term_ >= 0)
-      static_cast<ComPositionResidual&>(*costs[com_term_].residual)
-          .setReference(com_nominal_ + moved);
+      static_cast<ComPositionResidual&>(*costs[com_term_].residual).setReference(reference.com(t));
     after_impulse = impulse;
     if (!impulse) t += dt;
   }
   knot_time_[T] = t;
   auto& terminal = static_cast<TerminalModel&>(problem_->terminal());
-  setStateReference(x_ref_, t);
+  reference.state(t, x_ref_);
   static_cast<StateResidual&>(*terminal.costs()[0].residual).setReference(x_ref_);
   return true;
 }
 
-void LocomotionProblem::standingWarmStart(std::vector<Eigen::VectorXd>& xs,
-                                          std::vector<Eigen::VectorXd>& us) const {
+void LocomotionProblem::referenceWarmStart(const GaitGenerator& reference,
+                                           std::vector<Eigen::VectorXd>& xs,
+                                           std::vector<Eigen::VectorXd>& us) const {
   const int T = problem_->horizon();
-  xs.assign(T + 1, x_nominal_);
+  xs.resize(T + 1, x_nominal_);
   us.resize(T);
+  for (int k = 0; k <= T; ++k) reference.state(knot_time_[k], xs[k]);
   for (int k = 0; k < T; ++k) {
     const auto& knot = static_cast<const KnotModel&>(problem_->knot(k));
     us[k] = static_cast<const ControlResidual&>(*knot.costs()[control_term_].residual).reference();

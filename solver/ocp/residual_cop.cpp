@@ -24,14 +24,17 @@ CenterOfPressureResidual::CenterOfPressureResidual(const Model& model, int nu,
     throw std::invalid_argument("CenterOfPressureResidual: contact '" + contact +
                                 "': the surface orientation is not a rotation");
   const double hx = half_extents.x(), hy = half_extents.y();
-  Eigen::Matrix<double, 4, 6> As;  // on [f; τ] in the surface frame
-  As << 0, 0, -hy, 1, 0, 0,        //
-      0, 0, -hy, -1, 0, 0,         //
-      0, 0, -hx, 0, 1, 0,          //
+  As_ << 0, 0, -hy, 1, 0, 0,  //
+      0, 0, -hy, -1, 0, 0,    //
+      0, 0, -hx, 0, 1, 0,     //
       0, 0, -hx, 0, -1, 0;
+  setSurface(R_surface);
+}
+
+void CenterOfPressureResidual::setSurface(const Eigen::Matrix3d& R_surface) {
   // The wrench in the surface frame is blockdiag(Rᵀ, Rᵀ) [f; τ] (same origin, rotated axes).
-  A_.leftCols<3>().noalias() = As.leftCols<3>() * R_surface.transpose();
-  A_.rightCols<3>().noalias() = As.rightCols<3>() * R_surface.transpose();
+  A_.leftCols<3>().noalias() = As_.leftCols<3>() * R_surface.transpose();
+  A_.rightCols<3>().noalias() = As_.rightCols<3>() * R_surface.transpose();
 }
 
 Activation CenterOfPressureResidual::activation(double weight) {

@@ -6,9 +6,9 @@
 // foot then rolls. Multiplied by f_z > 0 (the friction cone's last row keeps it positive), the
 // rectangle is four linear rows that must all be ≤ 0:
 //   r = [ τ_x − hy f_z;  −τ_x − hy f_z;  τ_y − hx f_z;  −τ_y − hx f_z ]
-// in the sole's surface frame; R_surface rotates the contact's force frame into it (the identity
-// for LOCAL_WORLD_ALIGNED forces of a sole flat on the ground and aligned with the world's x axis,
-// the plans Stride generates). Zero where the contact is off.
+// in the sole's surface frame; R_surface is the sole's orientation in the contact's force frame
+// (for LOCAL_WORLD_ALIGNED forces: the sole's world orientation, which the locomotion problem sets
+// from each stance's planned heading, setSurface). Zero where the contact is off.
 
 #include "solver/ocp/residual_contact.hpp"
 
@@ -24,6 +24,8 @@ class CenterOfPressureResidual : public ContactResidual {
 
   // The bounds activation matching the rows: each row ≤ 0.
   static Activation activation(double weight = 1.0);
+  // A new sole orientation (no allocation; R_surface must be a rotation, unchecked here).
+  void setSurface(const Eigen::Matrix3d& R_surface);
   // The rows' matrix A (r = A [f; τ]), in the contact's force frame.
   const Eigen::Matrix<double, 4, 6>& rows() const { return A_; }
 
@@ -33,6 +35,7 @@ class CenterOfPressureResidual : public ContactResidual {
                 const Eigen::Ref<const Eigen::VectorXd>& u) const override;
 
  private:
+  Eigen::Matrix<double, 4, 6> As_;  // on [f; τ] in the surface frame
   Eigen::Matrix<double, 4, 6> A_;
 };
 

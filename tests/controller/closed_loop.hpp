@@ -1,11 +1,14 @@
 #pragma once
 // The closed loop in one process: stride-sim's node and stride-mpc's node on one in-process LCM
-// bus (memq://), in lock-step: the sim publishes a state every controller period, the controller
-// ticks on it, the sim applies the answer for one period. Deterministic and network-free.
+// bus (memq://), in lock-step: the sim publishes a state every controller period, a command
+// script (if any) publishes the command in force at that state's time, stamped with it, the
+// controller ticks on them, the sim applies the answer for one period. Deterministic and
+// network-free.
 
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
 
+#include "controller/command_script.hpp"
 #include "controller/mpc_node.hpp"
 #include "sim/sim_node.hpp"
 
@@ -37,7 +40,8 @@ inline double tiltDeg(const Eigen::VectorXd& q) {
 }
 
 inline Run run(const ControllerConfig& config, const sim::SimNodeOptions& sim_options,
-               double duration, const std::function<void(const Sample&)>& each = nullptr) {
+               double duration, const std::vector<ScriptedCommand>& script = {},
+               const std::function<void(const Sample&)>& each = nullptr) {
   lcm::LCM lcm("memq://");
   LcmPublisher publisher(lcm);
   MpcNode mpc(config, publisher, TimeSource::Stamps);
@@ -50,8 +54,19 @@ inline Run run(const ControllerConfig& config, const sim::SimNodeOptions& sim_op
   sim.subscribe(lcm);
   sim.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
   Run r;
+  command_t command;
   while (sim.simulator().time() < duration - 1e-9) {
     const std::int64_t stamp = sim.publishState();
+    if (!script.empty()) {
+      const ScriptedCommand& c = script[commandAt(script, sim.simulator().time())];
+      command.utime = sim.utime();
+      command.vx = c.vx;
+      command.vy = c.vy;
+      command.yaw_rate = c.yaw_rate;
+      command.gait = c.gait;
+      command.body_height = c.body_height;
+      lcm.publish(config.command_channel, &command);
+    }
     while (lcm.handleTimeout(0) > 0) {
     }
     if (mpc.tickDue()) {

@@ -11,13 +11,16 @@ namespace {
 
 using closed_loop::tiltDeg;
 
-// Stands 5 s, trots in place, then forward from 7.5 s (the stand-5-s-trot-5-s).
+// Stands 5 s, trots in place, then forward at 0.3 m/s from 7.5 s.
 TEST(ClosedLoop, QuadrupedStandsThenTrots) {
   ControllerConfig config = loadControllerConfig(controller_cases::configPath("stride_quad"));
-  config.gait.stand = 5.0;
-  config.gait.step_after = 7.5;
-  config.locomotion.step_after = 7.5;
-  const closed_loop::Run r = closed_loop::run(config, sim::SimNodeOptions{}, 10.0);
+  std::vector<ScriptedCommand> script(3);  // script[0]: stand from 0 s
+  script[1].at = 5.0;
+  script[1].gait = "trot";
+  script[2] = script[1];
+  script[2].at = 7.5;
+  script[2].vx = 0.3;
+  const closed_loop::Run r = closed_loop::run(config, sim::SimNodeOptions{}, 10.0, script);
   ASSERT_FALSE(r.sim.fell);
   ASSERT_NEAR(r.samples.back().t, 10.0 - 0.005, 1e-9);
   const double z0 = r.samples.front().q[2];
@@ -32,22 +35,22 @@ TEST(ClosedLoop, QuadrupedStandsThenTrots) {
     if (s.t > 5.2) fewer_feet += s.feet_down <= 2;
     EXPECT_EQ(s.policy_status, 0) << "t " << s.t;
   }
-  EXPECT_LT(drift_standing, 0.002);  // standing is standing, before the trot enters the horizon
+  EXPECT_LT(drift_standing, 0.002);  // standing is standing, before the trot
   EXPECT_LT(max_tilt, 10.0);
   EXPECT_GT(z_min, z0 - 0.05);
   EXPECT_LT(z_max, z0 + 0.03);
   EXPECT_GT(fewer_feet, 200) << "the trot lifts two feet at a time";
-  EXPECT_GT(r.q_end[0] - r.samples.front().q[0], 0.05) << "walks forward after 7.5 s";
+  // 0.3 m/s from 7.5 s (reached at the acceleration limit within 0.6 s): ~0.6 m by 10 s.
+  EXPECT_GT(r.q_end[0] - r.samples.front().q[0], 0.45) << "walks forward after 7.5 s";
   EXPECT_EQ(r.sim.policies_rejected, 0);
   EXPECT_EQ(r.sim.hold_steps, 0);
   EXPECT_EQ(r.mpc.fallbacks, 0);
   EXPECT_EQ(r.rejected, 0);
 }
 
-// A shove on the standing robot's base: it must absorb it and settle back.
+// A shove on the standing robot's base (no command: it stands): it must absorb it and settle back.
 TEST(ClosedLoop, QuadrupedRecoversFromAPush) {
   ControllerConfig config = loadControllerConfig(controller_cases::configPath("stride_quad"));
-  config.gait.type = "stand";
   sim::SimNodeOptions o;
   sim::Push push;
   push.start = 1.0;
@@ -69,14 +72,17 @@ TEST(ClosedLoop, QuadrupedRecoversFromAPush) {
 // Estimates as a real robot's: joint noise, a period of delay, 10% dropped. The robot still trots.
 TEST(ClosedLoop, QuadrupedTrotsWithNoiseDelayAndDrops) {
   ControllerConfig config = loadControllerConfig(controller_cases::configPath("stride_quad"));
-  config.gait.stand = 0.5;
+  std::vector<ScriptedCommand> script(2);
+  script[1].at = 0.5;
+  script[1].gait = "trot";
+  script[1].vx = 0.2;
   sim::SimNodeOptions o;
   o.noise_q = 0.002;  // rad
   o.noise_v = 0.02;   // rad/s, m/s
   o.delay = 1;        // one controller period late
   o.drop = 0.1;
   o.seed = 7;
-  const closed_loop::Run r = closed_loop::run(config, o, 4.0);
+  const closed_loop::Run r = closed_loop::run(config, o, 4.0, script);
   ASSERT_FALSE(r.sim.fell);
   EXPECT_GT(r.sim.states_dropped, 40);
   double max_tilt = 0.0;
@@ -91,14 +97,14 @@ TEST(ClosedLoop, QuadrupedTrotsWithNoiseDelayAndDrops) {
 namespace stride {
 namespace {
 
-// The humanoid stands, then walks its footstep list (a half step, 15 cm strides) on its soles
-// (lock-step, memq).
+// The humanoid stands, then walks forward at 0.2 m/s on its soles (lock-step, memq).
 TEST(ClosedLoop, HumanoidStandsAndSteps) {
   ControllerConfig config = loadControllerConfig(controller_cases::configPath("stride_humanoid"));
-  config.gait.stand = 1.0;
-  config.gait.step_after = 1.0;
-  config.locomotion.step_after = 1.0;
-  const closed_loop::Run r = closed_loop::run(config, sim::SimNodeOptions{}, 5.0);
+  std::vector<ScriptedCommand> script(2);
+  script[1].at = 1.0;
+  script[1].gait = "walk";
+  script[1].vx = 0.2;
+  const closed_loop::Run r = closed_loop::run(config, sim::SimNodeOptions{}, 5.0, script);
   ASSERT_FALSE(r.sim.fell);
   const double z0 = r.samples.front().q[2];
   double max_tilt = 0.0, z_min = 1e9;
@@ -111,8 +117,8 @@ TEST(ClosedLoop, HumanoidStandsAndSteps) {
   EXPECT_LT(max_tilt, 10.0);
   EXPECT_GT(z_min, z0 - 0.05);
   EXPECT_GT(single_support, 50) << "steps lift one foot at a time (samples at 50 Hz)";
-  // Five of the six footsteps are done by 5 s (0.8 s each from 1 s): the base is past 0.2 m.
-  EXPECT_GT(r.q_end[0] - r.samples.front().q[0], 0.2) << "walks forward";
+  // 0.2 m/s from 1 s, reached at 0.5 m/s² within 0.4 s: ~0.7 m by 5 s.
+  EXPECT_GT(r.q_end[0] - r.samples.front().q[0], 0.5) << "walks forward";
   EXPECT_EQ(r.sim.policies_rejected, 0);
   EXPECT_EQ(r.mpc.fallbacks, 0);
 }

@@ -46,7 +46,14 @@ TEST(ControllerConfig, ErrorsNameTheFileAndTheKey) {
   EXPECT_NE(configError(robot + "horizon: {knots: 100, dtt: 0.01}\n").find("horizon.dtt"),
             std::string::npos);
   EXPECT_NE(configError(robot + "solver: {kind: newton}\n").find("solver.kind"), std::string::npos);
-  EXPECT_NE(configError(robot + "gait: {type: gallop}\n").find("gait.type"), std::string::npos);
+  EXPECT_NE(configError(robot + "gait: {gallop: {support: 0.1}}\n").find("gait.gallop"),
+            std::string::npos);
+  EXPECT_NE(configError(robot + "gait: {trot: {support: -0.1}}\n").find("gait.trot.support"),
+            std::string::npos);
+  EXPECT_NE(configError(robot + "command: {max_velocity: [1, 2]}\n").find("command.max_velocity"),
+            std::string::npos);
+  EXPECT_NE(configError(robot + "command: {timeout_ms: 0}\n").find("command.timeout_ms"),
+            std::string::npos);
   EXPECT_NE(configError(robot + "safety: {fallback: pray}\n").find("safety.fallback"),
             std::string::npos);
   EXPECT_NE(configError(robot + "horizon: [1, 2\n").find("malformed"), std::string::npos);
@@ -60,100 +67,49 @@ TEST(ControllerConfig, ErrorsNameTheFileAndTheKey) {
   }
 }
 
-TEST(Gait, TrotAndWalkPlans) {
+// The gaits' cyclic patterns: every one starts with all feet down (where the timeline switches),
+// trot and pace lift pairs, walk one foot at a time; a biped walks, and cannot trot.
+TEST(Gait, Patterns) {
   const Robot quad =
       loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
-  GaitConfig g;
-  g.type = "trot";
-  g.stand = 1.0;
-  g.support = 0.1;
-  g.swing = 0.2;
-  g.duration = 3.0;
-  const ContactPlan trot = makeGaitPlan(g, quad.contacts);
-  EXPECT_FALSE(trot.cyclic);
-  EXPECT_TRUE(trot.isClosed("FL_foot", 0.5));
-  EXPECT_FALSE(trot.isClosed("FL_foot", 1.15));
-  EXPECT_FALSE(trot.isClosed("HR_foot", 1.15));
-  EXPECT_TRUE(trot.isClosed("FR_foot", 1.15));
-  EXPECT_FALSE(trot.isClosed("FR_foot", 1.45));
-  EXPECT_TRUE(trot.isClosed("FR_foot", 100.0));  // stands after the plan
-  g.type = "walk";
-  const ContactPlan walk = makeGaitPlan(g, quad.contacts);
-  int open_at_once = 0;
-  for (double t = 0.0; t < 3.0; t += 0.01) {
-    int open = 0;
-    for (const auto& c : quad.contacts) open += !walk.isClosed(c.frame, t);
-    open_at_once = std::max(open_at_once, open);
-  }
-  EXPECT_EQ(open_at_once, 1);
+  EXPECT_EQ(gaitNames(4), (std::vector<std::string>{"stand", "trot", "walk", "pace"}));
+  EXPECT_EQ(gaitNames(2), (std::vector<std::string>{"stand", "walk"}));
+  EXPECT_EQ(gaitNames(3), (std::vector<std::string>{"stand"}));
+  const GaitTiming timing{0.1, 0.2};
+  auto lifted = [&](const ContactPlan& plan, double t) {
+    std::string up;
+    for (const auto& c : quad.contacts)
+      if (!plan.isClosed(c.frame, t)) up += c.frame.substr(0, 2) + " ";
+    return up;
+  };
+  const ContactPlan trot = makeGaitPattern("trot", timing, quad.contacts);
+  EXPECT_TRUE(trot.cyclic);
+  EXPECT_DOUBLE_EQ(trot.duration(), 0.6);
+  EXPECT_EQ(lifted(trot, 0.05), "");
+  EXPECT_EQ(lifted(trot, 0.15), "FL HR ");
+  EXPECT_EQ(lifted(trot, 0.45), "FR HL ");
+  EXPECT_EQ(lifted(trot, 0.6 + 0.15), "FL HR ");  // repeats
+  const ContactPlan pace = makeGaitPattern("pace", timing, quad.contacts);
+  EXPECT_EQ(lifted(pace, 0.15), "FL HL ");
+  EXPECT_EQ(lifted(pace, 0.45), "FR HR ");
+  const ContactPlan walk = makeGaitPattern("walk", timing, quad.contacts);
+  EXPECT_DOUBLE_EQ(walk.duration(), 1.2);
+  EXPECT_EQ(lifted(walk, 0.15), "HL ");
+  EXPECT_EQ(lifted(walk, 0.45), "FL ");
+  EXPECT_EQ(lifted(walk, 0.75), "HR ");
+  EXPECT_EQ(lifted(walk, 1.05), "FR ");
+  const ContactPlan stand = makeGaitPattern("stand", timing, quad.contacts);
+  EXPECT_EQ(lifted(stand, 12.3), "");
 
   const Robot biped =
       loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml");
-  EXPECT_NO_THROW(makeGaitPlan(g, biped.contacts));
-  g.type = "trot";
-  EXPECT_THROW(makeGaitPlan(g, biped.contacts), ConfigError);
-}
-
-TEST(Gait, StepsInPlaceUntilStepAfter) {
-  const Robot quad =
-      loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
-  ContactSet contacts;
-  for (const auto& c : quad.contacts)
-    contacts.add(quad.model, c.frame, 3, ReferenceFrame::LocalWorldAligned);
-  GaitConfig g;
-  g.stand = 0.5;
-  g.duration = 5.0;
-  LocomotionOptions o;
-  o.knots = 10;
-  o.step = Eigen::Vector3d(0.05, 0.0, 0.0);
-  o.step_after = 1.7;
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(quad.model.nq + quad.model.nv);
-  x.head(quad.model.nq) = quad.default_q;
-  LocomotionProblem loco(quad.model, contacts, makeGaitPlan(g, quad.contacts), x, o);
-  const Eigen::Vector3d start = loco.footReference(0, 0.0);
-  // Touch-downs of FL up to 1.7 s (at 0.8 and 1.4 s) leave it in place; later ones move it.
-  EXPECT_NEAR((loco.footReference(0, 1.65) - start).norm(), 0.0, 1e-12);
-  EXPECT_NEAR(loco.footReference(0, 2.05).x() - start.x(), 0.05, 1e-12);  // landed at 2.0 s
-  EXPECT_NEAR(loco.footReference(0, 2.65).x() - start.x(), 0.10, 1e-12);
-  // Mid-swing before step_after: up, not forward.
-  EXPECT_NEAR(loco.footReference(0, 1.3).x(), start.x(), 1e-12);
-  EXPECT_GT(loco.footReference(0, 1.3).z(), start.z() + 0.01);
-}
-
-// A footstep list: each touch-down after step_after takes the next displacement, in plan order;
-// the swing arc goes from one foothold to the next; after the list, the feet stay.
-TEST(Gait, FootstepList) {
-  const Robot biped =
-      loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml");
-  ContactSet contacts;
-  for (const auto& c : biped.contacts)
-    contacts.add(biped.model, c.frame, 6, ReferenceFrame::LocalWorldAligned);
-  GaitConfig g;
-  g.type = "walk";
-  g.stand = 1.0;
-  g.support = 0.2;
-  g.swing = 0.6;
-  g.duration = 10.0;
-  LocomotionOptions o;
-  o.knots = 10;
-  o.dt = 0.02;
-  o.step_after = 1.0;
-  o.footsteps = {Eigen::Vector3d(0.1, 0.0, 0.0), Eigen::Vector3d(0.2, 0.05, 0.0),
-                 Eigen::Vector3d(0.1, -0.05, 0.0)};
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(biped.model.nq + biped.model.nv);
-  x.head(biped.model.nq) = biped.default_q;
-  LocomotionProblem loco(biped.model, contacts, makeGaitPlan(g, biped.contacts), x, o);
-  const Eigen::Vector3d L0 = loco.footReference(0, 0.0), R0 = loco.footReference(1, 0.0);
-  // Left swings 1.2-1.8 s, right 2.0-2.6 s, left 2.8-3.4 s, right 3.6-4.2 s (in place).
-  EXPECT_TRUE((loco.footReference(0, 1.9) - L0).isApprox(Eigen::Vector3d(0.1, 0, 0), 1e-12));
-  EXPECT_TRUE((loco.footReference(1, 2.7) - R0).isApprox(Eigen::Vector3d(0.2, 0.05, 0), 1e-12));
-  EXPECT_TRUE((loco.footReference(0, 3.5) - L0).isApprox(Eigen::Vector3d(0.2, -0.05, 0), 1e-12));
-  EXPECT_TRUE((loco.footReference(1, 5.0) - R0).isApprox(Eigen::Vector3d(0.2, 0.05, 0), 1e-12));
-  // Mid-swing: half way on the ramp, at the arc's top.
-  const Eigen::Vector3d mid = loco.footReference(1, 2.3) - R0;
-  EXPECT_NEAR(mid.x(), 0.1, 1e-12);
-  EXPECT_NEAR(mid.y(), 0.025, 1e-12);
-  EXPECT_NEAR(mid.z(), o.swing_height, 1e-12);
+  const ContactPlan steps = makeGaitPattern("walk", timing, biped.contacts);
+  EXPECT_TRUE(steps.isClosed("R_sole", 0.15));
+  EXPECT_FALSE(steps.isClosed("L_sole", 0.15));
+  EXPECT_FALSE(steps.isClosed("R_sole", 0.45));
+  EXPECT_THROW(makeGaitPattern("trot", timing, biped.contacts), ConfigError);
+  EXPECT_THROW(makeGaitPattern("gallop", timing, quad.contacts), ConfigError);
+  EXPECT_THROW(makeGaitPattern("trot", GaitTiming{0.0, 0.2}, quad.contacts), ConfigError);
 }
 
 TEST(Gait, PlanFile) {
@@ -179,7 +135,9 @@ TEST(Gait, PlanFile) {
   Mpc mpc(config);
   robot_state_t s = standingState(mpc.robot(), 0);
   ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
-  EXPECT_EQ(mpc.problem()->schedule().phases(), 14);
+  EXPECT_EQ(mpc.status().gait, "plan");
+  const ContactTimeline& timeline = mpc.reference()->timeline();
+  EXPECT_EQ(timeline.pattern(timeline.patternAt(0.0)).phases(), 14);
   std::ofstream(bad) << "phases:\n  - {duration: 1, contacts: [L_sole]}\n";
   config.gait.plan_file = bad;
   EXPECT_THROW(Mpc{config}, ConfigError);

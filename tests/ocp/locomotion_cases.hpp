@@ -100,8 +100,6 @@ inline LocomotionOptions soloOptions() {
   o.knots = 100;
   o.mu = kPlanFriction;
   o.min_normal_force = 1.0;
-  o.swing_height = 0.05;
-  o.step = Eigen::Vector3d(0.05, 0.0, 0.0);
   LocomotionWeights& w = o.weights;
   w.base_position = 10.0;
   w.base_orientation = 10.0;
@@ -121,8 +119,6 @@ inline LocomotionOptions talosOptions() {
   o.knots = 60;
   o.mu = kPlanFriction;
   o.min_normal_force = 20.0;
-  o.swing_height = 0.05;
-  o.step = Eigen::Vector3d(0.1, 0.0, 0.0);
   LocomotionWeights& w = o.weights;
   w.base_position = 100.0;
   w.base_orientation = 100.0;
@@ -136,10 +132,24 @@ inline LocomotionOptions talosOptions() {
   return o;
 }
 
-// A problem with the robot it refers to (the problem keeps a reference to the model).
+// A problem with the robot it refers to (the problem keeps a reference to the model) and the
+// references it is configured from: the plan played by a gait generator, the robot commanded
+// forward at `velocity` from its nominal posture.
 struct Case {
   std::unique_ptr<Robot> robot;
   std::unique_ptr<LocomotionProblem> loco;
+  std::unique_ptr<GaitGenerator> ref;
+  BodyCommand velocity;
+
+  // Plans the references from the nominal posture at t0 (as a controller would from a state
+  // there) and configures the knots for them.
+  bool update(double t0) {
+    return ref->plan(t0, robot->x_nominal, t0, t0 + loco->span()) && loco->update(t0, *ref);
+  }
+  // A warm start on the references: their states and the knots' holding torques.
+  void warmStart(std::vector<Eigen::VectorXd>& xs, std::vector<Eigen::VectorXd>& us) const {
+    loco->referenceWarmStart(*ref, xs, us);
+  }
 };
 
 enum class Problem { SoloStand, SoloTrot, TalosStand, TalosStep };
@@ -181,8 +191,19 @@ inline Case make(Problem p, const std::string& shared,
       break;
   }
   if (adjust) adjust(o);
-  c.loco = std::make_unique<LocomotionProblem>(c.robot->model, c.robot->contacts, plan,
-                                               c.robot->x_nominal, o);
+  c.loco =
+      std::make_unique<LocomotionProblem>(c.robot->model, c.robot->contacts, c.robot->x_nominal, o);
+  GaitGeneratorOptions g;
+  g.swing_height = 0.05;
+  g.horizon = c.loco->span();
+  g.sample_dt = o.dt;
+  c.ref = std::make_unique<GaitGenerator>(c.robot->model, c.robot->contacts, c.robot->x_nominal, g);
+  c.ref->timeline().reset(c.ref->timeline().addPattern(plan), 0.0);
+  // The trot steps 5 cm per touch-down (a foot lands every 0.6 s); talos's step is 10 cm.
+  if (p == Problem::SoloTrot) c.velocity.vx = 0.05 / 0.6;
+  if (p == Problem::TalosStep) c.velocity.vx = 0.1 / 1.2;
+  c.ref->setCommand(c.velocity, c.velocity);
+  c.update(0.0);
   return c;
 }
 

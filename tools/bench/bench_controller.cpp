@@ -18,8 +18,8 @@
 namespace stride::bench {
 namespace {
 
-// stride-mpc's node and stride-sim's node on one in-process bus, the robot into its gait quickly
-// (the hard ticks are the stepping ones).
+// stride-mpc's node and stride-sim's node on one in-process bus, the robot commanded into its gait
+// at once, walking forward (the hard ticks are the stepping ones).
 struct ClosedLoop {
   explicit ClosedLoop(const char* robot)
       : config(configFor(robot)),
@@ -34,9 +34,6 @@ struct ClosedLoop {
   static ControllerConfig configFor(const char* robot) {
     ControllerConfig c =
         loadControllerConfig(std::string(STRIDE_CONFIG_DIR) + "/controller/" + robot + ".yaml");
-    c.gait.stand = 0.5;
-    c.gait.step_after = 1.0;
-    c.locomotion.step_after = 1.0;
     return c;
   }
   static sim::SimNodeOptions simOptions(const ControllerConfig& c) {
@@ -53,6 +50,10 @@ struct ClosedLoop {
   // when the robot fell.
   bool period(double& tick_seconds, double& prepare_seconds) {
     sim.publishState();
+    command.utime = sim.utime();
+    command.gait = mpc.mpc().gaits().size() > 2 ? "trot" : "walk";
+    command.vx = sim.simulator().time() > 0.5 ? 0.3 : 0.0;
+    lcm.publish(config.command_channel, &command);
     while (lcm.handleTimeout(0) > 0) {
     }
     const auto t0 = std::chrono::steady_clock::now();
@@ -71,6 +72,7 @@ struct ClosedLoop {
   }
 
   ControllerConfig config;
+  command_t command;
   lcm::LCM lcm;
   LcmPublisher publisher;
   MpcNode mpc;

@@ -175,7 +175,7 @@ void fddpIteration(benchmark::State& state, loco_cases::Problem which) {
   c.loco->problem().setThreads(static_cast<int>(state.range(0)));
   Solver solver(c.loco->problem(), SolverKind::Fddp);
   std::vector<Eigen::VectorXd> xs, us;
-  c.loco->standingWarmStart(xs, us);
+  c.warmStart(xs, us);
   const double reg = solver.regularization();
   for (auto _ : state) {
     state.PauseTiming();

@@ -1,0 +1,322 @@
+#include "solver/ocp/gait_generator.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "solver/multibody/center_of_mass.hpp"
+#include "solver/multibody/frames.hpp"
+
+namespace stride {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kGravity = 9.81;
+// How far past the window a foothold may need the base reference: the mid-stance of the first
+// touch-down after the window's end. Beyond the samples the base moves at its last velocity.
+constexpr double kLookahead = 2.0;
+// Mid-stance of a stance that does not end (a stand): at most this long after the touch-down.
+constexpr double kHalfStanceCap = 0.5;
+
+double yawOf(double qx, double qy, double qz, double qw) {
+  return std::atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz));
+}
+
+Eigen::Vector2d rotate(double yaw, double x, double y) {
+  const double c = std::cos(yaw), s = std::sin(yaw);
+  return {c * x - s * y, s * x + c * y};
+}
+
+// A value ramping from v0 to v1 at rate a: its value and its integral from 0 to tau.
+double ramp(double v0, double v1, double a, double tau) {
+  const double d = v1 - v0, step = a * tau;
+  return v0 + std::clamp(d, -step, step);
+}
+double rampIntegral(double v0, double v1, double a, double tau) {
+  const double d = v1 - v0, T = std::abs(d) / a;
+  if (tau <= T) return v0 * tau + (d >= 0.0 ? 0.5 : -0.5) * a * tau * tau;
+  return v0 * T + 0.5 * d * T + v1 * (tau - T);
+}
+}  // namespace
+
+GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
+                             const Eigen::VectorXd& x_nominal, const GaitGeneratorOptions& options)
+    : model_(model),
+      timeline_(contacts),
+      options_(options),
+      nc_(contacts.size()),
+      x_nominal_(x_nominal),
+      data_(model) {
+  if (!model.hasFreeFlyer())
+    throw std::invalid_argument("GaitGenerator: the robot needs a free-flyer base");
+  if (x_nominal.size() != model.nq + model.nv || !x_nominal.allFinite())
+    throw std::invalid_argument("GaitGenerator: x_nominal must be finite of size nq + nv");
+  const GaitGeneratorOptions& o = options;
+  if (!(o.horizon > 0.0) || !(o.sample_dt > 0.0) || !std::isfinite(o.horizon) ||
+      !(o.acceleration.minCoeff() > 0.0) || !o.acceleration.allFinite() || !(o.height_rate > 0.0) ||
+      !std::isfinite(o.swing_height) || !std::isfinite(o.foothold_gain) ||
+      !(o.max_foothold_correction >= 0.0))
+    throw std::invalid_argument(
+        "GaitGenerator: horizon, sample_dt, accelerations and height rate must be positive, "
+        "the swing height, foothold gain and correction cap finite");
+  x_nominal_.segment<4>(3).normalize();
+
+  const auto q = x_nominal_.head(model.nq);
+  framesForwardKinematics(model, data_, q);
+  const Eigen::Vector3d base = q.head<3>();
+  const Eigen::Quaterniond orientation(q[6], q[3], q[4], q[5]);
+  const double yaw = yawOf(q[3], q[4], q[5], q[6]);
+  const Eigen::Matrix3d unyaw =
+      Eigen::AngleAxisd(-yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  tilt_ = Eigen::Quaterniond(unyaw) * orientation;
+  z_nominal_ = base.z();
+  for (int c = 0; c < nc_; ++c) {
+    frames_.push_back(contacts[c].frame);
+    const Eigen::Vector3d p = data_.oMf[contacts[c].frame].p;
+    Eigen::Vector3d off = unyaw * (p - base);
+    off.z() = p.z();  // the foot's height on the ground, not relative to the base
+    offset_.push_back(off);
+    const Eigen::Matrix3d& R = data_.oMf[contacts[c].frame].R;
+    const double foot_yaw = std::atan2(R(1, 0), R(0, 0));
+    foot_yaw_.push_back(std::remainder(foot_yaw - yaw, 2.0 * kPi));
+    foot_tilt_.push_back(Eigen::AngleAxisd(-foot_yaw, Eigen::Vector3d::UnitZ()) * R);
+  }
+  com_offset_ = unyaw * (centerOfMass(model, data_, q) - base);
+  gain_ =
+      o.foothold_gain > -0.99 ? o.foothold_gain : std::sqrt(std::max(z_nominal_, 0.0) / kGravity);
+
+  latched_.assign(nc_, Eigen::Vector3d::Zero());
+  latched_yaw_.assign(nc_, 0.0);
+  samples_.assign(static_cast<size_t>(std::ceil((o.horizon + kLookahead) / o.sample_dt)) + 2,
+                  Sample{});
+  stances_.assign(nc_, std::vector<Stance>(kMaxStances));
+  n_stances_.assign(nc_, 0);
+  for (int c = 0; c < nc_; ++c) {
+    stances_[c][0] = {-ContactTimeline::kNever, ContactTimeline::kNever, offset_[c], foot_yaw_[c]};
+    n_stances_[c] = 1;
+  }
+  sampleBase(0.0, base.head<2>(), yaw);
+}
+
+void GaitGenerator::setCommand(const BodyCommand& now, const BodyCommand& target) {
+  now_ = now;
+  target_ = target;
+}
+
+void GaitGenerator::sampleBase(double t, const Eigen::Vector2d& p0, double yaw0) {
+  const double h = options_.sample_dt;
+  const Eigen::Vector3d& a = options_.acceleration;
+  t_anchor_ = t;
+  n_samples_ = static_cast<int>(samples_.size());
+  Eigen::Vector2d p = p0;
+  for (int i = 0; i < n_samples_; ++i) {
+    const double tau = i * h;
+    Sample& s = samples_[i];
+    s.x = p.x();
+    s.y = p.y();
+    s.yaw = yaw0 + rampIntegral(now_.yaw_rate, target_.yaw_rate, a.z(), tau);
+    s.vx = ramp(now_.vx, target_.vx, a.x(), tau);
+    s.vy = ramp(now_.vy, target_.vy, a.y(), tau);
+    s.wz = ramp(now_.yaw_rate, target_.yaw_rate, a.z(), tau);
+    s.height = ramp(now_.height, target_.height, options_.height_rate, tau);
+    // Midpoint rule: the heading turns while the base moves.
+    const double mid = tau + 0.5 * h;
+    const double yaw_mid = yaw0 + rampIntegral(now_.yaw_rate, target_.yaw_rate, a.z(), mid);
+    p += h * rotate(yaw_mid, ramp(now_.vx, target_.vx, a.x(), mid),
+                    ramp(now_.vy, target_.vy, a.y(), mid));
+  }
+}
+
+GaitGenerator::Sample GaitGenerator::baseAt(double t) const {
+  const double h = options_.sample_dt;
+  const double tau = t - t_anchor_;
+  auto extrapolate = [&](const Sample& s, double d) {
+    Sample e = s;
+    const Eigen::Vector2d v = rotate(s.yaw + 0.5 * d * s.wz, s.vx, s.vy);
+    e.x += d * v.x();
+    e.y += d * v.y();
+    e.yaw += d * s.wz;
+    return e;
+  };
+  if (tau <= 0.0) return extrapolate(samples_[0], tau);
+  const int last = n_samples_ - 1;
+  if (tau >= last * h) return extrapolate(samples_[last], tau - last * h);
+  const int i = static_cast<int>(tau / h);
+  const double r = tau / h - i;
+  const Sample& a = samples_[i];
+  const Sample& b = samples_[i + 1];
+  auto mix = [r](double u, double w) { return u + r * (w - u); };
+  return {mix(a.x, b.x),   mix(a.y, b.y),   mix(a.yaw, b.yaw),      mix(a.vx, b.vx),
+          mix(a.vy, b.vy), mix(a.wz, b.wz), mix(a.height, b.height)};
+}
+
+GaitGenerator::Sample GaitGenerator::robotAt(double t) const {
+  Sample s = baseAt(t);
+  const Eigen::Vector2d d =
+      rotate(robot_turn_, s.x - samples_[0].x, s.y - samples_[0].y) + robot_xy_;
+  s.x = d.x();
+  s.y = d.y();
+  s.yaw += robot_turn_;
+  return s;
+}
+
+GaitGenerator::Stance GaitGenerator::foothold(int contact, double touch_down, double lift_off,
+                                              const Eigen::Vector2d& correction) const {
+  const double mid = touch_down + std::min(0.5 * (lift_off - touch_down), kHalfStanceCap);
+  const Sample s = baseAt(mid), r = robotAt(mid);
+  const Eigen::Vector3d& off = offset_[contact];
+  const Eigen::Vector2d on_reference = Eigen::Vector2d(s.x, s.y) + rotate(s.yaw, off.x(), off.y());
+  const Eigen::Vector2d on_robot = Eigen::Vector2d(r.x, r.y) + rotate(r.yaw, off.x(), off.y());
+  Eigen::Vector2d lead = on_reference - on_robot;
+  const double n = lead.norm();
+  if (n > options_.max_foothold_lead) lead *= options_.max_foothold_lead / n;
+  const Eigen::Vector2d xy = on_robot + lead + correction;
+  return {touch_down, lift_off, Eigen::Vector3d(xy.x(), xy.y(), off.z()),
+          s.yaw + foot_yaw_[contact]};
+}
+
+bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, double t_begin,
+                         double t_end) {
+  const int nq = model_.nq;
+  if (!std::isfinite(t) || !std::isfinite(t_begin) || !std::isfinite(t_end) || std::abs(t) > 1e9 ||
+      t_end < t_begin || t_end - t_begin > options_.horizon + kPlanTimeEpsilon ||
+      x.size() != nq + model_.nv || !x.allFinite())
+    return false;
+  const auto q = x.head(nq);
+  const double n = q.segment<4>(3).norm();
+  if (!(n > 0.5)) return false;
+  framesForwardKinematics(model_, data_, q);
+  const double yaw = yawOf(q[3] / n, q[4] / n, q[5] / n, q[6] / n);
+  // The base reference carries on from the last plan, but stays within a leash of the robot.
+  Eigen::Vector2d anchor = q.head<2>();
+  double anchor_yaw = yaw;
+  if (latched_any_) {
+    const Sample before = baseAt(t);
+    Eigen::Vector2d lead = Eigen::Vector2d(before.x, before.y) - anchor;
+    if (lead.norm() > options_.max_position_lead) lead *= options_.max_position_lead / lead.norm();
+    anchor += lead;
+    const double turn = std::remainder(before.yaw - yaw, 2.0 * kPi);
+    anchor_yaw += std::clamp(turn, -options_.max_yaw_lead, options_.max_yaw_lead);
+  }
+  sampleBase(t, anchor, anchor_yaw);
+  robot_xy_ = q.head<2>();
+  robot_turn_ = yaw - anchor_yaw;
+
+  for (int c = 0; c < nc_; ++c)
+    if (!latched_any_ || timeline_.closed(c, t)) {
+      const SE3& M = data_.oMf[frames_[c]];
+      latched_[c] = M.p;
+      latched_yaw_[c] = std::atan2(M.R(1, 0), M.R(0, 0));
+    }
+  latched_any_ = true;
+
+  // The velocity the robot has beyond the command (world axes, horizontal): the next touch-down
+  // of each foot moves by gain x that, capped.
+  const Eigen::Quaterniond orientation(q[6] / n, q[3] / n, q[4] / n, q[5] / n);
+  const Eigen::Vector3d v_world = orientation * x.segment<3>(nq);
+  Eigen::Vector2d correction = gain_ * (v_world.head<2>() - rotate(yaw, now_.vx, now_.vy));
+  const double norm = correction.norm();
+  if (norm > options_.max_foothold_correction)
+    correction *= options_.max_foothold_correction / norm;
+
+  const double t_from = std::min(t_begin, t);
+  timeline_.forget(t_from);
+  for (int c = 0; c < nc_; ++c) {
+    std::vector<Stance>& st = stances_[c];
+    if (timeline_.closed(c, t_from))
+      st[0] = {timeline_.lastChange(c, t_from), timeline_.nextChange(c, t_from), latched_[c],
+               latched_yaw_[c]};
+    else
+      st[0] = {-ContactTimeline::kNever, timeline_.lastChange(c, t_from), latched_[c],
+               latched_yaw_[c]};
+    int count = 1;
+    bool next = true;  // the next touch-down after t takes the correction
+    double lift_off = st[0].lift_off;
+    while (count < kMaxStances && lift_off < ContactTimeline::kNever) {
+      const double touch_down = timeline_.nextChange(c, lift_off);
+      if (touch_down == ContactTimeline::kNever) break;
+      const double next_lift_off = timeline_.nextChange(c, touch_down);
+      if (touch_down <= t) {  // already down at t: where it was measured
+        st[count++] = {touch_down, next_lift_off, latched_[c], latched_yaw_[c]};
+      } else {
+        st[count++] = foothold(c, touch_down, next_lift_off,
+                               next ? correction : Eigen::Vector2d::Zero().eval());
+        next = false;
+      }
+      if (touch_down > t_end) break;
+      lift_off = next_lift_off;
+    }
+    n_stances_[c] = count;
+  }
+  return true;
+}
+
+int GaitGenerator::stanceAt(int contact, double t, double& s) const {
+  const std::vector<Stance>& st = stances_[contact];
+  const int n = n_stances_[contact];
+  int i = 0;
+  while (i + 1 < n && st[i + 1].touch_down <= t + kPlanTimeEpsilon) ++i;
+  if (t + kPlanTimeEpsilon < st[i].lift_off) {
+    s = 0.0;
+  } else if (i + 1 == n) {
+    s = -1.0;
+  } else {
+    const double lift_off = st[i].lift_off, touch_down = st[i + 1].touch_down;
+    s = std::clamp((t - lift_off) / (touch_down - lift_off), 0.0, 1.0);
+  }
+  return i;
+}
+
+Eigen::Vector3d GaitGenerator::foot(int contact, double t) const {
+  double s;
+  const int i = stanceAt(contact, t, s);
+  const std::vector<Stance>& st = stances_[contact];
+  if (s <= 0.0) return st[i].p;  // down, or no touch-down known: hold the lift-off point
+  Eigen::Vector3d p = st[i].p + 0.5 * (1.0 - std::cos(kPi * s)) * (st[i + 1].p - st[i].p);
+  p.z() += options_.swing_height * std::sin(kPi * s);
+  return p;
+}
+
+Eigen::Matrix3d GaitGenerator::footRotation(int contact, double t) const {
+  double s;
+  const int i = stanceAt(contact, t, s);
+  const std::vector<Stance>& st = stances_[contact];
+  double yaw = st[i].yaw;
+  if (s > 0.0)
+    yaw += 0.5 * (1.0 - std::cos(kPi * s)) * std::remainder(st[i + 1].yaw - yaw, 2.0 * kPi);
+  return Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * foot_tilt_[contact];
+}
+
+void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
+  const int nq = model_.nq;
+  x_ref = x_nominal_;
+  const Sample s = baseAt(t);
+  x_ref[0] = s.x;
+  x_ref[1] = s.y;
+  x_ref[2] = z_nominal_ + s.height;
+  const Eigen::Quaterniond o = Eigen::AngleAxisd(s.yaw, Eigen::Vector3d::UnitZ()) * tilt_;
+  x_ref.segment<4>(3) << o.x(), o.y(), o.z(), o.w();
+  // The twist in the base frame: the heading frame's, seen through the nominal tilt.
+  const Eigen::Matrix3d untilt = tilt_.conjugate().toRotationMatrix();
+  x_ref.segment<3>(nq) = untilt * Eigen::Vector3d(s.vx, s.vy, 0.0);
+  x_ref.segment<3>(nq + 3) = untilt * Eigen::Vector3d(0.0, 0.0, s.wz);
+}
+
+Eigen::Vector3d GaitGenerator::basePosition(double t) const {
+  const Sample s = baseAt(t);
+  return {s.x, s.y, z_nominal_ + s.height};
+}
+
+double GaitGenerator::baseYaw(double t) const {
+  return baseAt(t).yaw;
+}
+
+Eigen::Vector3d GaitGenerator::com(double t) const {
+  const Sample s = baseAt(t);
+  const Eigen::Vector2d xy =
+      Eigen::Vector2d(s.x, s.y) + rotate(s.yaw, com_offset_.x(), com_offset_.y());
+  return {xy.x(), xy.y(), z_nominal_ + s.height + com_offset_.z()};
+}
+
+}  // namespace stride

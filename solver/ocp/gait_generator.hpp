@@ -1,0 +1,163 @@
+#pragma once
+// The references a commanded robot walks by, re-planned every tick from the measured state and a
+// body velocity command: when each foot is down (a ContactTimeline of gait patterns), where each
+// touch-down lands, the swing arcs between footholds, and the base's pose and twist over the
+// horizon. The locomotion problem (locomotion.hpp) reads them knot by knot.
+//
+// Base: anchored at the measured base position and heading at the state's time t, then integrated
+// from the command: the velocity (vx, vy in the heading frame, yaw rate) ramps from the command in
+// force to the target command at the configured accelerations (the body height offset at its
+// rate), so the horizon already sees a change the robot is heading into. Height and tilt are the
+// nominal posture's (plus the height offset); the base velocity reference is the command.
+//
+// Footholds (Raibert's heuristic, on the reference instead of the hip's current position): a
+// touch-down at t_td that lasts until lift-off t_lo lands under the foot's nominal stance position
+// (its place relative to the base in the nominal posture, on the ground) carried by the base
+// reference to mid-stance t_mid = t_td + ½ min(t_lo - t_td, 1 s), rotated by the reference yaw
+// there. The next touch-down of each foot also moves by k (v - v_cmd), the measured horizontal
+// velocity's excess over the command (capped): a robot that is too fast (pushed) steps further,
+// as a capture point would. A foot down at t keeps the position measured there (latched while it
+// is down, so the foot it lifts from is where it really was).
+//
+// Swing from foothold a to b, s = (t - lift-off) / (touch-down - lift-off):
+//   p(s) = a + ½ (1 - cos πs)(b - a) + h sin(πs) e_z
+// (no horizontal speed at either end: a landing needs no tangential impulse). A foot's heading
+// turns on the same ramp, from its yaw at lift-off to the reference yaw at the next mid-stance
+// (plus its nominal yaw relative to the base): a sole lands turned with the body.
+//
+// plan() allocates nothing and queries are array look-ups; the sizes are fixed at construction.
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "solver/multibody/data.hpp"
+#include "solver/ocp/contact_timeline.hpp"
+
+namespace stride {
+
+// A body command: velocity in the base's heading frame and the base height offset.
+struct BodyCommand {
+  double vx = 0.0, vy = 0.0;  // [m/s]
+  double yaw_rate = 0.0;      // [rad/s]
+  double height = 0.0;        // [m], from the nominal posture's
+};
+
+struct GaitGeneratorOptions {
+  double swing_height = 0.05;  // apex of the swing arcs above the line between footholds [m]
+  // Raibert gain k [s] on the velocity excess; negative: sqrt(h / g) of the nominal base height h
+  // (the capture point's time constant).
+  double foothold_gain = -1.0;
+  double max_foothold_correction = 0.1;  // cap on |k (v - v_cmd)| [m]
+  // How far the base reference may lead (or trail) the measured base: position [m], yaw [rad].
+  double max_position_lead = 0.1;
+  double max_yaw_lead = 0.3;
+  // How far a foothold may be from where the same foothold would be if the reference were
+  // anchored at the measured base [m]: a robot that lags its reference is not asked to reach
+  // beyond its legs.
+  double max_foothold_lead = 0.05;
+  // The command's ramp over the horizon: vx, vy [m/s²], yaw rate [rad/s²]; height rate [m/s].
+  Eigen::Vector3d acceleration = Eigen::Vector3d(1.0, 1.0, 2.0);
+  double height_rate = 0.1;
+  // The longest span plan() is asked to cover (t_end - t_begin) [s], and the step of the base
+  // trajectory's samples.
+  double horizon = 1.0;
+  double sample_dt = 0.01;
+};
+
+class GaitGenerator {
+ public:
+  static constexpr int kMaxStances = 32;  // per foot, in a planned window
+
+  // x_nominal: the nominal posture (its base pose sets the height and tilt; its position and yaw
+  // do not matter). Throws std::invalid_argument for a fixed-base model, sizes or options.
+  GaitGenerator(const Model& model, const ContactSet& contacts, const Eigen::VectorXd& x_nominal,
+                const GaitGeneratorOptions& options = {});
+
+  ContactTimeline& timeline() { return timeline_; }
+  const ContactTimeline& timeline() const { return timeline_; }
+  const GaitGeneratorOptions& options() const { return options_; }
+  double footholdGain() const { return gain_; }
+
+  // The command in force now and the one the controller is heading to (its smoothed command and
+  // its target): the base references ramp from one to the other.
+  void setCommand(const BodyCommand& now, const BodyCommand& target);
+  const BodyCommand& command() const { return now_; }
+  const BodyCommand& target() const { return target_; }
+
+  // Re-plans from the measured state x at plan time t for the window [t_begin, t_end] (at most
+  // options.horizon long): anchors the base, latches the feet that are down at t, places every
+  // touch-down up to the first after t_end. False (nothing changed) for a non-finite time or
+  // state, a wrong size, or a window longer than options.horizon.
+  bool plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, double t_begin, double t_end);
+
+  // After plan(): contact c closed at time t (the timeline's), its reference position (foothold
+  // or swing arc), the state reference (base pose and twist; joints at the nominal posture, at
+  // rest), the centre of mass reference (the nominal CoM carried by the base reference).
+  bool closed(int contact, double t) const { return timeline_.closed(contact, t); }
+  unsigned mask(double t) const { return timeline_.mask(t); }
+  Eigen::Vector3d foot(int contact, double t) const;
+  // Its reference orientation: the nominal tilt of the foot, turned to the planned heading.
+  Eigen::Matrix3d footRotation(int contact, double t) const;
+  void state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const;
+  Eigen::Vector3d com(double t) const;
+  // The base reference at t: position, yaw.
+  Eigen::Vector3d basePosition(double t) const;
+  double baseYaw(double t) const;
+
+  // The planned stances of a foot: touch-down, lift-off (±infinity when outside the timeline's
+  // knowledge), position. Stance 0 is the one in force at the window's start (or the last before
+  // it, for a foot in the air), at its latched position.
+  struct Stance {
+    double touch_down, lift_off;
+    Eigen::Vector3d p;
+    double yaw;  // the foot's heading
+  };
+  int stances(int contact) const { return n_stances_[contact]; }
+  const Stance& stance(int contact, int i) const { return stances_[contact][i]; }
+  // A foot's nominal stance position relative to the base, in the heading frame.
+  const Eigen::Vector3d& stanceOffset(int contact) const { return offset_[contact]; }
+
+ private:
+  struct Sample {
+    double x, y, yaw, vx, vy, wz, height;
+  };
+  void sampleBase(double t, const Eigen::Vector2d& p0, double yaw0);
+  Sample baseAt(double t) const;
+  // The same command carried from the measured base instead (where footholds are planned).
+  Sample robotAt(double t) const;
+  // A planned stance's position and heading.
+  Stance foothold(int contact, double touch_down, double lift_off,
+                  const Eigen::Vector2d& correction) const;
+  // The stance in force (or last lifted from) at t, and how far along the swing to the next one
+  // t is (0 while down, 1 when landed; -1 when no next stance is known).
+  int stanceAt(int contact, double t, double& s) const;
+
+  const Model& model_;
+  ContactTimeline timeline_;
+  GaitGeneratorOptions options_;
+  int nc_;
+  std::vector<int> frames_;
+  Eigen::VectorXd x_nominal_;
+  Eigen::Quaterniond tilt_;  // the nominal base orientation without its yaw
+  double z_nominal_ = 0.0;
+  double gain_ = 0.0;
+  std::vector<Eigen::Vector3d> offset_;     // heading frame, z: the foot's height
+  std::vector<double> foot_yaw_;            // each foot's nominal yaw relative to the base
+  std::vector<Eigen::Matrix3d> foot_tilt_;  // each foot's nominal orientation without its yaw
+  Eigen::Vector3d com_offset_;              // nominal CoM relative to the base, heading frame
+  BodyCommand now_, target_;
+
+  Data data_;  // forward kinematics of the measured state
+  bool latched_any_ = false;
+  std::vector<Eigen::Vector3d> latched_;  // where each foot was last measured while down
+  std::vector<double> latched_yaw_;
+  double t_anchor_ = 0.0;
+  Eigen::Vector2d robot_xy_ = Eigen::Vector2d::Zero();  // measured base at t_anchor_
+  double robot_turn_ = 0.0;                             // measured yaw - reference yaw there
+  std::vector<Sample> samples_;  // base reference from t_anchor_, every options.sample_dt
+  int n_samples_ = 0;
+  std::vector<std::vector<Stance>> stances_;
+  std::vector<int> n_stances_;
+};
+
+}  // namespace stride
