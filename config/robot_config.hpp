@@ -3,19 +3,14 @@
 // contact frames and their dimension, torque limits and the default posture. YAML lives here, not
 // in solver/, which knows nothing of file formats beyond URDF/SRDF (ARCHITECTURE.md §2).
 
-#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "config/config_error.hpp"
 #include "solver/multibody/model.hpp"
 #include "solver/multibody/urdf.hpp"
 
 namespace stride {
-
-class ConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 struct ContactSpec {
   std::string frame;
