@@ -2,11 +2,18 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <set>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <sstream>
 
+#include "config/package_path.hpp"
+#include "solver/multibody/frames.hpp"
 #include "solver/multibody/lie_group.hpp"
+#include "solver/multibody/srdf.hpp"
 
 namespace stride {
 
@@ -20,9 +27,168 @@ YAML::Node need(const YAML::Node& parent, const char* key, const std::string& pa
   if (!n) fail(path, std::string("missing key '") + key + "'");
   return n;
 }
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+// A misspelt optional key would otherwise be ignored silently, and its default used instead.
+// `where` prefixes the key in the message ("contacts[1].", "default_posture.").
+void checkKeys(const YAML::Node& map, const std::vector<std::string>& known,
+               const std::string& path, const std::string& where) {
+  if (!map.IsMap())
+    fail(path, (where.empty() ? "the top level" : "'" + where.substr(0, where.size() - 1) + "'") +
+                   " must be a mapping");
+  for (const auto& kv : map) {
+    const std::string key = kv.first.as<std::string>();
+    if (std::find(known.begin(), known.end(), key) == known.end())
+      fail(path, "unknown key '" + where + key + "' (known: " + joined(known) + ")");
+  }
+}
+
+bool actuated(const Joint& j) {
+  return j.type != JointType::Universe && j.type != JointType::FreeFlyer;
+}
+
+// A joint named in the YAML: it exists and is actuated (the free-flyer is set by `base`).
+const Joint& namedJoint(const Model& model, const std::string& name, const std::string& path,
+                        const std::string& key) {
+  if (!model.existJoint(name)) fail(path, key + ": joint '" + name + "' is not in the URDF");
+  const Joint& j = model.joints[model.getJointId(name)];
+  if (!actuated(j)) fail(path, key + ": joint '" + name + "' is the free-flyer base, not actuated");
+  return j;
+}
+
+std::vector<ContactSpec> readContacts(const YAML::Node& contacts, const Model& model,
+                                      const std::string& path) {
+  if (!contacts.IsSequence()) fail(path, "contacts must be a list of {frame, dim}");
+  std::vector<ContactSpec> out;
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const YAML::Node c = contacts[i];
+    checkKeys(c, {"frame", "dim"}, path, "contacts[" + std::to_string(i) + "].");
+    ContactSpec spec{need(c, "frame", path).as<std::string>(), need(c, "dim", path).as<int>()};
+    if (!model.existFrame(spec.frame))
+      fail(path, "contact frame '" + spec.frame + "' is not in the URDF");
+    if (spec.dim != 3 && spec.dim != 6)
+      fail(path, "contact '" + spec.frame + "' has dim " + std::to_string(spec.dim) + " (3 or 6)");
+    for (const auto& other : out)
+      if (other.frame == spec.frame)
+        fail(path, "contact frame '" + spec.frame + "' is listed twice");
+    out.push_back(spec);
+  }
+  return out;
+}
+
+void checkLimit(double limit, const std::string& joint, const std::string& path) {
+  if (!(limit > 0) || !std::isfinite(limit))
+    fail(path, "torque limit of '" + joint + "' must be positive and finite");
+}
+
+// `torque_limits:` absent (URDF efforts), one number (every joint) or a map joint -> limit (the
+// others keep their URDF effort). A joint left with no finite limit would make the box-constrained
+// solver and the mock robot unbounded: an error, not a silent infinity.
+void applyTorqueLimits(const YAML::Node& limits, Model& model, const std::string& path) {
+  if (limits && limits.IsScalar()) {
+    const double limit = limits.as<double>();
+    checkLimit(limit, "every joint", path);
+    for (const Joint& j : model.joints)
+      if (actuated(j)) model.effortLimit[j.idx_v] = limit;
+  } else if (limits && limits.IsMap()) {
+    for (const auto& kv : limits) {
+      const Joint& j = namedJoint(model, kv.first.as<std::string>(), path, "torque_limits");
+      const double limit = kv.second.as<double>();
+      checkLimit(limit, j.name, path);
+      model.effortLimit[j.idx_v] = limit;
+    }
+  } else if (limits) {
+    fail(path, "torque_limits must be a number or a map joint: limit");
+  }
+  for (const Joint& j : model.joints)
+    if (actuated(j) && !std::isfinite(model.effortLimit[j.idx_v]))
+      fail(path, "joint '" + j.name +
+                     "' has no torque limit: torque_limits does not give one and the URDF gives "
+                     "no effort");
+}
+
+// The default posture before its base height is corrected: the SRDF state (if any), then the
+// YAML's joints and base over it. `base_source` says where the base height came from.
+Eigen::VectorXd readPosture(const YAML::Node& root, const Robot& robot, const std::string& path,
+                            std::string& base_source) {
+  const Model& model = robot.model;
+  const bool from_srdf = !robot.reference_posture.empty();
+  const YAML::Node posture = root["default_posture"];
+  if (!posture && !from_srdf)
+    fail(path, "missing key 'default_posture' (or give 'srdf' and 'reference_posture')");
+  if (posture) checkKeys(posture, {"base", "joints"}, path, "default_posture.");
+
+  Eigen::VectorXd q = neutral(model);
+  if (from_srdf) {
+    q = model.referenceConfigurations.at(robot.reference_posture);
+    base_source = "SRDF '" + robot.srdf_path + "' group_state '" + robot.reference_posture + "'";
+  }
+  const YAML::Node joints = posture ? posture["joints"] : YAML::Node(YAML::NodeType::Undefined);
+  if (!joints && !from_srdf) fail(path, "missing key 'joints' in default_posture");
+  if (joints) {
+    if (!joints.IsMap()) fail(path, "default_posture.joints must be a map joint: angle");
+    for (const auto& kv : joints) {
+      const Joint& j =
+          namedJoint(model, kv.first.as<std::string>(), path, "default_posture.joints");
+      q[j.idx_q] = kv.second.as<double>();
+    }
+  }
+  // Without an SRDF state, every joint must be named: a missing one is an error, not a silent 0.
+  if (!from_srdf)
+    for (const Joint& j : model.joints)
+      if (actuated(j) && !joints[j.name])
+        fail(path, "default_posture.joints has no entry for joint '" + j.name + "'");
+
+  const YAML::Node base = posture ? posture["base"] : YAML::Node(YAML::NodeType::Undefined);
+  if (base && !model.hasFreeFlyer())
+    fail(path, "default_posture.base is only for a free-flyer root_joint");
+  if (base) {
+    const auto b = base.as<std::vector<double>>();
+    if (b.size() != 7) fail(path, "default_posture.base needs 7 numbers [x y z qx qy qz qw]");
+    for (int k = 0; k < 7; ++k) q[k] = b[k];
+    if (std::abs(q.segment<4>(3).norm() - 1.0) > 1e-6)
+      fail(path, "default_posture.base quaternion is not unit");
+    base_source = "default_posture.base";
+  } else if (model.hasFreeFlyer() && !from_srdf) {
+    fail(path, "missing key 'base' in default_posture");
+  }
+  if (!q.allFinite()) fail(path, "default_posture has non-finite values");
+  normalize(model, q);
+  return q;
+}
+
+// Moves a free-flyer's base vertically so that the lowest contact frame is at z = 0: SRDF heights
+// are rounded (or meant for another foot frame), and a robot that starts in the air or in the
+// ground spoils the first solves. A given height that misses by more than 1 mm is worth telling the
+// user.
+void putOnTheGround(Robot& robot, const std::string& base_source) {
+  const Model& model = robot.model;
+  if (!model.hasFreeFlyer() || robot.contacts.empty()) return;
+  Data data(model);
+  framesForwardKinematics(model, data, robot.default_q);
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const auto& c : robot.contacts)
+    lowest = std::min(lowest, data.oMf[model.getFrameId(c.frame)].p.z());
+  const double given = robot.default_q[2], computed = given - lowest;
+  robot.default_q[2] = computed;
+  if (std::abs(lowest) > 1e-3) {
+    std::ostringstream w;
+    w << std::fixed << std::setprecision(4) << "warning: robot config '" << robot.yaml_path
+      << "': the base height " << given << " m of " << base_source << " leaves the lowest contact "
+      << std::setprecision(1) << std::abs(lowest) * 100 << " cm "
+      << (lowest > 0 ? "above" : "below") << " the ground; using the computed base height "
+      << std::setprecision(4) << computed << " m\n";
+    std::cerr << w.str();
+  }
+}
 }  // namespace
 
-Robot loadRobot(const std::string& yaml_path) {
+Robot loadRobot(const std::string& yaml_path, const std::vector<std::string>& robots_dirs) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(yaml_path);
@@ -31,14 +197,28 @@ Robot loadRobot(const std::string& yaml_path) {
   } catch (const YAML::Exception& e) {
     fail(yaml_path, std::string("malformed YAML: ") + e.what());
   }
-  if (!root.IsMap()) fail(yaml_path, "the top level must be a mapping");
   Robot robot;
   robot.yaml_path = yaml_path;
+  const std::string yaml_dir = std::filesystem::path(yaml_path).parent_path().string();
+  // Files named by the YAML: the error says which key named the missing one.
+  auto resolve = [&](const char* key) {
+    const std::string uri = need(root, key, yaml_path).as<std::string>();
+    try {
+      return resolveRobotFile(uri, yaml_dir, robots_dirs);
+    } catch (const RobotFileNotFound& e) {
+      throw RobotFileNotFound("robot config '" + yaml_path + "': " + key + ": " + e.what(),
+                              e.tried());
+    } catch (const ConfigError& e) {
+      fail(yaml_path, std::string(key) + ": " + e.what());
+    }
+  };
   try {
+    checkKeys(root,
+              {"name", "urdf", "srdf", "reference_posture", "root_joint", "contacts",
+               "sole_half_extents", "torque_limits", "default_posture"},
+              yaml_path, "");
     robot.name = need(root, "name", yaml_path).as<std::string>();
-    const std::filesystem::path urdf = std::filesystem::path(yaml_path).parent_path() /
-                                       need(root, "urdf", yaml_path).as<std::string>();
-    robot.urdf_path = urdf.string();
+    robot.urdf_path = resolve("urdf");
     const std::string root_joint = need(root, "root_joint", yaml_path).as<std::string>();
     if (root_joint != "free-flyer" && root_joint != "fixed")
       fail(yaml_path, "root_joint must be 'free-flyer' or 'fixed', not '" + root_joint + "'");
@@ -46,55 +226,33 @@ Robot loadRobot(const std::string& yaml_path) {
         robot.urdf_path, root_joint == "fixed" ? RootJoint::Fixed : RootJoint::FreeFlyer);
     Model& model = robot.model;
 
-    for (const auto& c : need(root, "contacts", yaml_path)) {
-      ContactSpec spec{need(c, "frame", yaml_path).as<std::string>(),
-                       need(c, "dim", yaml_path).as<int>()};
-      if (!model.existFrame(spec.frame))
-        fail(yaml_path, "contact frame '" + spec.frame + "' is not in the URDF");
-      if (spec.dim != 3 && spec.dim != 6)
-        fail(yaml_path,
-             "contact '" + spec.frame + "' has dim " + std::to_string(spec.dim) + " (3 or 6)");
-      robot.contacts.push_back(spec);
+    if (root["srdf"]) {
+      robot.srdf_path = resolve("srdf");
+      const SrdfReport srdf = loadReferenceConfigurations(model, robot.srdf_path);
+      if (root["reference_posture"]) {
+        robot.reference_posture = root["reference_posture"].as<std::string>();
+        if (std::find(srdf.states.begin(), srdf.states.end(), robot.reference_posture) ==
+            srdf.states.end())
+          fail(yaml_path, "reference_posture '" + robot.reference_posture +
+                              "' is not a group_state of SRDF '" + robot.srdf_path + "' (it has: " +
+                              (srdf.states.empty() ? "none" : joined(srdf.states)) + ")");
+      }
+    } else if (root["reference_posture"]) {
+      fail(yaml_path, "reference_posture needs an 'srdf' key (the file of its group_state)");
     }
+
+    robot.contacts = readContacts(need(root, "contacts", yaml_path), model, yaml_path);
     if (root["sole_half_extents"]) {
       const auto e = root["sole_half_extents"].as<std::vector<double>>();
       if (e.size() != 2 || !(e[0] > 0) || !(e[1] > 0))
         fail(yaml_path, "sole_half_extents must be two positive numbers");
       robot.sole_half_extents << e[0], e[1];
     }
+    applyTorqueLimits(root["torque_limits"], model, yaml_path);
 
-    // Every actuated joint needs a torque limit and a default angle: a missing one is an error,
-    // not a silent zero.
-    const YAML::Node limits = need(root, "torque_limits", yaml_path);
-    const YAML::Node posture = need(root, "default_posture", yaml_path);
-    const YAML::Node joints = need(posture, "joints", yaml_path);
-    for (const auto& table : {limits, joints})
-      for (const auto& kv : table)
-        if (!model.existJoint(kv.first.as<std::string>()))
-          fail(yaml_path, "joint '" + kv.first.as<std::string>() + "' is not in the URDF");
-    robot.default_q = neutral(model);
-    for (int i = 1; i < model.njoints(); ++i) {
-      const Joint& j = model.joints[i];
-      if (j.type == JointType::FreeFlyer) continue;
-      if (!limits[j.name]) fail(yaml_path, "torque_limits has no entry for joint '" + j.name + "'");
-      if (!joints[j.name])
-        fail(yaml_path, "default_posture.joints has no entry for joint '" + j.name + "'");
-      const double limit = limits[j.name].as<double>();
-      if (!(limit > 0) || !std::isfinite(limit))
-        fail(yaml_path, "torque limit of '" + j.name + "' must be positive");
-      model.effortLimit[j.idx_v] = limit;
-      robot.default_q[j.idx_q] = joints[j.name].as<double>();
-    }
-    if (model.hasFreeFlyer()) {
-      const auto base = need(posture, "base", yaml_path).as<std::vector<double>>();
-      if (base.size() != 7)
-        fail(yaml_path, "default_posture.base needs 7 numbers [x y z qx qy qz qw]");
-      for (int k = 0; k < 7; ++k) robot.default_q[k] = base[k];
-      const double n = robot.default_q.segment<4>(3).norm();
-      if (std::abs(n - 1.0) > 1e-6) fail(yaml_path, "default_posture.base quaternion is not unit");
-      normalize(model, robot.default_q);
-    }
-    if (!robot.default_q.allFinite()) fail(yaml_path, "default_posture has non-finite values");
+    std::string base_source;
+    robot.default_q = readPosture(root, robot, yaml_path, base_source);
+    putOnTheGround(robot, base_source);
     model.referenceConfigurations["default"] = robot.default_q;
   } catch (const YAML::Exception& e) {
     fail(yaml_path, std::string("bad value: ") + e.what());

@@ -3,19 +3,14 @@
 // contact frames and their dimension, torque limits and the default posture. YAML lives here, not
 // in solver/, which knows nothing of file formats beyond URDF/SRDF (ARCHITECTURE.md §2).
 
-#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "config/config_error.hpp"
 #include "solver/multibody/model.hpp"
 #include "solver/multibody/urdf.hpp"
 
 namespace stride {
-
-class ConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 struct ContactSpec {
   std::string frame;
@@ -26,14 +21,22 @@ struct Robot {
   Model model;
   std::string name;
   std::string yaml_path;
-  std::string urdf_path;
+  std::string urdf_path;          // resolved (package:// URIs become paths)
+  std::string srdf_path;          // empty without an `srdf:` key
+  std::string reference_posture;  // the SRDF group_state the default posture starts from, if any
   std::vector<ContactSpec> contacts;
-  Eigen::VectorXd default_q;  // also model.referenceConfigurations["default"]
+  // Also model.referenceConfigurations["default"]. For a free-flyer, the base height puts the
+  // lowest contact frame at z = 0 exactly, whatever the YAML or SRDF said.
+  Eigen::VectorXd default_q;
   Eigen::Vector2d sole_half_extents = Eigen::Vector2d::Zero();  // surface contacts, if given
 };
 
-// Loads the YAML and its URDF; torque limits replace the URDF efforts. Every error names the file
-// and the key (ConfigError) or the URDF element (UrdfError).
-Robot loadRobot(const std::string& yaml_path);
+// Loads the YAML, its URDF and its SRDF (if any). `robots_dirs` (e.g. the programs' repeatable
+// `--robots-dir`) are searched for `package://` URIs before ROS_PACKAGE_PATH (package_path.hpp).
+// Torque limits given in the YAML replace the URDF efforts. Every error names the file and the key
+// (ConfigError; RobotFileNotFound for a file that cannot be found) or the URDF/SRDF element
+// (wrapped UrdfError). Writes a warning to stderr when the given base height misses the ground
+// by more than 1 mm.
+Robot loadRobot(const std::string& yaml_path, const std::vector<std::string>& robots_dirs = {});
 
 }  // namespace stride

@@ -1,10 +1,16 @@
-// The in-house robots load with the properties their issue asked for, and bad YAML is reported
-// with the file and the key.
+// The in-house and the public robots load with the properties their issues asked for; robot files
+// are found by path or package:// URI; bad YAML is reported with the file and the key.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 
+#include "config/describe_model.hpp"
+#include "config/package_path.hpp"
 #include "config/robot_config.hpp"
 #include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/frames.hpp"
@@ -12,28 +18,117 @@
 namespace stride {
 namespace {
 
+namespace fs = std::filesystem;
+
 const std::string kQuad = STRIDE_CONFIG_DIR "/robots/stride_quad/stride_quad.yaml";
 const std::string kHumanoid = STRIDE_CONFIG_DIR "/robots/stride_humanoid/stride_humanoid.yaml";
+// example-robot-data as a package (config/CMakeLists.txt); empty without ../shared.
+const std::string kPackages = STRIDE_ROBOT_PACKAGES;
 
-// Contacts touch the ground (z = 0) in the default posture and the CoM is above them.
+std::string robotYaml(const std::string& name) {
+  return STRIDE_CONFIG_DIR "/robots/" + name + "/" + name + ".yaml";
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// A directory per test (ctest runs the cases of this file in parallel processes), emptied when the
+// test first asks for it.
+std::string testDir() {
+  static std::string emptied;
+  const auto* info = testing::UnitTest::GetInstance()->current_test_info();
+  const std::string name = std::string(info->test_suite_name()) + "." + info->name();
+  const fs::path dir = fs::path(testing::TempDir()) / "stride_robot_config" / name;
+  if (emptied != name) fs::remove_all(dir), emptied = name;
+  fs::create_directories(dir);
+  return dir.string();
+}
+
+std::string writeFile(const std::string& path, const std::string& text) {
+  fs::create_directories(fs::path(path).parent_path());
+  std::ofstream(path) << text;
+  return path;
+}
+
+// Sets (or unsets, with nullptr) an environment variable for one scope.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const char* value) : name_(name) {
+    if (const char* old = std::getenv(name)) old_ = old, had_ = true;
+    if (value)
+      setenv(name, value, 1);
+    else
+      unsetenv(name);
+  }
+  ~ScopedEnv() {
+    if (had_)
+      setenv(name_.c_str(), old_.c_str(), 1);
+    else
+      unsetenv(name_.c_str());
+  }
+
+ private:
+  std::string name_, old_;
+  bool had_ = false;
+};
+
+// The convex hull of points (counter-clockwise, Andrew's monotone chain).
+std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> p) {
+  std::sort(p.begin(), p.end(), [](const auto& a, const auto& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
+  };
+  std::vector<Eigen::Vector2d> h(2 * p.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  for (std::size_t i = p.size() - 1, t = k + 1; i-- > 0;) {
+    while (k >= t && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  h.resize(k - 1);
+  return h;
+}
+
+// Contacts touch the ground (z = 0) in the default posture and the CoM projects inside the support
+// polygon: the hull of the point feet and of the soles' corners, at least 1 cm inside.
 void expectStandsOnTheGround(const Robot& robot) {
   Data data(robot.model);
   framesForwardKinematics(robot.model, data, robot.default_q);
-  Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
+  std::vector<Eigen::Vector2d> support;
   for (const auto& c : robot.contacts) {
     const SE3& oMf = data.oMf[robot.model.getFrameId(c.frame)];
-    EXPECT_NEAR(oMf.p.z(), 0.0, 1e-6) << c.frame;
+    EXPECT_NEAR(oMf.p.z(), 0.0, 1e-6) << robot.name << " " << c.frame;
     if (c.dim == 6) {
-      EXPECT_NEAR(oMf.R(2, 2), 1.0, 1e-9) << c.frame << " sole is not flat";
+      // Flat within 2 mrad (talos' half_sitting rolls the ankles by 1.7 mrad).
+      EXPECT_LT(std::acos(std::min(1.0, oMf.R(2, 2))), 2e-3)
+          << robot.name << " " << c.frame << " sole is not flat";
+      for (double sx : {-1.0, 1.0})
+        for (double sy : {-1.0, 1.0}) {
+          const Eigen::Vector3d corner(sx * robot.sole_half_extents.x(),
+                                       sy * robot.sole_half_extents.y(), 0.0);
+          support.push_back((oMf.p + oMf.R * corner).head<2>());
+        }
+    } else {
+      support.push_back(oMf.p.head<2>());
     }
-    lo = lo.cwiseMin(oMf.p.head<2>());
-    hi = hi.cwiseMax(oMf.p.head<2>());
   }
   const Eigen::Vector3d com = centerOfMass(robot.model, data, robot.default_q);
-  EXPECT_GT(com.z(), 0.1);
-  EXPECT_TRUE((com.head<2>().array() >= lo.array() - robot.sole_half_extents.array()).all() &&
-              (com.head<2>().array() <= hi.array() + robot.sole_half_extents.array()).all())
-      << "CoM " << com.transpose() << " is outside the support polygon";
+  EXPECT_GT(com.z(), 0.1) << robot.name;
+  const auto hull = convexHull(support);
+  ASSERT_GE(hull.size(), 3u) << robot.name << ": the support polygon has no area";
+  for (std::size_t i = 0; i < hull.size(); ++i) {
+    const Eigen::Vector2d a = hull[i], b = hull[(i + 1) % hull.size()];
+    const Eigen::Vector2d inward(-(b - a).y(), (b - a).x());
+    EXPECT_GT(inward.normalized().dot(com.head<2>() - a), 0.01)
+        << robot.name << ": CoM " << com.transpose() << " is outside the support polygon";
+  }
 }
 
 TEST(RobotConfig, Quadruped) {
@@ -72,39 +167,413 @@ TEST(RobotConfig, Humanoid) {
   EXPECT_LT(height, 1.7);
 }
 
-void expectConfigError(const std::string& yaml, const std::string& fragment) {
-  const std::string path = STRIDE_CONFIG_DIR "/robots/stride_quad/test_broken.yaml";
-  { std::ofstream(path) << yaml; }
-  try {
-    loadRobot(path);
-    ADD_FAILURE() << "accepted; expected an error with '" << fragment << "'";
-  } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("test_broken.yaml"), std::string::npos) << e.what();
+// Their YAMLs give exact base heights: loading them is silent.
+TEST(RobotConfig, InHouseRobotsNeedNoBaseCorrection) {
+  for (const auto& yaml : {kQuad, kHumanoid}) {
+    testing::internal::CaptureStderr();
+    const Robot robot = loadRobot(yaml);
+    EXPECT_EQ(testing::internal::GetCapturedStderr(), "") << yaml;
   }
-  std::remove(path.c_str());
+}
+
+// ---- the public robots (example-robot-data), by their package:// URIs ----
+
+struct PublicRobot {
+  const char* name;
+  int nv;
+  std::vector<const char*> feet;
+  int dim;
+  const char* posture;
+};
+
+const std::vector<PublicRobot> kPublicRobots = {
+    {"solo12", 18, {"FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"}, 3, "standing"},
+    {"anymal_c", 18, {"LF_FOOT", "RF_FOOT", "LH_FOOT", "RH_FOOT"}, 3, "standing"},
+    {"talos_reduced", 38, {"left_sole_link", "right_sole_link"}, 6, "half_sitting"},
+};
+
+void expectPublicRobot(const Robot& robot, const PublicRobot& expected) {
+  EXPECT_EQ(robot.name, expected.name);
+  EXPECT_EQ(robot.model.nv, expected.nv);
+  EXPECT_EQ(robot.model.nq, expected.nv + 1);
+  ASSERT_EQ(robot.contacts.size(), expected.feet.size());
+  for (std::size_t k = 0; k < expected.feet.size(); ++k) {
+    EXPECT_EQ(robot.contacts[k].frame, expected.feet[k]);
+    EXPECT_EQ(robot.contacts[k].dim, expected.dim);
+  }
+  EXPECT_EQ(robot.reference_posture, expected.posture);
+  expectStandsOnTheGround(robot);
+}
+
+TEST(RobotConfig, PublicRobotsThroughRobotsDir) {
+  if (kPackages.empty()) GTEST_SKIP() << "no ../shared/robots/SOURCES.md: no package view";
+  const ScopedEnv no_ros("ROS_PACKAGE_PATH", nullptr);
+  for (const auto& expected : kPublicRobots) {
+    testing::internal::CaptureStderr();
+    const Robot robot = loadRobot(robotYaml(expected.name), {kPackages});
+    EXPECT_EQ(testing::internal::GetCapturedStderr(), "")
+        << expected.name << ": our YAML's base height should put the feet on the ground";
+    EXPECT_EQ(robot.urdf_path.rfind(kPackages + "/example-robot-data/robots/", 0), 0u)
+        << robot.urdf_path;
+    expectPublicRobot(robot, expected);
+  }
+  // Torque limits: solo12's YAML replaces the URDF's placeholder 1000 N m; the others keep the
+  // URDF's efforts.
+  const Robot solo = loadRobot(robotYaml("solo12"), {kPackages});
+  EXPECT_TRUE((solo.model.effortLimit.tail(12).array() == 2.7).all());
+  const Robot anymal = loadRobot(robotYaml("anymal_c"), {kPackages});
+  EXPECT_TRUE((anymal.model.effortLimit.tail(12).array() == 80.0).all());
+  const Robot talos = loadRobot(robotYaml("talos_reduced"), {kPackages});
+  const Model& m = talos.model;
+  EXPECT_DOUBLE_EQ(m.effortLimit[m.joints[m.getJointId("leg_left_4_joint")].idx_v], 300.0);
+  EXPECT_DOUBLE_EQ(m.effortLimit[m.joints[m.getJointId("leg_left_6_joint")].idx_v], 100.0);
+  // The SRDF's half_sitting, except the base height.
+  const Eigen::VectorXd& half_sitting = m.referenceConfigurations.at("half_sitting");
+  EXPECT_TRUE(talos.default_q.tail(m.nq - 3).isApprox(half_sitting.tail(m.nq - 3), 1e-12));
+}
+
+TEST(RobotConfig, PublicRobotsThroughRosPackagePath) {
+  if (kPackages.empty()) GTEST_SKIP() << "no ../shared/robots/SOURCES.md: no package view";
+  // An entry that does not hold the package comes first: the search goes on to the next.
+  const std::string path = "/nonexistent/stride:" + kPackages + ":";
+  const ScopedEnv ros("ROS_PACKAGE_PATH", path.c_str());
+  for (const auto& expected : kPublicRobots) {
+    const Robot robot = loadRobot(robotYaml(expected.name));
+    expectPublicRobot(robot, expected);
+    EXPECT_EQ(robot.default_q, loadRobot(robotYaml(expected.name), {kPackages}).default_q);
+  }
+}
+
+TEST(RobotConfig, PublicRobotWithoutPackageSaysWhereItLooked) {
+  const ScopedEnv no_ros("ROS_PACKAGE_PATH", nullptr);
+  const std::string empty = testDir();
+  try {
+    loadRobot(robotYaml("solo12"), {empty});
+    FAIL() << "found a package in an empty directory";
+  } catch (const RobotFileNotFound& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("solo12.yaml"), std::string::npos) << what;
+    EXPECT_NE(what.find("urdf"), std::string::npos) << what;
+    EXPECT_NE(what.find("package://example-robot-data/robots/solo_description/robots/solo12.urdf"),
+              std::string::npos)
+        << what;
+    EXPECT_EQ(e.tried().size(), 2u);
+    for (const auto& t : e.tried()) EXPECT_NE(what.find(t), std::string::npos) << what;
+  }
+}
+
+// ---- the resolver ----
+
+TEST(PackagePath, EveryLayoutAndOrder) {
+  const ScopedEnv no_ros("ROS_PACKAGE_PATH", nullptr);
+  const std::string root = testDir();
+  const std::string uri = "package://mypkg/robots/r.urdf";
+  // D/NAME/REST, D/REST with D = .../NAME, D/share/NAME/REST.
+  const std::string a = root + "/a", b = root + "/b/mypkg", c = root + "/c";
+  const std::string in_a = writeFile(a + "/mypkg/robots/r.urdf", "a");
+  const std::string in_b = writeFile(b + "/robots/r.urdf", "b");
+  const std::string in_c = writeFile(c + "/share/mypkg/robots/r.urdf", "c");
+  EXPECT_EQ(resolveRobotFile(uri, "", {a}), in_a);
+  EXPECT_EQ(resolveRobotFile(uri, "", {b}), in_b);
+  EXPECT_EQ(readFile(resolveRobotFile(uri, "", {b + "/"})), "b");
+  EXPECT_EQ(resolveRobotFile(uri, "", {c}), in_c);
+  // The first directory that has it wins.
+  EXPECT_EQ(resolveRobotFile(uri, "", {root, c, a}), in_c);
+  // ROS_PACKAGE_PATH after the program's directories.
+  {
+    const std::string path = root + ":" + a;
+    const ScopedEnv ros("ROS_PACKAGE_PATH", path.c_str());
+    EXPECT_EQ(resolveRobotFile(uri, "", {}), in_a);
+    EXPECT_EQ(resolveRobotFile(uri, "", {c}), in_c);
+  }
+  // Paths: relative to the YAML's directory, absolute, file://.
+  EXPECT_EQ(readFile(resolveRobotFile("robots/r.urdf", b, {})), "b");
+  EXPECT_EQ(resolveRobotFile(in_c, b, {}), in_c);
+  EXPECT_EQ(resolveRobotFile("file://" + in_c, b, {}), in_c);
+  EXPECT_THROW(resolveRobotFile("robots/missing.urdf", b, {}), RobotFileNotFound);
+  EXPECT_THROW(resolveRobotFile("package://mypkg", "", {a}), ConfigError);
+  EXPECT_THROW(resolveRobotFile("package:///robots/r.urdf", "", {a}), ConfigError);
+}
+
+TEST(PackagePath, MissingPackageListsEveryPlaceLooked) {
+  const std::string root = testDir();
+  const std::string a = root + "/a", named = root + "/d/other", env = root + "/e";
+  const std::string path = env + "::";
+  const ScopedEnv ros("ROS_PACKAGE_PATH", path.c_str());
+  try {
+    resolveRobotFile("package://other/x.urdf", "", {a, named});
+    FAIL() << "resolved a missing package";
+  } catch (const RobotFileNotFound& e) {
+    const std::vector<std::string> expected = {
+        a + "/other/x.urdf",        a + "/share/other/x.urdf",     named + "/other/x.urdf",
+        named + "/x.urdf",          named + "/share/other/x.urdf", env + "/other/x.urdf",
+        env + "/share/other/x.urdf"};
+    EXPECT_EQ(e.tried(), expected);
+    const std::string what = e.what();
+    for (const auto& t : expected) EXPECT_NE(what.find(t), std::string::npos) << what;
+    EXPECT_NE(what.find("package://other/x.urdf"), std::string::npos) << what;
+    EXPECT_NE(what.find("ROS_PACKAGE_PATH"), std::string::npos) << what;
+    EXPECT_NE(what.find("--robots-dir"), std::string::npos) << what;
+  }
+  const ScopedEnv no_ros("ROS_PACKAGE_PATH", nullptr);
+  try {
+    resolveRobotFile("package://other/x.urdf", "", {});
+    FAIL() << "resolved a package with nowhere to look";
+  } catch (const RobotFileNotFound& e) {
+    EXPECT_TRUE(e.tried().empty());
+    EXPECT_NE(std::string(e.what()).find("ROS_PACKAGE_PATH"), std::string::npos) << e.what();
+  }
+}
+
+// ---- YAML variants, written into a temporary directory ----
+
+const std::string kQuadUrdfLine = "urdf: stride_quad.urdf";
+const std::string kQuadUrdfAbsolute =
+    "urdf: " STRIDE_CONFIG_DIR "/robots/stride_quad/stride_quad.urdf";
+const std::string kQuadBase = "  base: [0.0, 0.0, 0.222946147, 0.0, 0.0, 0.0, 1.0]\n";
+
+// The in-house quadruped's YAML, its URDF named by absolute path so that the copy can live
+// anywhere.
+std::string quadText() {
+  std::string s = readFile(kQuad);
+  const auto pos = s.find(kQuadUrdfLine);
+  EXPECT_NE(pos, std::string::npos);
+  return s.replace(pos, kQuadUrdfLine.size(), kQuadUrdfAbsolute);
+}
+
+std::string replaced(std::string s, const std::string& from, const std::string& to) {
+  const auto pos = s.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  return pos == std::string::npos ? s : s.replace(pos, from.size(), to);
+}
+
+// The YAML's error, or "" when it loads.
+std::string loadError(const std::string& yaml, const std::vector<std::string>& robots_dirs = {}) {
+  const std::string path = writeFile(testDir() + "/test_broken.yaml", yaml);
+  try {
+    loadRobot(path, robots_dirs);
+  } catch (const std::exception& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("test_broken.yaml"), std::string::npos) << what;
+    return what;
+  }
+  return "";
+}
+
+void expectConfigError(const std::string& yaml, const std::string& fragment) {
+  const std::string what = loadError(yaml);
+  EXPECT_NE(what.find(fragment), std::string::npos)
+      << (what.empty() ? "accepted" : what) << "; expected an error with '" << fragment << "'";
 }
 
 TEST(RobotConfig, BadInput) {
   EXPECT_THROW(loadRobot("/nonexistent.yaml"), ConfigError);
-  std::ifstream in(kQuad);
-  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string good = quadText();
   auto with = [&](const std::string& from, const std::string& to) {
-    std::string s = good;
-    const auto pos = s.find(from);
-    EXPECT_NE(pos, std::string::npos) << from;
-    return s.replace(pos, from.size(), to);
+    return replaced(good, from, to);
   };
+  EXPECT_EQ(loadError(good), "");
   expectConfigError("name: [unclosed", "malformed YAML");
-  expectConfigError(with("name: stride_quad", "nom: stride_quad"), "missing key 'name'");
+  expectConfigError(with("name: stride_quad", "nom: stride_quad"), "unknown key 'nom'");
+  expectConfigError(with("name: stride_quad\n", ""), "missing key 'name'");
   expectConfigError(with("{frame: FL_foot, dim: 3}", "{frame: FL_toe, dim: 3}"),
                     "contact frame 'FL_toe'");
   expectConfigError(with("{frame: FL_foot, dim: 3}", "{frame: FL_foot, dim: 4}"), "dim 4");
-  expectConfigError(with("FL_HAA: 2.7,", ""), "torque_limits has no entry for joint 'FL_HAA'");
+  expectConfigError(with("{frame: FR_foot, dim: 3}", "{frame: FL_foot, dim: 3}"), "listed twice");
   expectConfigError(with("FL_HAA: 2.7,", "FL_HAA: -1,"), "must be positive");
-  expectConfigError(with("urdf: stride_quad.urdf", "urdf: missing.urdf"), "does not exist");
+  expectConfigError(with("FL_HAA: 2.7,", "FL_HAA: .inf,"), "must be positive and finite");
+  expectConfigError(with("FL_HAA: 2.7,", "FL_HAA: 2.7, FL_toe: 1,"), "joint 'FL_toe'");
+  expectConfigError(with("FL_HAA: 2.7,", "root_joint: 2.7,"), "not actuated");
+  expectConfigError(with("FL_HAA: 0.0,", ""),
+                    "default_posture.joints has no entry for joint 'FL_HAA'");
+  expectConfigError(with(kQuadBase, ""), "missing key 'base'");
+  expectConfigError(with("default_posture:", "posture:"), "unknown key 'posture'");
+  expectConfigError(with(kQuadUrdfAbsolute, "urdf: missing.urdf"), "does not exist");
   expectConfigError(with("root_joint: free-flyer", "root_joint: planar"), "root_joint must be");
   expectConfigError(with("0.0, 0.0, 0.0, 1.0]", "0.0, 0.0, 0.5, 1.0]"), "quaternion is not unit");
+  expectConfigError(good + "reference_posture: standing\n", "reference_posture needs an 'srdf'");
+}
+
+// A misspelt key would otherwise silently leave its default in place.
+TEST(RobotConfig, UnknownKeysAtEveryLevel) {
+  const std::string good = quadText();
+  expectConfigError(replaced(good, "contacts:", "contcts:"), "unknown key 'contcts'");
+  expectConfigError(good + "sole_half_extent: [0.1, 0.05]\n", "unknown key 'sole_half_extent'");
+  expectConfigError(replaced(good, "{frame: HL_foot, dim: 3}", "{frame: HL_foot, dim: 3, mu: 1}"),
+                    "unknown key 'contacts[2].mu'");
+  expectConfigError(replaced(good, "  joints: {", "  jionts: {"),
+                    "unknown key 'default_posture.jionts'");
+  expectConfigError(replaced(good, "  base:", "  bse:"), "unknown key 'default_posture.bse'");
+}
+
+TEST(RobotConfig, TorqueLimits) {
+  const std::string good = quadText();
+  const std::string limits = good.substr(
+      good.find("torque_limits:"), good.find("default_posture:") - good.find("torque_limits:"));
+  const std::string dir = testDir();
+  auto load = [&](const std::string& text) {
+    return loadRobot(writeFile(dir + "/quad.yaml", text)).model.effortLimit;
+  };
+  // One number for every joint.
+  const Eigen::VectorXd scalar = load(replaced(good, limits, "torque_limits: 1.5\n"));
+  EXPECT_TRUE((scalar.tail(12).array() == 1.5).all()) << scalar.transpose();
+  // A map: the joints it names; the others keep the URDF's effort (2.7).
+  const Eigen::VectorXd map = load(replaced(good, limits, "torque_limits: {FL_KFE: 4.0}\n"));
+  const Model quad = loadRobot(kQuad).model;
+  EXPECT_EQ(map[quad.joints[quad.getJointId("FL_KFE")].idx_v], 4.0);
+  EXPECT_EQ((map.tail(12).array() == 2.7).count(), 11);
+  // None: the URDF's efforts.
+  const Eigen::VectorXd urdf = load(replaced(good, limits, ""));
+  EXPECT_TRUE((urdf.tail(12).array() == 2.7).all()) << urdf.transpose();
+  expectConfigError(replaced(good, limits, "torque_limits: 0\n"), "must be positive");
+  expectConfigError(replaced(good, limits, "torque_limits: [1, 2]\n"), "torque_limits must be");
+
+  // A URDF with a zero effort for `b` (urdfdom requires the attribute): its limit must come from
+  // the YAML.
+  const std::string arm = writeFile(dir + "/arm.urdf", R"(<robot name="arm">
+  <link name="base"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+  <link name="l1"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+  <link name="l2"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+  <joint name="a" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="5" velocity="1"/></joint>
+  <joint name="b" type="revolute"><parent link="l1"/><child link="l2"/><axis xyz="0 1 0"/>
+    <origin xyz="0 0 0.5"/><limit lower="-1" upper="1" effort="0" velocity="1"/></joint>
+</robot>
+)");
+  const std::string arm_yaml = "name: arm\nurdf: " + arm +
+                               "\nroot_joint: fixed\ncontacts: []\n"
+                               "default_posture: {joints: {a: 0.1, b: 0.2}}\n";
+  expectConfigError(arm_yaml, "joint 'b' has no torque limit");
+  const Robot fixed = loadRobot(writeFile(dir + "/arm.yaml", arm_yaml + "torque_limits: {b: 3}\n"));
+  EXPECT_EQ(fixed.model.effortLimit, Eigen::Vector2d(5, 3));
+  EXPECT_EQ(fixed.default_q, Eigen::Vector2d(0.1, 0.2));
+  // A fixed base: q, v and u are the joints.
+  const std::string text = describeModel(fixed);
+  for (const char* part : {"fixed base", "nq 2, nv 2, nu 2", "q[1]     b", "u[0]     a"})
+    EXPECT_NE(text.find(part), std::string::npos) << part << " in\n" << text;
+  EXPECT_EQ(text.find("root_joint"), std::string::npos) << text;
+  expectConfigError(replaced(arm_yaml, "b: 0.2}", "b: 0.2}, base: [0, 0, 0, 0, 0, 0, 1]") +
+                        "torque_limits: {b: 3}\n",
+                    "only for a free-flyer");
+}
+
+// ---- the default posture from an SRDF group_state ----
+
+const std::string kSoloHeader =
+    "name: solo_test\n"
+    "urdf: package://example-robot-data/robots/solo_description/robots/solo12.urdf\n"
+    "srdf: package://example-robot-data/robots/solo_description/srdf/solo.srdf\n"
+    "root_joint: free-flyer\n"
+    "contacts: [{frame: FL_FOOT, dim: 3}, {frame: FR_FOOT, dim: 3}, {frame: HL_FOOT, dim: 3},\n"
+    "           {frame: HR_FOOT, dim: 3}]\n"
+    "torque_limits: 2.7\n";
+
+TEST(RobotConfig, SrdfPostureWithYamlOverrides) {
+  if (kPackages.empty()) GTEST_SKIP() << "no ../shared/robots/SOURCES.md: no package view";
+  const std::string dir = testDir();
+  const std::string yaml =
+      writeFile(dir + "/solo.yaml", kSoloHeader +
+                                        "reference_posture: standing\n"
+                                        "default_posture:\n"
+                                        "  joints: {FL_HAA: 0.0, HR_KFE: 1.5}\n");
+  testing::internal::CaptureStderr();
+  const Robot robot = loadRobot(yaml, {kPackages});
+  const std::string warning = testing::internal::GetCapturedStderr();
+  const Model& m = robot.model;
+  const Eigen::VectorXd& standing = m.referenceConfigurations.at("standing");
+  auto q = [&](const Eigen::VectorXd& x, const char* joint) {
+    return x[m.joints[m.getJointId(joint)].idx_q];
+  };
+  EXPECT_EQ(q(robot.default_q, "FL_HAA"), 0.0);
+  EXPECT_EQ(q(robot.default_q, "HR_KFE"), 1.5);
+  for (const char* j : {"FR_HAA", "FL_HFE", "FL_KFE", "HL_HAA", "HR_HAA", "HR_HFE"})
+    EXPECT_EQ(q(robot.default_q, j), q(standing, j)) << j;
+  EXPECT_EQ(robot.default_q.segment<2>(0), standing.segment<2>(0));
+  EXPECT_EQ(robot.default_q.segment<4>(3), standing.segment<4>(3));
+  // The SRDF's height is not the one that puts the feet on the ground: computed, and said. With a
+  // knee bent differently, only the lowest foot touches.
+  EXPECT_NE(warning.find("solo.yaml"), std::string::npos) << warning;
+  Data data(m);
+  framesForwardKinematics(m, data, robot.default_q);
+  double lowest = 1.0;
+  for (const auto& c : robot.contacts)
+    lowest = std::min(lowest, data.oMf[m.getFrameId(c.frame)].p.z());
+  EXPECT_NEAR(lowest, 0.0, 1e-12);
+
+  // The YAML's base replaces the SRDF's, but its height is computed as well.
+  const std::string based =
+      writeFile(dir + "/based.yaml", kSoloHeader +
+                                         "reference_posture: straight_standing\n"
+                                         "default_posture: {base: [0.1, -0.2, 0.3, 0, 0, 0, 1]}\n");
+  testing::internal::CaptureStderr();
+  const Robot moved = loadRobot(based, {kPackages});
+  testing::internal::GetCapturedStderr();
+  EXPECT_EQ(moved.default_q.segment<2>(0), Eigen::Vector2d(0.1, -0.2));
+  EXPECT_EQ(moved.default_q.tail(12), m.referenceConfigurations.at("straight_standing").tail(12));
+  expectStandsOnTheGround(moved);
+
+  // An SRDF state the file does not have: the error names the key and the states it has.
+  const std::string what = loadError(kSoloHeader + "reference_posture: sitting\n", {kPackages});
+  for (const char* part :
+       {"reference_posture 'sitting'", "solo.srdf", "standing", "straight_standing"})
+    EXPECT_NE(what.find(part), std::string::npos) << what;
+}
+
+TEST(RobotConfig, BaseHeightWarning) {
+  const std::string dir = testDir();
+  const std::string yaml = writeFile(
+      dir + "/high_quad.yaml", replaced(quadText(), "[0.0, 0.0, 0.222946147,", "[0.0, 0.0, 0.25,"));
+  testing::internal::CaptureStderr();
+  const Robot robot = loadRobot(yaml);
+  const std::string warning = testing::internal::GetCapturedStderr();
+  for (const char* part : {"warning", "high_quad.yaml", "0.2500", "0.2229", "2.7 cm above"})
+    EXPECT_NE(warning.find(part), std::string::npos) << warning;
+  EXPECT_NEAR(robot.default_q[2], 0.222946147, 1e-8);
+  EXPECT_EQ(robot.model.referenceConfigurations.at("default"), robot.default_q);
+  expectStandsOnTheGround(robot);
+  // Within a millimetre: corrected silently.
+  testing::internal::CaptureStderr();
+  loadRobot(writeFile(dir + "/close_quad.yaml", replaced(quadText(), "0.222946147,", "0.2235,")));
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+}
+
+// ---- the model in wire order ----
+
+TEST(RobotConfig, DescribeModel) {
+  const Robot robot = loadRobot(kQuad);
+  const std::string text = describeModel(robot);
+  for (const char* part :
+       {"stride_quad", "stride_quad.yaml", "stride_quad.urdf", "nq 19", "nv 18", "nu 12", "kg",
+        "base height 0.2229", "q[0:7]", "v[0:6]", "x y z qx qy qz qw"})
+    EXPECT_NE(text.find(part), std::string::npos) << part << " in\n" << text;
+  // Each section lists every joint in the model's order, at its index.
+  const Model& m = robot.model;
+  for (const char* section :
+       {"q, configuration", "v, velocity", "u, joint torques", "actuated joints"}) {
+    std::size_t at = text.find(section);
+    ASSERT_NE(at, std::string::npos) << section;
+    for (int i = 2; i < m.njoints(); ++i) {
+      const Joint& j = m.joints[i];
+      const std::string index = section[0] == 'q'   ? "q[" + std::to_string(j.idx_q) + "]"
+                                : section[0] == 'v' ? "v[" + std::to_string(j.idx_v) + "]"
+                                                    : "u[" + std::to_string(j.idx_v - 6) + "]";
+      const std::size_t found = text.find(index, at);
+      ASSERT_NE(found, std::string::npos) << section << " " << j.name << "\n" << text;
+      EXPECT_EQ(text.find(j.name, found), text.find_first_not_of(" ", found + index.size()))
+          << section << " " << j.name << "\n"
+          << text;
+      at = found + index.size();
+    }
+  }
+  std::size_t at = text.find("contacts (4)");
+  ASSERT_NE(at, std::string::npos) << text;
+  for (const auto& c : robot.contacts) {
+    at = text.find(c.frame, at);
+    ASSERT_NE(at, std::string::npos) << c.frame << "\n" << text;
+    EXPECT_NE(text.find("dim 3", at), std::string::npos);
+  }
+  EXPECT_NE(text.find("2.70 N m"), std::string::npos) << text;
+  EXPECT_NE(text.find("-1.6000 rad"), std::string::npos) << text;
 }
 
 }  // namespace
