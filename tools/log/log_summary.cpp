@@ -1,7 +1,9 @@
 // stride-log-summary: what happened in a recorded session (an lcm-logger log of the demo, a replay
 // output, or a robot's session): how far the robot went, whether it fell, how the controller kept
-// up. Reads the state and status channels only; prints a summary and optionally writes JSON.
-//   stride-log-summary session.lcmlog [--summary summary.json] [--windows 5]
+// up, and how well it followed the commands it was given (segments: one per run of identical
+// commands, tools/log/segments.hpp). Reads the state, status and command channels; prints a summary
+// and optionally writes JSON.
+//   stride-log-summary session.lcmlog [--summary summary.json] [--windows 5] [--check-tracking]
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -10,10 +12,13 @@
 #include <cstdio>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <string>
 #include <vector>
 
+#include "messages/validate.hpp"
 #include "stride/mpc_status_t.hpp"
 #include "stride/robot_state_t.hpp"
+#include "tools/log/segments.hpp"
 
 namespace {
 
@@ -53,24 +58,169 @@ void printWindows(const std::vector<Window>& windows, double width, long long mi
   }
 }
 
+// A command from the log, accepted as the controller would accept it: sizes on the wire, then the
+// decoded content, then a stamp newer than the last accepted one. Rejects are counted, not fatal.
+struct CommandReader {
+  std::vector<std::int64_t> utimes;
+  std::vector<stride::logs::CommandSample> commands;  // t filled in once the first state is known
+  long rejects = 0;
+
+  void read(const lcm::LogEvent& e) {
+    stride::command_t m;
+    if (stride::msg::checkCommandWire(e.data, e.datalen) != stride::msg::Reject::None ||
+        m.decode(e.data, 0, e.datalen) < 0 ||
+        stride::msg::checkCommand(m) != stride::msg::Reject::None ||
+        (!utimes.empty() && m.utime <= utimes.back())) {
+      ++rejects;
+      return;
+    }
+    utimes.push_back(m.utime);
+    stride::logs::CommandSample c;
+    c.vx = m.vx;
+    c.vy = m.vy;
+    c.yaw_rate = m.yaw_rate;
+    c.gait = m.gait;
+    c.body_height = m.body_height;
+    commands.push_back(c);
+  }
+};
+
+// A gait name from a message, as a JSON string (it may hold any byte).
+std::string jsonString(const std::string& text) {
+  std::string out = "\"";
+  for (const char ch : text) {
+    const auto u = static_cast<unsigned char>(ch);
+    if (ch == '"' || ch == '\\') {
+      out += '\\';
+      out += ch;
+    } else if (u < 0x20 || u >= 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", u);
+      out += buf;
+    } else {
+      out += ch;
+    }
+  }
+  return out + "\"";
+}
+
+void printSegments(const std::vector<stride::logs::Segment>& segments, double settle) {
+  std::printf(
+      "command segments (t [s] from the first state; vx, vy [m/s], yaw [rad/s]; achieved: mean "
+      "heading-frame velocity from t0 + %.1f s)\n"
+      "   #      t0      t1  gait    command vx     vy    yaw   achieved vx     vy    yaw  "
+      "samples\n",
+      settle);
+  for (std::size_t k = 0; k < segments.size(); ++k) {
+    const stride::logs::Segment& s = segments[k];
+    char achieved[64] = "               (none)";
+    if (s.samples > 0)
+      std::snprintf(achieved, sizeof achieved, "%+6.2f %+6.2f %+6.2f", s.achieved[0], s.achieved[1],
+                    s.achieved[2]);
+    std::printf("  %2zu %7.2f %7.2f  %-6s      %+6.2f %+6.2f %+6.2f       %s  %7d%s\n", k, s.t0,
+                s.t1, s.gait.c_str(), s.command[0], s.command[1], s.command[2], achieved, s.samples,
+                s.fell ? "  FELL" : "");
+  }
+}
+
+// One line per miss, then the verdict line. Returns whether every segment tracked.
+bool reportTracking(const std::vector<stride::logs::Segment>& segments,
+                    const std::vector<stride::logs::TrackingMiss>& misses,
+                    const stride::logs::TrackingTolerance& tol) {
+  using Kind = stride::logs::TrackingMiss::Kind;
+  for (const auto& m : misses) {
+    const auto& s = segments[m.segment];
+    if (m.kind == Kind::Fell)
+      std::printf("tracking: segment %d (%.2f .. %.2f s, %s): the robot fell\n", m.segment, s.t0,
+                  s.t1, s.gait.c_str());
+    else if (m.kind == Kind::NoSamples)
+      std::printf("tracking: segment %d (%.2f .. %.2f s, %s): no state to measure it\n", m.segment,
+                  s.t0, s.t1, s.gait.c_str());
+    else
+      std::printf(
+          "tracking: segment %d (%.2f .. %.2f s, %s) missed %s: commanded %+.3f, achieved %+.3f, "
+          "tolerance %.3f\n",
+          m.segment, s.t0, s.t1, s.gait.c_str(), stride::logs::componentName(m.component),
+          m.commanded, m.achieved, m.tolerance);
+  }
+  long checked = 0;
+  for (const auto& s : segments) checked += s.t1 - s.t0 >= tol.min_duration;
+  if (misses.empty())
+    std::printf(
+        "tracking: every segment tracked its command (%ld of %zu segments last >= %.1f s and were "
+        "checked: within max(%.0f%%, %.2f m/s, %.2f rad/s)), no fall\n",
+        checked, segments.size(), tol.min_duration, tol.relative * 100, tol.linear, tol.yaw_rate);
+  else
+    std::printf("tracking: NOT every segment tracked its command (%zu misses)\n", misses.size());
+  return misses.empty();
+}
+
+void writeSegmentsJson(std::ostream& f, const std::vector<stride::logs::Segment>& segments) {
+  f << "[";
+  for (std::size_t k = 0; k < segments.size(); ++k) {
+    const stride::logs::Segment& s = segments[k];
+    f << (k ? ",\n    " : "\n    ") << "{\"t0\": " << s.t0 << ", \"t1\": " << s.t1
+      << ", \"command\": [" << s.command[0] << ", " << s.command[1] << ", " << s.command[2]
+      << "], \"gait\": " << jsonString(s.gait) << ", \"body_height\": " << s.body_height
+      << ", \"achieved\": ";
+    if (s.samples > 0)
+      f << "[" << s.achieved[0] << ", " << s.achieved[1] << ", " << s.achieved[2] << "]";
+    else
+      f << "null";
+    f << ", \"samples\": " << s.samples << ", \"commands\": " << s.commands
+      << ", \"fell\": " << (s.fell ? "true" : "false") << "}";
+  }
+  f << (segments.empty() ? "]" : "\n  ]");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"stride-log-summary: distance, base height, falls and controller timing of a log"};
+  CLI::App app{
+      "stride-log-summary: distance, base height, falls, controller timing and command tracking of "
+      "a log"};
   std::string log_path, summary_path, state_channel = "STRIDE_STATE",
-                                      status_channel = "STRIDE_STATUS";
+                                      status_channel = "STRIDE_STATUS",
+                                      command_channel = "STRIDE_COMMAND";
   double fall_height = 0.5, fall_tilt_deg = 60.0, window = 0.0;
+  stride::logs::TrackingTolerance tolerance;
+  stride::logs::SegmentOptions segment_options;
+  bool check_tracking = false;
   app.add_option("log", log_path, "LCM log file")->required()->check(CLI::ExistingFile);
   app.add_option("--summary", summary_path, "write the summary as JSON here");
   app.add_option("--state-channel", state_channel);
   app.add_option("--status-channel", status_channel);
+  app.add_option("--command-channel", command_channel);
   app.add_option("--fall-height", fall_height,
                  "fallen: base below this fraction of its first height");
   app.add_option("--fall-tilt", fall_tilt_deg, "fallen: base tilted more than this [deg]");
   app.add_option("--windows", window,
                  "also print the controller's timing and misses per window of this many seconds")
       ->check(CLI::Range(0.0, 3600.0));
+  app.add_flag("--check-tracking", check_tracking,
+               "exit status 1 when a command segment missed its command or the robot fell");
+  app.add_option("--tolerance", tolerance.relative,
+                 "tracking: allowed error as a fraction of the commanded value")
+      ->check(CLI::Range(0.0, 10.0))
+      ->capture_default_str();
+  app.add_option("--tolerance-linear", tolerance.linear,
+                 "tracking: allowed error at least this on vx and vy [m/s]")
+      ->check(CLI::Range(0.0, 10.0))
+      ->capture_default_str();
+  app.add_option("--tolerance-yaw", tolerance.yaw_rate,
+                 "tracking: allowed error at least this on yaw_rate [rad/s]")
+      ->check(CLI::Range(0.0, 10.0))
+      ->capture_default_str();
+  app.add_option("--min-segment", tolerance.min_duration,
+                 "tracking: segments shorter than this [s] are not checked")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
+  app.add_option("--settle", segment_options.settle,
+                 "segments: velocities are averaged from this long after a command's start [s]")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  segment_options.fall = {fall_height, fall_tilt_deg};
 
   lcm::LogFile log(log_path, "r");
   if (!log.good()) {
@@ -86,6 +236,9 @@ int main(int argc, char** argv) {
   stride::mpc_status_t last_status{};
   std::vector<Window> windows;
   std::int64_t status_t0 = -1;
+  std::int64_t state_utime0 = 0;
+  std::vector<stride::logs::BaseSample> base_samples;  // t from the first state's stamp
+  CommandReader command_reader;
   for (const lcm::LogEvent* e = log.readNextEvent(); e != nullptr; e = log.readNextEvent()) {
     if (e->channel == state_channel) {
       stride::robot_state_t s;
@@ -100,18 +253,27 @@ int main(int argc, char** argv) {
         y0 = s.q[1];
         z_first = z;
         t_first = s.utime * 1e-6;
+        state_utime0 = s.utime;
+      }
+      stride::logs::BaseSample b;
+      b.t = static_cast<double>(s.utime - state_utime0) / 1e6;
+      std::copy(s.q.begin(), s.q.begin() + 7, b.q.begin());
+      // Velocities feed the segments' averages: one NaN would spoil a whole segment.
+      if (s.nv >= 6 && stride::msg::checkState(s, true) == stride::msg::Reject::None) {
+        std::copy(s.v.begin(), s.v.begin() + 6, b.v.begin());
+        base_samples.push_back(b);
       }
       x1 = s.q[0];
       y1 = s.q[1];
       t_last = s.utime * 1e-6;
       z_min = std::min(z_min, z);
       z_max = std::max(z_max, z);
-      // Tilt: the angle between the base's z axis and the world's (quaternion x y z w).
-      const double qx = s.q[3], qy = s.q[4];
-      const double tilt = std::acos(std::clamp(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0));
-      max_tilt = std::max(max_tilt, tilt * 180.0 / M_PI);
-      if (z < fall_height * z_first || tilt * 180.0 / M_PI > fall_tilt_deg) fell = true;
+      // One definition of a fall for the session and its segments (tools/log/segments.hpp).
+      max_tilt = std::max(max_tilt, stride::logs::tilt(b.q) * 180.0 / M_PI);
+      if (stride::logs::fallen(b, z_first, segment_options.fall)) fell = true;
       ++states;
+    } else if (e->channel == command_channel) {
+      command_reader.read(*e);
     } else if (e->channel == status_channel) {
       stride::mpc_status_t st;
       if (st.decode(e->data, 0, static_cast<int>(e->datalen)) < 0) {
@@ -164,6 +326,20 @@ int main(int argc, char** argv) {
                  state_channel.c_str(), status_channel.c_str(), log_path.c_str());
     return 1;
   }
+  // Segments on the robot's clock: commands played from a script carry the stamp of the state
+  // they answered, so both share the first state's origin.
+  std::vector<stride::logs::CommandSample>& commands = command_reader.commands;
+  for (std::size_t i = 0; i < commands.size(); ++i)
+    commands[i].t = static_cast<double>(command_reader.utimes[i] - state_utime0) / 1e6;
+  const std::vector<stride::logs::Segment> segments =
+      stride::logs::segmentCommands(commands, base_samples, segment_options);
+  const std::vector<stride::logs::TrackingMiss> misses =
+      stride::logs::checkTracking(segments, tolerance);
+  // Keyboard commands carry the teleop's CLOCK_MONOTONIC: the robot's clock in real time, not in
+  // lock-step or on a replayed log. Then the segments mean nothing, and the reader must know.
+  long off_clock = 0;
+  if (states > 0)
+    for (const auto& c : commands) off_clock += c.t < -1.0 || c.t > t_last - t_first + 1.0;
   if (states == 0) {  // e.g. a replay's output: the controller's side only
     z_min = z_max = 0.0;
     std::printf("no state estimates in this log (a replay output?): controller side only\n");
@@ -198,6 +374,28 @@ int main(int argc, char** argv) {
   if (!windows.empty())
     printWindows(windows, window, last_status.deadline_misses, last_status.late_ticks);
   if (bad > 0) std::printf("log: %ld undecodable events skipped\n", bad);
+  bool tracked = true;
+  if (commands.empty()) {
+    std::printf("commands: none on '%s'%s\n", command_channel.c_str(),
+                check_tracking ? "; --check-tracking checks the fall only" : "");
+    tracked = !fell;
+  } else {
+    printSegments(segments, segment_options.settle);
+    tracked = reportTracking(segments, misses, tolerance);
+    // A fall outside every segment (before the first command) fails the check too.
+    if (fell && tracked) {
+      std::printf("tracking: the robot fell outside the command segments\n");
+      tracked = false;
+    }
+  }
+  if (off_clock > 0)
+    std::printf(
+        "commands: %ld of %zu stamped more than 1 s outside the states' time span: their clock is "
+        "not the robot's, the segments are not meaningful\n",
+        off_clock, commands.size());
+  if (command_reader.rejects > 0)
+    std::printf("commands: %ld rejected (wrong size, non-finite or stamps not increasing)\n",
+                command_reader.rejects);
   if (!summary_path.empty()) {
     std::ofstream f(summary_path);
     f << "{\n  \"duration_s\": " << t_last - t_first << ",\n  \"distance_m\": " << distance
@@ -213,11 +411,15 @@ int main(int argc, char** argv) {
       << ",\n  \"prepare_time_us\": {\"p50\": " << percentile(prepare_ms, 0.5) * 1e3
       << ", \"p99\": " << percentile(prepare_ms, 0.99) * 1e3 << "}"
       << ",\n  \"line_search\": {\"full\": " << full_steps << ", \"shorter\": " << short_steps
-      << ", \"none\": " << no_steps << "}\n}\n";
+      << ", \"none\": " << no_steps << "}"
+      << ",\n  \"commands\": " << commands.size()
+      << ",\n  \"command_rejects\": " << command_reader.rejects << ",\n  \"segments\": ";
+    writeSegmentsJson(f, segments);
+    f << ",\n  \"tracked\": " << (tracked ? "true" : "false") << "\n}\n";
     if (!f) {
       std::fprintf(stderr, "stride-log-summary: cannot write '%s'\n", summary_path.c_str());
       return 1;
     }
   }
-  return 0;
+  return check_tracking && !tracked ? 1 : 0;
 }

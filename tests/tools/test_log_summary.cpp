@@ -1,0 +1,142 @@
+// stride-log-summary on logs written here (lcm::LogFile, no network): the command segments in the
+// table and the JSON, the rejected commands, and --check-tracking's exit status for a robot that
+// tracks, one that falls short, and one that falls.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "stride/command_t.hpp"
+#include "stride/robot_state_t.hpp"
+
+namespace {
+
+enum class Robot { Tracks, SlowInSegment1, FallsInSegment2 };
+
+template <typename Message>
+void write(lcm::LogFile& log, const std::string& channel, const Message& m, std::int64_t utime) {
+  std::vector<unsigned char> bytes(m.getEncodedSize());
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  lcm::LogEvent e{};
+  e.timestamp = utime;
+  e.channel = channel;
+  e.datalen = static_cast<int32_t>(bytes.size());
+  e.data = bytes.data();
+  log.writeEvent(&e);
+}
+
+// 9 s at 100 Hz: stand 3 s, walk forward at 0.5 m/s 3 s, walk and turn at 1 rad/s 3 s, with the
+// commands repeated at 20 Hz and stamped with the state they answer. One command is NaN.
+std::string writeSession(const std::string& name, Robot robot) {
+  const std::string path = testing::TempDir() + "/" + name + ".lcmlog";
+  lcm::LogFile log(path, "w");
+  EXPECT_TRUE(log.good());
+  const std::int64_t u0 = 7000000;
+  double x = 0, y = 0, yaw = 0;
+  for (int i = 0; i <= 900; ++i) {
+    const double t = i / 100.0;
+    const std::int64_t utime = u0 + 10000L * i;
+    const int segment = t < 3.0 ? 0 : t < 6.0 ? 1 : 2;
+    double vx = segment == 0 ? 0.0 : 0.5, w = segment == 2 ? 1.0 : 0.0;
+    if (robot == Robot::SlowInSegment1 && segment == 1) vx = 0.3;
+    stride::robot_state_t s;
+    s.utime = utime;
+    s.nq = 7;
+    s.nv = 6;
+    const bool down = robot == Robot::FallsInSegment2 && t >= 7.0;
+    s.q = std::vector<double>{x, y, down ? 0.1 : 0.3, 0, 0, std::sin(yaw / 2), std::cos(yaw / 2)};
+    s.v = std::vector<double>{vx, 0, 0, 0, 0, w};
+    s.ncontacts = 0;
+    write(log, "STRIDE_STATE", s, utime);
+    if (i % 5 == 0 && i < 900) {
+      stride::command_t c;
+      c.utime = utime;
+      c.vx = segment == 0 ? 0.0 : 0.5;
+      c.vy = 0.0;
+      c.yaw_rate = segment == 2 ? 1.0 : 0.0;
+      c.gait = segment == 0 ? "stand" : "trot";
+      c.body_height = 0.0;
+      if (i == 400) c.vx = std::numeric_limits<double>::quiet_NaN();
+      write(log, "STRIDE_COMMAND", c, utime);
+    }
+    x += (std::cos(yaw) * vx) * 0.01;
+    y += (std::sin(yaw) * vx) * 0.01;
+    yaw += w * 0.01;
+  }
+  return path;
+}
+
+struct Summary {
+  int status;
+  std::string output, json;
+};
+
+Summary summarize(const std::string& log, const std::string& flags) {
+  const std::string out = log + ".txt", json = log + ".json";
+  const std::string cmd = std::string(STRIDE_LOG_SUMMARY_BIN) + " " + log + " --summary " + json +
+                          " " + flags + " > " + out + " 2>&1";
+  const int raw = std::system(cmd.c_str());
+  const auto slurp = [](const std::string& p) {
+    std::ifstream f(p);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+  };
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(json)};
+}
+
+TEST(LogSummary, SegmentsOfARobotThatTracks) {
+  const Summary r = summarize(writeSession("tracks", Robot::Tracks), "--check-tracking");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("tracking: every segment tracked its command (3 of 3"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("commands: 1 rejected"), std::string::npos) << r.output;
+  // The turn: constant in the heading frame, although the world velocity went round.
+  EXPECT_NE(r.json.find("{\"t0\": 6, \"t1\": 9, \"command\": [0.5, 0, 1], \"gait\": \"trot\", "
+                        "\"body_height\": 0, \"achieved\": [0.5, "),
+            std::string::npos)
+      << r.json;
+  EXPECT_NE(r.json.find("{\"t0\": 0, \"t1\": 3, \"command\": [0, 0, 0], \"gait\": \"stand\""),
+            std::string::npos)
+      << r.json;
+  EXPECT_NE(r.json.find("\"command_rejects\": 1"), std::string::npos);
+  EXPECT_NE(r.json.find("\"fell\": false"), std::string::npos);
+  EXPECT_NE(r.json.find("\"tracked\": true"), std::string::npos);
+}
+
+TEST(LogSummary, CheckTrackingFailsOnAMissedCommand) {
+  const std::string log = writeSession("slow", Robot::SlowInSegment1);
+  const Summary checked = summarize(log, "--check-tracking");
+  EXPECT_EQ(checked.status, 1) << checked.output;
+  EXPECT_NE(checked.output.find("tracking: segment 1 (3.00 .. 6.00 s, trot) missed vx: commanded "
+                                "+0.500, achieved +0.300, tolerance 0.075"),
+            std::string::npos)
+      << checked.output;
+  EXPECT_NE(checked.json.find("\"tracked\": false"), std::string::npos);
+  // Without the flag the status stays 0, and the verdict is still printed.
+  const Summary plain = summarize(log, "");
+  EXPECT_EQ(plain.status, 0) << plain.output;
+  EXPECT_NE(plain.output.find("tracking: NOT every segment tracked its command (1 misses)"),
+            std::string::npos)
+      << plain.output;
+  // A looser tolerance lets it pass.
+  EXPECT_EQ(summarize(log, "--check-tracking --tolerance 0.5").status, 0);
+}
+
+TEST(LogSummary, CheckTrackingFailsOnAFall) {
+  const Summary r = summarize(writeSession("falls", Robot::FallsInSegment2), "--check-tracking");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("tracking: segment 2 (6.00 .. 9.00 s, trot): the robot fell"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.json.find("\"samples\": 201, \"commands\": 60, \"fell\": true}"), std::string::npos)
+      << r.json;
+}
+
+}  // namespace

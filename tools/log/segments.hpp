@@ -1,0 +1,99 @@
+#pragma once
+// Command segments of a session: how well the robot followed each command it was given.
+//
+// A segment is a run of consecutive identical commands (a command script played by stride-teleop
+// gives one per entry). For each, the base's velocity in the heading frame (the world frame turned
+// by the base's yaw only, so a robot walking forward while turning keeps a constant forward
+// velocity) is averaged after a settling time, and compared with the command.
+//
+// Free of LCM and files: inputs are plain samples, so stride-log-summary and an in-process
+// closed-loop runner can both call these functions.
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace stride::logs {
+
+// One base state: t [s] on the session's clock, q = [x y z, qx qy qz qw] (world), v = [base linear,
+// base angular] velocity expressed in the base frame (ARCHITECTURE.md §3).
+struct BaseSample {
+  double t = 0.0;
+  std::array<double, 7> q{0, 0, 0, 0, 0, 0, 1};
+  std::array<double, 6> v{};
+};
+
+// One command as sent: t [s] on the same clock as the states.
+struct CommandSample {
+  double t = 0.0;
+  double vx = 0.0, vy = 0.0, yaw_rate = 0.0;  // heading frame [m/s, m/s, rad/s]
+  std::string gait;
+  double body_height = 0.0;
+};
+
+// [vx, vy, yaw_rate] of the base in its heading frame: the world linear velocity turned back by
+// the yaw, and the world z component of the angular velocity.
+std::array<double, 3> headingVelocity(const BaseSample& s);
+
+// Yaw (heading) of the base quaternion [rad], and its tilt: the angle between the base's z axis and
+// the world's [rad].
+double yaw(const std::array<double, 7>& q);
+double tilt(const std::array<double, 7>& q);
+
+// The fall criterion stride-log-summary has always used: the base below height_fraction of its
+// first height, or tilted more than max_tilt_deg.
+struct FallLimits {
+  double height_fraction = 0.5;
+  double max_tilt_deg = 60.0;
+};
+bool fallen(const BaseSample& s, double first_height, const FallLimits& limits);
+
+struct Segment {
+  double t0 = 0.0,
+         t1 = 0.0;  // [s]: the run's first command; the next run's first or the last state
+  std::array<double, 3> command{};  // vx, vy, yaw_rate
+  std::string gait;
+  double body_height = 0.0;
+  int commands = 0;                  // command messages in the run
+  int samples = 0;                   // states averaged into `achieved`
+  std::array<double, 3> achieved{};  // mean heading-frame velocity (meaningful when samples > 0)
+  bool fell = false;                 // a fallen state in [t0, t1]
+};
+
+struct SegmentOptions {
+  double settle = 1.0;  // states from t0 + settle on are averaged: the first second is transition
+  FallLimits fall;
+};
+
+// Splits the commands (in time order) into runs of identical values and measures each against the
+// states (in time order; the first gives the fall criterion's reference height). A segment ends at
+// the next run's first command, the last one at the last state (never before its own start).
+std::vector<Segment> segmentCommands(const std::vector<CommandSample>& commands,
+                                     const std::vector<BaseSample>& states,
+                                     const SegmentOptions& options = {});
+
+// Tracking check: a segment of at least min_duration misses a component when |achieved - command|
+// exceeds max(relative × |command|, the component's absolute floor); a fall fails its segment, and
+// so does a long segment without any state to measure.
+struct TrackingTolerance {
+  double relative = 0.15;
+  double linear = 0.05;       // [m/s], vx and vy
+  double yaw_rate = 0.1;      // [rad/s]
+  double min_duration = 2.0;  // [s]: shorter segments are all transition
+};
+
+struct TrackingMiss {
+  int segment = 0;
+  enum class Kind { Component, Fell, NoSamples } kind = Kind::Component;
+  int component = 0;  // 0 vx, 1 vy, 2 yaw_rate (Kind::Component)
+  double commanded = 0.0, achieved = 0.0, tolerance = 0.0;
+};
+
+// Every miss, in segment order; empty when every segment tracked its command.
+std::vector<TrackingMiss> checkTracking(const std::vector<Segment>& segments,
+                                        const TrackingTolerance& tolerance = {});
+
+// "vx", "vy", "yaw_rate".
+const char* componentName(int component);
+
+}  // namespace stride::logs
