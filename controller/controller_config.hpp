@@ -28,6 +28,9 @@ enum class Fallback { Previous, Hold };
 struct ControllerConfig {
   std::string path;        // the YAML it came from
   std::string robot_yaml;  // resolved against the YAML's folder
+  // Where package:// URIs of the robot YAML are looked for first (--robots-dir), before
+  // ROS_PACKAGE_PATH (config/package_path.hpp).
+  std::vector<std::string> robots_dirs;
   double rate_hz = 100.0;
   int policy_knots = 8;  // knots sent in each policy message
   LocomotionOptions locomotion;

@@ -11,6 +11,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 
+#include "config/describe_model.hpp"
 #include "controller/run_loop.hpp"
 
 namespace {
@@ -28,8 +29,9 @@ std::string defaultUrl() {
 int main(int argc, char** argv) {
   CLI::App app{"stride-mpc: real-time whole-body MPC (KKT-DDP) over LCM"};
   std::string config_path, replay, output, input_url, output_url, summary;
-  bool lockstep = false;
+  bool lockstep = false, print_model = false;
   double duration = 0.0;
+  std::vector<std::string> robots_dirs;
   app.add_option("--config", config_path, "controller YAML (config/controller/)")->required();
   app.add_option("--replay", replay, "run on the states of this LCM log, as fast as possible");
   app.add_option("--output", output, "with --replay: the log to write policies and status to");
@@ -38,12 +40,27 @@ int main(int argc, char** argv) {
   app.add_option("--output-url", output_url, "LCM URL to publish on (overrides the YAML)");
   app.add_option("--duration", duration, "stop after this many seconds (0: on SIGINT/SIGTERM)");
   app.add_option("--summary", summary, "write the run's counters and latencies as JSON here");
+  app.add_option("--robots-dir", robots_dirs,
+                 "where package:// URIs of the robot YAML are looked for before ROS_PACKAGE_PATH "
+                 "(repeatable)");
+  app.add_flag("--print-model", print_model,
+               "print the robot in wire order (q, v, u, contacts, limits) and exit");
   CLI11_PARSE(app, argc, argv);
 
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
   try {
     stride::ControllerConfig config = stride::loadControllerConfig(config_path);
+    config.robots_dirs = robots_dirs;
+    if (print_model) {
+      const stride::Robot robot = stride::loadRobot(config.robot_yaml, robots_dirs);
+      std::printf("%s", stride::describeModel(robot).c_str());
+      std::printf("gaits:");
+      for (const std::string& g : stride::gaitNames(static_cast<int>(robot.contacts.size())))
+        std::printf(" %s", g.c_str());
+      std::printf("\n");
+      return 0;
+    }
     if (!input_url.empty()) config.input_url = input_url;
     if (!output_url.empty()) config.output_url = output_url;
     const bool replaying = !replay.empty();

@@ -24,7 +24,8 @@ double millisSince(Solver::Clock::time_point t0) {
 }
 }  // namespace
 
-Mpc::Mpc(const ControllerConfig& config) : config_(config), robot_(loadRobot(config.robot_yaml)) {
+Mpc::Mpc(const ControllerConfig& config)
+    : config_(config), robot_(loadRobot(config.robot_yaml, config.robots_dirs)) {
   const Model& model = robot_.model;
   nq_ = model.nq;
   nv_ = model.nv;

@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "config/describe_model.hpp"
 #include "sim/sim_node.hpp"
 
 namespace {
@@ -42,7 +43,8 @@ int main(int argc, char** argv) {
   CLI::App app{
       "stride-sim: mock robot for stride-mpc (flat ground, unilateral contacts, friction)"};
   std::string robot_yaml, url, summary;
-  bool lockstep = false;
+  bool lockstep = false, print_model = false;
+  std::vector<std::string> robots_dirs;
   double duration = 10.0, timeout = 5.0, drop_height = 0.0;
   std::vector<std::string> pushes;
   stride::sim::SimOptions sim;
@@ -70,6 +72,11 @@ int main(int argc, char** argv) {
                  "joint PD holding the default posture until the first policy [Nm/rad]");
   app.add_option("--hold-kd", node_options.hold_kd, "its damping [Nm s/rad]");
   app.add_option("--summary", summary, "write the run's summary as JSON here");
+  app.add_option("--robots-dir", robots_dirs,
+                 "where package:// URIs of the robot YAML are looked for before ROS_PACKAGE_PATH "
+                 "(repeatable)");
+  app.add_flag("--print-model", print_model,
+               "print the robot in wire order (q, v, u, contacts, limits) and exit");
   CLI11_PARSE(app, argc, argv);
 
   std::signal(SIGINT, onSignal);
@@ -84,13 +91,17 @@ int main(int argc, char** argv) {
       }
       node_options.pushes.pushes.push_back(push);
     }
+    const stride::Robot robot = stride::loadRobot(robot_yaml, robots_dirs);
+    if (print_model) {
+      std::printf("%s", stride::describeModel(robot).c_str());
+      return 0;
+    }
     if (url.empty() && std::getenv("LCM_DEFAULT_URL") != nullptr)
       url = std::getenv("LCM_DEFAULT_URL");
     if (url.empty()) {
       std::fprintf(stderr, "stride-sim: no LCM URL: --url or LCM_DEFAULT_URL\n");
       return 2;
     }
-    const stride::Robot robot = stride::loadRobot(robot_yaml);
     lcm::LCM lcm(url);
     if (!lcm.good()) {
       std::fprintf(stderr, "stride-sim: cannot open LCM '%s'\n", url.c_str());

@@ -3,13 +3,22 @@
 // bounds, feet really lifting, progress forward, recovery after a push.
 #include <gtest/gtest.h>
 
-#include "closed_loop.hpp"
 #include "controller_cases.hpp"
+#include "tools/drive/closed_loop.hpp"
 
 namespace stride {
 namespace {
 
-using closed_loop::tiltDeg;
+using drive::tiltDeg;
+
+drive::Run run(const ControllerConfig& config, const sim::SimNodeOptions& sim, double duration,
+               const std::vector<ScriptedCommand>& script = {}) {
+  drive::Options o;
+  o.sim = sim;
+  o.duration = duration;
+  o.script = script;
+  return drive::run(config, o);
+}
 
 // Stands 5 s, trots in place, then forward at 0.3 m/s from 7.5 s.
 TEST(ClosedLoop, QuadrupedStandsThenTrots) {
@@ -20,13 +29,13 @@ TEST(ClosedLoop, QuadrupedStandsThenTrots) {
   script[2] = script[1];
   script[2].at = 7.5;
   script[2].vx = 0.3;
-  const closed_loop::Run r = closed_loop::run(config, sim::SimNodeOptions{}, 10.0, script);
+  const drive::Run r = run(config, sim::SimNodeOptions{}, 10.0, script);
   ASSERT_FALSE(r.sim.fell);
   ASSERT_NEAR(r.samples.back().t, 10.0 - 0.005, 1e-9);
   const double z0 = r.samples.front().q[2];
   double drift_standing = 0.0, max_tilt = 0.0, z_min = 1e9, z_max = -1e9;
   int fewer_feet = 0;
-  for (const closed_loop::Sample& s : r.samples) {
+  for (const drive::Sample& s : r.samples) {
     if (s.t < 4.0)
       drift_standing = std::max(drift_standing, (s.q.head<3>() - r.samples[0].q.head<3>()).norm());
     max_tilt = std::max(max_tilt, tiltDeg(s.q));
@@ -57,13 +66,13 @@ TEST(ClosedLoop, QuadrupedRecoversFromAPush) {
   push.duration = 0.1;
   push.force = Eigen::Vector3d(0.0, 15.0, 0.0);  // 1.5 N s on 2.5 kg: 0.6 m/s sideways
   o.pushes.pushes.push_back(push);
-  const closed_loop::Run r = closed_loop::run(config, o, 3.0);
+  const drive::Run r = run(config, o, 3.0);
   ASSERT_FALSE(r.sim.fell);
   double moved = 0.0;
-  for (const closed_loop::Sample& s : r.samples)
+  for (const drive::Sample& s : r.samples)
     moved = std::max(moved, std::abs(s.q[1] - r.samples[0].q[1]));
   EXPECT_GT(moved, 0.005) << "the push must move the robot";
-  const closed_loop::Sample& end = r.samples.back();
+  const drive::Sample& end = r.samples.back();
   EXPECT_LT(tiltDeg(end.q), 2.0);
   EXPECT_NEAR(end.q[2], r.samples[0].q[2], 0.01);
   EXPECT_LT(end.v.head<6>().norm(), 0.05) << "settled";
@@ -82,11 +91,11 @@ TEST(ClosedLoop, QuadrupedTrotsWithNoiseDelayAndDrops) {
   o.delay = 1;        // one controller period late
   o.drop = 0.1;
   o.seed = 7;
-  const closed_loop::Run r = closed_loop::run(config, o, 4.0, script);
+  const drive::Run r = run(config, o, 4.0, script);
   ASSERT_FALSE(r.sim.fell);
   EXPECT_GT(r.sim.states_dropped, 40);
   double max_tilt = 0.0;
-  for (const closed_loop::Sample& s : r.samples) max_tilt = std::max(max_tilt, tiltDeg(s.q));
+  for (const drive::Sample& s : r.samples) max_tilt = std::max(max_tilt, tiltDeg(s.q));
   EXPECT_LT(max_tilt, 10.0);
   EXPECT_EQ(r.sim.policies_rejected, 0);
 }
@@ -104,12 +113,12 @@ TEST(ClosedLoop, HumanoidStandsAndSteps) {
   script[1].at = 1.0;
   script[1].gait = "walk";
   script[1].vx = 0.2;
-  const closed_loop::Run r = closed_loop::run(config, sim::SimNodeOptions{}, 5.0, script);
+  const drive::Run r = run(config, sim::SimNodeOptions{}, 5.0, script);
   ASSERT_FALSE(r.sim.fell);
   const double z0 = r.samples.front().q[2];
   double max_tilt = 0.0, z_min = 1e9;
   int single_support = 0;
-  for (const closed_loop::Sample& s : r.samples) {
+  for (const drive::Sample& s : r.samples) {
     max_tilt = std::max(max_tilt, tiltDeg(s.q));
     z_min = std::min(z_min, s.q[2]);
     single_support += s.feet_down == 1;

@@ -17,7 +17,8 @@ using controller_cases::configPath;
 using controller_cases::standingState;
 
 TEST(ControllerConfig, ShippedConfigsLoad) {
-  for (const char* robot : {"stride_quad", "stride_humanoid"}) {
+  for (const char* robot :
+       {"stride_quad", "stride_humanoid", "solo12", "anymal_c", "talos_reduced"}) {
     const ControllerConfig c = loadControllerConfig(configPath(robot));
     EXPECT_TRUE(std::filesystem::exists(c.robot_yaml)) << c.robot_yaml;
     EXPECT_GT(c.rate_hz, 0.0);

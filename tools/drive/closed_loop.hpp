@@ -1,0 +1,65 @@
+#pragma once
+// The closed loop in one process: stride-sim's node and stride-mpc's node on one in-process LCM
+// bus (memq://), in lock-step: the sim publishes a state every controller period, a command script
+// (if any) publishes the command in force at that state's time, stamped with it, the controller
+// ticks on them, the sim applies the answer for one period. Deterministic and network-free: the
+// tests, stride-drive and the sweeps (tools/drive/README.md) all drive robots through it.
+
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "controller/command_script.hpp"
+#include "controller/mpc_node.hpp"
+#include "sim/sim_node.hpp"
+#include "tools/log/segments.hpp"
+
+namespace stride::drive {
+
+struct Sample {
+  double t;
+  Eigen::VectorXd q, v;
+  double cost, gap;
+  int policy_status;
+  double k_max;  // largest |K| entry of the policy's first knot
+  double step, reg;
+  int feet_down;                                // robot contacts carrying load (sim)
+  int backward_passes = 0, forward_passes = 0;  // of the tick's solve
+  double solve_ms = 0.0;
+};
+
+struct Options {
+  sim::SimNodeOptions sim;  // pushes, noise, delay, drops (the state rate is the config's)
+  double duration = 10.0;   // [s] of robot time
+  std::vector<ScriptedCommand> script;  // empty: no command (the robot stands)
+  // Commands stop at this time [s] (a teleop that went silent: the deadman's case).
+  double commands_until = std::numeric_limits<double>::infinity();
+  std::string log;  // an LCM log of every message on the bus (lcm-logger's format), if not empty
+  std::function<void(const Sample&)> each;  // called every period
+};
+
+struct Run {
+  std::vector<Sample> samples;                // one per tick
+  std::vector<logs::CommandSample> commands;  // as sent (t: sim time)
+  sim::SimNodeStats sim;
+  MpcCounters mpc;
+  CommandCounters command_counters;
+  std::int64_t rejected = 0;
+  Eigen::VectorXd q_end;
+  bool fell() const { return sim.fell; }
+  // The base states for segments (t: sim time).
+  std::vector<logs::BaseSample> baseSamples() const;
+  // One segment per run of identical commands (logs::segmentCommands).
+  std::vector<logs::Segment> segments(const logs::SegmentOptions& options = {}) const;
+};
+
+// Drives the robot of `config` (its robot YAML, at its default posture) for options.duration.
+// Throws what the controller's construction throws (ConfigError, UrdfError), or
+// std::runtime_error when the log cannot be written.
+Run run(const ControllerConfig& config, const Options& options);
+
+// Base tilt [deg]: the angle between the base's z axis and the world's.
+double tiltDeg(const Eigen::VectorXd& q);
+
+}  // namespace stride::drive
