@@ -155,11 +155,12 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   if (c.solver == SolverKind::BoxFddp) lo.torque_limits = true;
 
   const YAML::Node weights = root["weights"];
-  r.onlyKeys(
-      weights, "weights",
-      {"base_position", "base_orientation", "joint_position", "base_velocity", "joint_velocity",
-       "control", "swing", "swing_rotation", "friction", "cop", "com", "terminal_state"});
+  r.onlyKeys(weights, "weights",
+             {"base_position", "base_orientation", "joint_position", "base_velocity",
+              "joint_velocity", "control", "swing", "swing_horizontal", "swing_rotation",
+              "friction", "cop", "com", "terminal_state"});
   LocomotionWeights& w = lo.weights;
+  w.swing_horizontal = w.swing;
   if (weights) {
     r.get(weights, "base_position", "weights", w.base_position);
     r.get(weights, "base_orientation", "weights", w.base_orientation);
@@ -169,14 +170,16 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(weights, "control", "weights", w.control);
     r.get(weights, "swing", "weights", w.swing);
     r.get(weights, "swing_rotation", "weights", w.swing_rotation);
+    w.swing_horizontal = w.swing;  // unless given
+    r.get(weights, "swing_horizontal", "weights", w.swing_horizontal);
     r.get(weights, "friction", "weights", w.friction);
     r.get(weights, "cop", "weights", w.cop);
     r.get(weights, "com", "weights", w.com);
     r.get(weights, "terminal_state", "weights", w.terminal_state);
   }
-  for (double v :
-       {w.base_position, w.base_orientation, w.joint_position, w.base_velocity, w.joint_velocity,
-        w.control, w.swing, w.swing_rotation, w.friction, w.cop, w.com, w.terminal_state})
+  for (double v : {w.base_position, w.base_orientation, w.joint_position, w.base_velocity,
+                   w.joint_velocity, w.control, w.swing, w.swing_horizontal, w.swing_rotation,
+                   w.friction, w.cop, w.com, w.terminal_state})
     r.nonNegative(v, "weights");
 
   const YAML::Node gait = root["gait"];

@@ -122,10 +122,14 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
                                  std::make_unique<CenterOfPressureResidual>(
                                      model, nu, contacts_, name, options.sole_half_extents),
                                  CenterOfPressureResidual::activation(), w.cop);
-      swing_term_[c] = costs.add("swing_" + name,
-                                 std::make_unique<FrameTranslationResidual>(
-                                     model, nu, name, data.oMf[contacts_[c].frame].p),
-                                 Activation::quadratic(3), w.swing);
+      swing_term_[c] =
+          costs.add("swing_" + name,
+                    std::make_unique<FrameTranslationResidual>(model, nu, name,
+                                                               data.oMf[contacts_[c].frame].p),
+                    Activation::weightedQuadratic(Eigen::Vector3d(
+                        w.swing_horizontal >= 0.0 ? w.swing_horizontal / w.swing : 1.0,
+                        w.swing_horizontal >= 0.0 ? w.swing_horizontal / w.swing : 1.0, 1.0)),
+                    w.swing);
       if (w.swing_rotation > 0.0 && contacts_[c].dim == 6)
         swing_rot_term_[c] = costs.add("swing_rot_" + name,
                                        std::make_unique<FrameRotationResidual>(

@@ -40,7 +40,10 @@ struct LocomotionWeights {
   double joint_velocity = 1.0;
   Eigen::VectorXd state;
   double control = 1e-2;
-  double swing = 1e4;            // per axis, on the foot position error [m]
+  double swing = 1e4;  // per axis, on the foot position error [m]
+  // On its x and y, if not negative (else `swing`): lighter than `swing`, the solver may move a
+  // foothold by a few cm where the dynamics need it (a robot braking from a run steps further).
+  double swing_horizontal = -1.0;
   double swing_rotation = 0.0;   // per axis, on a sole's orientation error [rad] (0: no term)
   double friction = 1e2;         // on the cone rows' violation [N]
   double cop = 1e2;              // on the centre-of-pressure rows' violation [N m] (6D contacts)

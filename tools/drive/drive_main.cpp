@@ -3,7 +3,7 @@
 // Prints how each command segment was tracked; optionally writes the session as an LCM log.
 //   stride-drive --config config/controller/solo12.yaml --commands config/commands/quadruped.yaml
 //                [--robots-dir DIR] [--duration S] [--push START:DURATION:FX,FY,FZ]...
-//                [--log FILE] [--summary FILE.json] [--check-tracking]
+//                [--log FILE] [--summary FILE.json] [--settle S] [--check-tracking]
 // Exit status: 0; 1 with --check-tracking when a segment missed its command or the robot fell;
 // 2 for bad arguments or files.
 
@@ -57,6 +57,7 @@ int main(int argc, char** argv) {
   stride::drive::Options options;
   options.duration = 0.0;
   bool check = false;
+  stride::logs::SegmentOptions segment_options;
   app.add_option("--config", config_path, "controller YAML (config/controller/)")->required();
   app.add_option("--commands", script_path, "command script (YAML, controller/command_script.hpp)")
       ->required();
@@ -67,6 +68,8 @@ int main(int argc, char** argv) {
   app.add_option("--push", pushes, "a push on the base: start:duration:fx,fy,fz (repeatable)");
   app.add_option("--log", options.log, "write every message as an LCM log (lcm-logger's format)");
   app.add_option("--summary", summary, "write the segments as JSON here");
+  app.add_option("--settle", segment_options.settle,
+                 "seconds after each command before its segment's velocity is averaged (1)");
   app.add_flag("--check-tracking", check,
                "exit 1 when a segment of 2 s or more misses its command by more than max(15%, "
                "0.05 m/s, 0.1 rad/s), or the robot fell");
@@ -87,7 +90,7 @@ int main(int argc, char** argv) {
       options.sim.pushes.pushes.push_back(push);
     }
     const stride::drive::Run run = stride::drive::run(config, options);
-    const std::vector<stride::logs::Segment> segments = run.segments();
+    const std::vector<stride::logs::Segment> segments = run.segments(segment_options);
     const std::vector<stride::logs::TrackingMiss> misses = stride::logs::checkTracking(segments);
     std::printf("stride-drive: %s, %.1f s of %.1f s, %s; %lld fallbacks, %lld failed solves\n",
                 config_path.c_str(), run.samples.empty() ? 0.0 : run.samples.back().t,
