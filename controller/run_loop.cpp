@@ -152,6 +152,12 @@ void writeSummary(const MpcNode& node, const std::string& path) {
       static_cast<long long>(c.fallbacks), static_cast<long long>(c.stale_states),
       static_cast<long long>(c.failed_solves), static_cast<long long>(c.unprepared_solves),
       static_cast<long long>(node.planUpdates()));
+  const CommandCounters& cc = node.commands().counters();
+  std::printf(
+      "stride-mpc: commands: %lld accepted, %lld rejected, %lld clamped, %lld deadman timeouts\n",
+      static_cast<long long>(cc.accepted),
+      static_cast<long long>(cc.rejected + node.commandsMalformed()),
+      static_cast<long long>(cc.clamped), static_cast<long long>(cc.timeouts));
   if (node.rejected() > 0) {
     std::printf("stride-mpc: rejected messages by reason:");
     for (int r = 1; r <= static_cast<int>(msg::Reject::Stale); ++r)
@@ -170,7 +176,10 @@ void writeSummary(const MpcNode& node, const std::string& path) {
     << ",\n  \"fallbacks\": " << c.fallbacks << ",\n  \"stale_states\": " << c.stale_states
     << ",\n  \"failed_solves\": " << c.failed_solves
     << ",\n  \"unprepared_solves\": " << c.unprepared_solves
-    << ",\n  \"ticks_without_state\": " << c.ticks_without_state << "\n}\n";
+    << ",\n  \"ticks_without_state\": " << c.ticks_without_state
+    << ",\n  \"commands\": {\"accepted\": " << cc.accepted
+    << ", \"rejected\": " << cc.rejected + node.commandsMalformed()
+    << ", \"clamped\": " << cc.clamped << ", \"deadman_timeouts\": " << cc.timeouts << "}\n}\n";
   if (!f) std::fprintf(stderr, "stride-mpc: cannot write the summary to '%s'\n", path.c_str());
 }
 

@@ -144,6 +144,31 @@ TEST(Gait, PlanFile) {
   EXPECT_THROW(Mpc{config}, ConfigError);
 }
 
+// A plan replaces the gaits (a gait asked for is ignored) while the command still sets the
+// velocity: the base reference moves at it, and the footholds with it.
+TEST(Mpc, PlanKeepsTheCommandVelocity) {
+  ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  config.gait.plan_file = std::string(STRIDE_CONFIG_DIR) + "/plans/quad_trot_then_stand.yaml";
+  Mpc mpc(config);
+  BodyCommand walk;
+  walk.vx = 0.3;
+  mpc.setCommand(walk, walk, 3);  // and "pace", which the plan overrides
+  robot_state_t s = standingState(mpc.robot(), 1000000);
+  ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+  const GaitGenerator& ref = *mpc.reference();
+  EXPECT_EQ(mpc.status().gait, "plan");
+  EXPECT_EQ(ref.timeline().patternAt(1.0), ref.timeline().lastPattern());
+  EXPECT_NEAR(ref.basePosition(1.0).x() - ref.basePosition(0.0).x(), 0.3, 1e-9);
+  EXPECT_NEAR(mpc.status().command[0], 0.3, 1e-12);
+  // FL lifts at 1.1 s in the plan and lands at 1.3 s, ahead of where it stood.
+  int fl = 0;
+  for (int i = 0; i < ref.stances(fl); ++i)
+    if (ref.stance(fl, i).touch_down > 1.0) {
+      EXPECT_GT(ref.stance(fl, i).p.x(), ref.stance(fl, 0).p.x() + 0.1);
+      break;
+    }
+}
+
 // The controller around a robot that stands still: the first tick solves to convergence and
 // publishes; the next ones shift and re-solve within their budget.
 TEST(Mpc, StandingTicks) {

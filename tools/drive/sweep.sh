@@ -6,7 +6,7 @@
 #          over those 10 s is within 15% (or 0.05 m/s) of the command. The sweep stops at the first
 #          speed that fails.
 #   push   the largest lateral push it survives while walking forward at --push-speed: a 0.1 s
-#          force on the base 4 s into the walk, increasing until the robot falls within the 4 s
+#          force on the base 4 s into the walk, increasing until the robot falls within the 6 s
 #          after it (bisection to 0.1 N s).
 #   tools/drive/sweep.sh ROBOT [--speed-step 0.1] [--push-speed 0.5] [--no-push] [--no-speed]
 #                        [--robots-dir DIR] [--out DIR]
