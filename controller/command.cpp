@@ -55,6 +55,10 @@ void CommandFilter::update(double now) {
   const double dt = updated_ ? std::max(0.0, now - last_update_) : 0.0;
   if (!updated_ || now > last_update_) last_update_ = now;
   updated_ = true;
+  // The clock never goes backwards: an earlier `now` is the latest time seen, else it would
+  // release the deadman (and count the same silence again) without any new command
+  // (tests/controller/test_commands.cpp, TimeNeverGoesBackwards).
+  now = last_update_;
 
   const bool silent = !any_ || now - last_arrival_ > config_.timeout;
   if (silent && !timed_out_ && any_) ++counters_.timeouts;

@@ -364,7 +364,11 @@ bool Solver::backwardPass() {
           auto Wf = W.topRows(nf);
           for (int a = 0; a < nf; ++a) Wf.row(a) = Qxu.col(F[a]).transpose();
           auto Kf = Wf_.topRows(nf);
-          Kf.noalias() = -Hinv * Wf;
+          // Negated after the product: with one free control (nf = 1) Eigen takes its
+          // row-vector path, which copied the negated row `(-Hinv).row(0)` into a heap
+          // temporary (tests/ocp/test_solver_no_alloc.cpp, BoxFddpWithOneFreeControl).
+          Kf.noalias() = Hinv * Wf;
+          Kf = -Kf;
           KK.setZero();
           for (int a = 0; a < nf; ++a) KK.row(F[a]) = Kf.row(a);
         }

@@ -9,8 +9,11 @@
 
 #include "allocation_counter.hpp"
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
+#include <limits>
 
 #include "ocp/locomotion_cases.hpp"
 #include "solver/ddp/solver.hpp"
@@ -62,6 +65,27 @@ TEST(SolverNoAllocation, Solve) {
   }
 }
 
+// Box-FDDP with a single free control per knot (every other one pinned at a bound): the feedback
+// gains come from a 1 x 1 free block, a row-vector product in Eigen.
+TEST(SolverNoAllocation, BoxFddpWithOneFreeControl) {
+  Trot trot;
+  Solver solver(trot.c.loco->problem(), SolverKind::BoxFddp);
+  const int nu = trot.c.loco->problem().maxNu();
+  const double inf = std::numeric_limits<double>::infinity();
+  Eigen::VectorXd lower = Eigen::VectorXd::Constant(nu, 1e-3), upper = lower;
+  lower[0] = -inf;
+  upper[0] = inf;
+  solver.setControlBounds(lower, upper);
+  ASSERT_TRUE(solver.setWarmStart(trot.xs, trot.us));
+  solver.solve(1);
+  const long n = allocations([&] {
+    solver.setWarmStart(trot.xs, trot.us);
+    solver.solve(3);
+  });
+  EXPECT_GT(solver.backwardPasses(), 0);
+  EXPECT_EQ(n, 0);
+}
+
 // One receding-horizon tick's re-configuration: shift the knots and the warm start, re-plan the
 // references (GaitGenerator::plan) and update the knots for the new start time.
 TEST(SolverNoAllocation, ShiftAndUpdate) {
@@ -81,6 +105,68 @@ TEST(SolverNoAllocation, ShiftAndUpdate) {
     EXPECT_EQ(n, 0) << "tick " << tick;
   }
   EXPECT_EQ(allocations([&] { trot.c.update(123.456); }), 0);
+}
+
+// The commanded tick's re-planning: GaitGenerator::plan from a moving, displaced state with a
+// changing command, gait switches (trot, stand, pace) at the timeline's next all-feet-down phase,
+// LocomotionProblem::update, and every query the knots and the controller make.
+TEST(SolverNoAllocation, GaitGeneratorTicksWithGaitSwitches) {
+  Trot trot;
+  LocomotionProblem& loco = *trot.c.loco;
+  GaitGenerator& gen = *trot.c.ref;
+  ContactTimeline& timeline = gen.timeline();
+  // Setup (allocates): more patterns.
+  const int trot_id = timeline.patternAt(0.0);
+  const int stand_id = timeline.addPattern(loco_cases::standing(*trot.c.robot, 0.5));
+  ContactPlan pace = loco_cases::soloTrot(0.05, 0.15);
+  pace.phases[1].contacts = {"FR_FOOT", "HR_FOOT"};
+  pace.phases[3].contacts = {"FL_FOOT", "HL_FOOT"};
+  const int pace_id = timeline.addPattern(pace);
+  const int patterns[] = {stand_id, pace_id, trot_id, stand_id, trot_id};
+  Eigen::VectorXd x = trot.c.robot->x_nominal, x_ref = x;
+  const int nq = trot.c.robot->model.nq;
+  const double dt = loco.options().dt;
+  double t0 = 0.0, checksum = 0.0;
+  int switches = 0;
+  for (int tick = 0; tick < 400; ++tick) {
+    const long n = allocations([&] {
+      t0 += dt;
+      // The robot drifts and turns a little, and moves faster than commanded.
+      x[0] = 0.2 * t0;
+      x[1] = 0.01 * std::sin(t0);
+      const double yaw = 0.1 * std::sin(0.5 * t0);
+      x.segment<4>(3) << 0.0, 0.0, std::sin(0.5 * yaw), std::cos(0.5 * yaw);
+      x[nq] = 0.3;
+      x[nq + 5] = 0.05;
+      BodyCommand now, target;
+      now.vx = 0.1 + 0.001 * (tick % 50);
+      now.yaw_rate = 0.2;
+      target.vx = 0.3;
+      target.vy = -0.05;
+      target.height = 0.01 * (tick % 3);
+      gen.setCommand(now, target);
+      if (tick % 37 == 36) {
+        const double at = timeline.switchTo(patterns[switches % 5], t0);
+        switches += at < ContactTimeline::kNever;
+      }
+      EXPECT_TRUE(gen.plan(t0, x, t0, t0 + loco.span()));
+      EXPECT_TRUE(loco.update(t0, gen));
+      for (int c = 0; c < 4; ++c) {
+        const double t = t0 + 0.013 * (c + 1);
+        checksum += gen.foot(c, t).sum() + gen.footRotation(c, t).trace();
+        // (kNever after a stand: capped, to keep the sum finite)
+        checksum +=
+            gen.closed(c, t) + std::min(timeline.nextChange(c, t), 1e3) + timeline.lastChange(c, t);
+        for (int i = 0; i < gen.stances(c); ++i) checksum += gen.stance(c, i).p.x();
+      }
+      gen.state(t0 + 0.5, x_ref);
+      checksum += x_ref.sum() + gen.com(t0 + 0.2).sum() + gen.basePosition(t0 + 0.3).sum() +
+                  gen.baseYaw(t0 + 0.4) + gen.mask(t0 + 0.1) + timeline.patternAt(t0);
+    });
+    EXPECT_EQ(n, 0) << "tick " << tick;
+  }
+  EXPECT_EQ(switches, 10);
+  EXPECT_TRUE(std::isfinite(checksum));
 }
 
 }  // namespace

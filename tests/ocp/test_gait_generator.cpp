@@ -1,0 +1,842 @@
+// The commanded robot's references, against times and positions computed by hand:
+//   ContactTimeline  a trot (support 0.1 s, swing 0.2 s) played from 0: which feet are down, when
+//                    they change, gait switches at the next all-feet-down phase (replaced,
+//                    cancelled, refused), across segment boundaries, forgetting the past;
+//   GaitGenerator    on the in-house quadruped (stride_quad): the base reference of a straight
+//                    line, a pure turn, a ramp, a body height change; footholds at mid-stance and
+//                    the swing arcs between them; a gait switch at a phase boundary; feet latched
+//                    where they were measured; the Raibert correction of the next touch-down only;
+//                    the leash of the base reference and of the footholds; bad input refused.
+// The allocation-free tick (plan, queries, switches, LocomotionProblem::update) is checked in
+// test_solver_no_alloc.cpp, whose binary counts allocations.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "config/robot_config.hpp"
+#include "solver/multibody/center_of_mass.hpp"
+#include "solver/multibody/frames.hpp"
+#include "solver/ocp/gait_generator.hpp"
+
+namespace stride {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kNever = ContactTimeline::kNever;
+constexpr double kTime = 1e-12;  // sums of phase durations carry rounding (0.1 + 0.2 != 0.3)
+
+// Contacts in the robot YAML's order.
+constexpr int FL = 0, FR = 1, HL = 2, HR = 3;
+const char* const kFeet[] = {"FL_foot", "FR_foot", "HL_foot", "HR_foot"};
+
+struct Quad {
+  Robot robot;
+  ContactSet contacts;
+  Eigen::VectorXd x_nominal;
+};
+
+const Quad& quad() {
+  static const Quad q = [] {
+    Quad r;
+    r.robot = loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
+    for (const char* foot : kFeet)
+      r.contacts.add(r.robot.model, foot, 3, ReferenceFrame::LocalWorldAligned);
+    r.x_nominal = Eigen::VectorXd::Zero(r.robot.model.nq + r.robot.model.nv);
+    r.x_nominal.head(r.robot.model.nq) = r.robot.default_q;
+    return r;
+  }();
+  return q;
+}
+
+std::vector<std::string> feetExcept(std::initializer_list<int> lifted) {
+  std::vector<std::string> closed;
+  for (int c = 0; c < 4; ++c)
+    if (std::find(lifted.begin(), lifted.end(), c) == lifted.end()) closed.push_back(kFeet[c]);
+  return closed;
+}
+
+// [0, .1) all feet, [.1, .3) FL + HR up, [.3, .4) all, [.4, .6) FR + HL up, repeating.
+ContactPlan trot() {
+  ContactPlan p;
+  p.cyclic = true;
+  p.phases = {{0.1, feetExcept({})},
+              {0.2, feetExcept({FL, HR})},
+              {0.1, feetExcept({})},
+              {0.2, feetExcept({FR, HL})}};
+  return p;
+}
+// The same timing with the left pair, then the right pair up.
+ContactPlan pace() {
+  ContactPlan p = trot();
+  p.phases[1].contacts = feetExcept({FL, HL});
+  p.phases[3].contacts = feetExcept({FR, HR});
+  return p;
+}
+ContactPlan stand() {
+  ContactPlan p;
+  p.cyclic = true;
+  p.phases = {{0.5, feetExcept({})}};
+  return p;
+}
+
+// ============================================================================ ContactTimeline
+
+struct Timeline {
+  ContactTimeline tl{quad().contacts};
+  int trot = tl.addPattern(stride::trot());
+  int stand = tl.addPattern(stride::stand());
+  int pace = tl.addPattern(stride::pace());
+};
+
+TEST(ContactTimeline, TrotQueries) {
+  Timeline T;
+  ContactTimeline& tl = T.tl;
+  tl.reset(T.trot, 0.0);
+  EXPECT_EQ(tl.patterns(), 3);
+  EXPECT_EQ(tl.contacts(), 4);
+  EXPECT_EQ(tl.patternAt(0.3), T.trot);
+
+  // closed: a boundary counts as after it (a knot time 0.1 = 10 × 0.01 included).
+  EXPECT_TRUE(tl.closed(FL, 0.0));
+  EXPECT_TRUE(tl.closed(FL, 0.05));
+  EXPECT_FALSE(tl.closed(FL, 0.1));
+  EXPECT_FALSE(tl.closed(FL, 10 * 0.01));
+  EXPECT_FALSE(tl.closed(HR, 0.2));
+  EXPECT_TRUE(tl.closed(FR, 0.2));
+  EXPECT_TRUE(tl.closed(FL, 0.3));
+  EXPECT_TRUE(tl.closed(FL, 0.5));
+  EXPECT_FALSE(tl.closed(FR, 0.5));
+  EXPECT_FALSE(tl.closed(HL, 0.5));
+  EXPECT_TRUE(tl.closed(FR, 0.6));
+  EXPECT_FALSE(tl.closed(FL, 0.6 + 0.2));    // second cycle
+  EXPECT_FALSE(tl.closed(FL, 60.0 + 0.15));  // the hundred-and-first
+
+  // mask: bit c for contact c.
+  EXPECT_EQ(tl.mask(0.05), 0xfu);
+  EXPECT_EQ(tl.mask(0.2), (1u << FR) | (1u << HL));
+  EXPECT_EQ(tl.mask(0.35), 0xfu);
+  EXPECT_EQ(tl.mask(0.5), (1u << FL) | (1u << HR));
+  EXPECT_EQ(tl.mask(0.6 + 0.5), (1u << FL) | (1u << HR));
+
+  // nextChange: the first change after t (a change at t itself is past).
+  EXPECT_NEAR(tl.nextChange(FL, 0.0), 0.1, kTime);
+  EXPECT_NEAR(tl.nextChange(FL, 0.1), 0.3, kTime);
+  EXPECT_NEAR(tl.nextChange(FL, 0.2), 0.3, kTime);
+  EXPECT_NEAR(tl.nextChange(FL, 0.3), 0.7, kTime);  // down through the FR-HL swing: lifts at 0.7
+  EXPECT_NEAR(tl.nextChange(FR, 0.0), 0.4, kTime);
+  EXPECT_NEAR(tl.nextChange(FR, 0.45), 0.6, kTime);
+  EXPECT_NEAR(tl.nextChange(HL, 6.45), 6.6, kTime);
+
+  // lastChange: the last change at or before t, or the segment's start.
+  EXPECT_NEAR(tl.lastChange(FL, 0.05), 0.0, kTime);
+  EXPECT_NEAR(tl.lastChange(FL, 0.1), 0.1, kTime);
+  EXPECT_NEAR(tl.lastChange(FL, 0.2), 0.1, kTime);
+  EXPECT_NEAR(tl.lastChange(FL, 0.35), 0.3, kTime);
+  EXPECT_NEAR(tl.lastChange(FL, 0.65), 0.3, kTime);  // down from 0.3 to 0.7, across the cycle
+  EXPECT_NEAR(tl.lastChange(FR, 0.5), 0.4, kTime);
+  EXPECT_NEAR(tl.lastChange(FR, 0.65), 0.6, kTime);
+  EXPECT_NEAR(tl.lastChange(HR, 6.2), 6.1, kTime);
+
+  // Played from another start: everything moves with it.
+  tl.reset(T.trot, 2.0);
+  EXPECT_TRUE(tl.closed(FL, 2.05));
+  EXPECT_FALSE(tl.closed(FL, 2.15));
+  EXPECT_NEAR(tl.nextChange(FL, 2.0), 2.1, kTime);
+  EXPECT_NEAR(tl.lastChange(FR, 2.5), 2.4, kTime);
+}
+
+TEST(ContactTimeline, SwitchAtTheNextAllFeetDownPhase) {
+  Timeline T;
+  ContactTimeline& tl = T.tl;
+  // Requested in the FL-HR swing: switches when that swing ends, at 0.3.
+  tl.reset(T.trot, 0.0);
+  EXPECT_NEAR(tl.switchTo(T.stand, 0.15), 0.3, kTime);
+  EXPECT_EQ(tl.lastPattern(), T.stand);
+  EXPECT_NEAR(tl.lastSwitch(), 0.3, kTime);
+  EXPECT_EQ(tl.patternAt(0.2), T.trot);
+  EXPECT_EQ(tl.patternAt(0.3), T.stand);
+  EXPECT_FALSE(tl.closed(FL, 0.2));  // the swing in progress finishes
+  EXPECT_EQ(tl.mask(0.29), (1u << FR) | (1u << HL));
+  for (double t = 0.3; t < 10.0; t += 0.01) EXPECT_EQ(tl.mask(t), 0xfu) << t;
+  EXPECT_NEAR(tl.nextChange(FL, 0.15), 0.3, kTime);  // lands, and never lifts again
+  EXPECT_EQ(tl.nextChange(FL, 0.3), kNever);
+  EXPECT_EQ(tl.nextChange(FR, 0.15), kNever);       // the trot would have lifted it at 0.4
+  EXPECT_NEAR(tl.lastChange(FR, 0.5), 0.3, kTime);  // the stand's segment starts at 0.3
+
+  // Requested exactly at the start of an all-feet-down phase: there and then.
+  tl.reset(T.trot, 0.0);
+  EXPECT_NEAR(tl.switchTo(T.stand, 0.3), 0.3, kTime);
+  EXPECT_TRUE(tl.closed(HL, 0.45));
+  // Requested inside one (past its start): the next one, at 0.6.
+  tl.reset(T.trot, 0.0);
+  EXPECT_NEAR(tl.switchTo(T.stand, 0.35), 0.6, kTime);
+  EXPECT_FALSE(tl.closed(FR, 0.45));
+  EXPECT_TRUE(tl.closed(FR, 0.6));
+  EXPECT_TRUE(tl.closed(FR, 0.75));
+
+  // From a stand (every phase has every foot down): at once, the trot's phase 0 there.
+  tl.reset(T.stand, 0.0);
+  EXPECT_DOUBLE_EQ(tl.switchTo(T.trot, 1.234), 1.234);
+  EXPECT_TRUE(tl.closed(FL, 1.234 + 0.05));
+  EXPECT_FALSE(tl.closed(FL, 1.234 + 0.15));
+  EXPECT_FALSE(tl.closed(FR, 1.234 + 0.5));
+  EXPECT_NEAR(tl.nextChange(FL, 1.234), 1.334, kTime);
+  EXPECT_NEAR(tl.lastChange(FR, 1.234 + 0.45), 1.634, kTime);
+}
+
+TEST(ContactTimeline, PendingSwitchReplacedOrCancelled) {
+  Timeline T;
+  ContactTimeline& tl = T.tl;
+  tl.reset(T.trot, 0.0);
+  ASSERT_NEAR(tl.switchTo(T.stand, 0.15), 0.3, kTime);
+  // Another request before 0.3 replaces it: a pace from 0.3 instead of the stand.
+  EXPECT_NEAR(tl.switchTo(T.pace, 0.2), 0.3, kTime);
+  EXPECT_EQ(tl.lastPattern(), T.pace);
+  EXPECT_EQ(tl.patternAt(0.35), T.pace);
+  EXPECT_FALSE(tl.closed(HL, 0.45));  // the pace lifts the left pair at 0.4
+  EXPECT_TRUE(tl.closed(FR, 0.45));
+  // Across the boundary: FL lands at 0.3 (the trot's swing), lifts at 0.4 (the pace's).
+  EXPECT_NEAR(tl.nextChange(FL, 0.2), 0.3, kTime);
+  EXPECT_NEAR(tl.nextChange(FL, 0.3), 0.4, kTime);
+  // Asking for the pattern in force cancels the pending switch.
+  EXPECT_DOUBLE_EQ(tl.switchTo(T.trot, 0.25), 0.25);
+  EXPECT_EQ(tl.lastPattern(), T.trot);
+  EXPECT_DOUBLE_EQ(tl.lastSwitch(), 0.0);
+  EXPECT_EQ(tl.patternAt(0.5), T.trot);
+  EXPECT_FALSE(tl.closed(FR, 0.45));
+  EXPECT_TRUE(tl.closed(HL, 0.35));
+  EXPECT_NEAR(tl.nextChange(FL, 0.3), 0.7, kTime);
+  // A switch already in force at t is not pending: asking for the pattern before it is a new
+  // switch, at the stand's next instant (at once).
+  ASSERT_NEAR(tl.switchTo(T.stand, 0.15), 0.3, kTime);
+  EXPECT_DOUBLE_EQ(tl.switchTo(T.trot, 0.5), 0.5);
+  EXPECT_EQ(tl.patternAt(0.4), T.stand);
+  EXPECT_EQ(tl.patternAt(0.5), T.trot);
+  EXPECT_FALSE(tl.closed(FL, 0.65));
+}
+
+TEST(ContactTimeline, NextChangeAcrossSegments) {
+  Timeline T;
+  ContactTimeline& tl = T.tl;
+  tl.reset(T.stand, 0.0);
+  ASSERT_DOUBLE_EQ(tl.switchTo(T.trot, 1.0), 1.0);
+  EXPECT_NEAR(tl.nextChange(FL, 0.5), 1.1, kTime);  // the stand never changes; the trot does
+  EXPECT_NEAR(tl.nextChange(FR, 0.5), 1.4, kTime);
+  EXPECT_NEAR(tl.lastChange(FL, 1.05), 1.0, kTime);
+  EXPECT_NEAR(tl.lastChange(FL, 0.5), 0.0, kTime);
+  // Back to a stand requested during the FR-HL swing (1.4-1.6): FR lands at 1.6 for good.
+  ASSERT_NEAR(tl.switchTo(T.stand, 1.45), 1.6, kTime);
+  EXPECT_NEAR(tl.nextChange(FR, 1.45), 1.6, kTime);
+  EXPECT_EQ(tl.nextChange(FR, 1.6), kNever);
+  EXPECT_EQ(tl.nextChange(FL, 1.45), kNever);       // down from 1.3, stays down
+  EXPECT_NEAR(tl.nextChange(FL, 0.5), 1.1, kTime);  // still: three segments now
+  EXPECT_EQ(tl.mask(1.5), (1u << FL) | (1u << HR));
+  EXPECT_EQ(tl.mask(1.6), 0xfu);
+}
+
+TEST(ContactTimeline, RefusesPatternsThatDoNotStartWithAllFeetDown) {
+  Timeline T;
+  ContactTimeline& tl = T.tl;
+  // Never every foot down: the trot without its all-feet phases.
+  ContactPlan lifted;
+  lifted.cyclic = true;
+  lifted.phases = {{0.2, feetExcept({FL, HR})}, {0.2, feetExcept({FR, HL})}};
+  const int bad = tl.addPattern(lifted);  // compiles: it can still be played from a reset
+  tl.reset(T.trot, 0.0);
+  ASSERT_NEAR(tl.switchTo(T.stand, 0.15), 0.3, kTime);  // pending
+  EXPECT_THROW(tl.switchTo(bad, 0.2), std::invalid_argument);
+  // Nothing changed: the stand is still pending at 0.3.
+  EXPECT_EQ(tl.lastPattern(), T.stand);
+  EXPECT_NEAR(tl.lastSwitch(), 0.3, kTime);
+  EXPECT_EQ(tl.patternAt(0.2), T.trot);
+  EXPECT_EQ(tl.mask(0.5), 0xfu);
+  // The trot started one phase late (its swing first) is refused alike.
+  ContactPlan late = stride::trot();
+  std::rotate(late.phases.begin(), late.phases.begin() + 1, late.phases.end());
+  EXPECT_THROW(tl.switchTo(tl.addPattern(late), 0.2), std::invalid_argument);
+  EXPECT_EQ(tl.lastPattern(), T.stand);
+
+  // A pattern in force that never has every foot down again: no switch (kNever), no change.
+  tl.reset(bad, 0.0);
+  EXPECT_EQ(tl.switchTo(T.stand, 0.05), kNever);
+  EXPECT_EQ(tl.lastPattern(), bad);
+  EXPECT_DOUBLE_EQ(tl.lastSwitch(), 0.0);
+  EXPECT_EQ(tl.mask(0.05), (1u << FR) | (1u << HL));
+}
+
+TEST(ContactTimeline, Forget) {
+  Timeline T;
+  ContactTimeline& tl = T.tl;
+  tl.reset(T.stand, 0.0);
+  ASSERT_DOUBLE_EQ(tl.switchTo(T.trot, 1.0), 1.0);
+  ASSERT_NEAR(tl.switchTo(T.stand, 1.15), 1.3, kTime);  // stand 0-1, trot 1-1.3, stand from 1.3
+  tl.forget(0.5);                                       // nothing ended before 0.5
+  EXPECT_EQ(tl.patternAt(0.5), T.stand);
+  EXPECT_EQ(tl.patternAt(1.1), T.trot);
+  tl.forget(1.2);  // the first stand ended at 1.0: gone; the trot is in force at 1.2
+  EXPECT_EQ(tl.patternAt(1.2), T.trot);
+  EXPECT_FALSE(tl.closed(FL, 1.2));
+  EXPECT_NEAR(tl.lastChange(FL, 1.2), 1.1, kTime);
+  EXPECT_NEAR(tl.nextChange(FL, 1.2), 1.3, kTime);
+  EXPECT_EQ(tl.lastPattern(), T.stand);
+  tl.forget(1.35);                        // the trot ended at 1.3
+  EXPECT_EQ(tl.patternAt(1.1), T.stand);  // the earliest segment known now
+  EXPECT_EQ(tl.patternAt(1.35), T.stand);
+  EXPECT_NEAR(tl.lastChange(FL, 2.0), 1.3, kTime);
+  tl.forget(100.0);  // the segment in force stays
+  EXPECT_EQ(tl.patternAt(100.0), T.stand);
+  EXPECT_EQ(tl.mask(100.0), 0xfu);
+}
+
+// More switches than segments kept: the oldest are dropped, the newest still answer.
+TEST(ContactTimeline, ManySwitchesWithoutForget) {
+  Timeline T;
+  ContactTimeline& tl = T.tl;
+  tl.reset(T.stand, 0.0);
+  for (int i = 0; i < 3 * ContactTimeline::kMaxSegments; ++i) {
+    const double t = 1.0 + i;
+    const int to = i % 2 == 0 ? T.trot : T.stand;
+    // From a stand at once; from the trot (requested 0.15 into its cycle) at 0.3 into it.
+    const double expected = i % 2 == 0 ? t : t - 1.0 + 0.3;
+    const double request = i % 2 == 0 ? t : t - 1.0 + 0.15;
+    ASSERT_NEAR(tl.switchTo(to, request), expected, kTime) << i;
+    EXPECT_EQ(tl.lastPattern(), to);
+    EXPECT_EQ(tl.patternAt(expected + 0.01), to);
+  }
+  // The last: trot at 1 + 22, stand at 23.3.
+  EXPECT_FALSE(tl.closed(FL, 23.2));
+  EXPECT_TRUE(tl.closed(FL, 23.4));
+  EXPECT_NEAR(tl.nextChange(FL, 23.2), 23.3, kTime);
+}
+
+// ============================================================================ GaitGenerator
+
+GaitGeneratorOptions hand() {
+  GaitGeneratorOptions o;
+  o.swing_height = 0.05;
+  o.foothold_gain = 0.0;
+  o.max_position_lead = 100.0;
+  o.max_yaw_lead = 100.0;
+  o.max_foothold_lead = 100.0;
+  o.acceleration = Eigen::Vector3d(1.0, 1.0, 2.0);
+  o.height_rate = 0.1;
+  o.horizon = 1.0;
+  o.sample_dt = 0.01;
+  return o;
+}
+
+// The quadruped's nominal posture, computed: foot positions and orientations, CoM, base height.
+struct Nominal {
+  Eigen::Vector3d foot[4];
+  Eigen::Matrix3d foot_R[4];
+  Eigen::Vector3d com;
+  double z;
+  Nominal() {
+    const Quad& r = quad();
+    Data data(r.robot.model);
+    const Eigen::VectorXd q = r.x_nominal.head(r.robot.model.nq);
+    framesForwardKinematics(r.robot.model, data, q);
+    for (int c = 0; c < 4; ++c) {
+      foot[c] = data.oMf[r.contacts[c].frame].p;
+      foot_R[c] = data.oMf[r.contacts[c].frame].R;
+    }
+    com = centerOfMass(r.robot.model, data, q);
+    z = q[2];
+  }
+};
+
+struct Generator {
+  std::unique_ptr<GaitGenerator> gen;
+  int trot = 0, stand = 0;
+  explicit Generator(const GaitGeneratorOptions& o = hand(),
+                     const ContactPlan& gait = stride::trot()) {
+    const Quad& r = quad();
+    gen = std::make_unique<GaitGenerator>(r.robot.model, r.contacts, r.x_nominal, o);
+    trot = gen->timeline().addPattern(gait);
+    stand = gen->timeline().addPattern(stride::stand());
+    gen->timeline().reset(trot, 0.0);
+  }
+  GaitGenerator* operator->() { return gen.get(); }
+  GaitGenerator& operator*() { return *gen; }
+};
+
+BodyCommand velocity(double vx, double vy = 0.0, double yaw_rate = 0.0, double height = 0.0) {
+  BodyCommand c;
+  c.vx = vx;
+  c.vy = vy;
+  c.yaw_rate = yaw_rate;
+  c.height = height;
+  return c;
+}
+
+Eigen::Matrix3d Rz(double yaw) {
+  return Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
+
+// x with its base at (x, y) turned by yaw (the joints at the nominal posture).
+Eigen::VectorXd placed(double x, double y, double yaw) {
+  Eigen::VectorXd s = quad().x_nominal;
+  s[0] = x;
+  s[1] = y;
+  const Eigen::Quaterniond o(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
+  s.segment<4>(3) << o.x(), o.y(), o.z(), o.w();
+  return s;
+}
+
+// The swing arc by hand: a + ½(1 - cos πs)(b - a) + h sin(πs) e_z.
+Eigen::Vector3d arc(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double s, double h) {
+  Eigen::Vector3d p = a + 0.5 * (1.0 - std::cos(kPi * s)) * (b - a);
+  p.z() += h * std::sin(kPi * s);
+  return p;
+}
+
+TEST(GaitGenerator, NominalStanceOffsets) {
+  const Nominal n;
+  Generator g;
+  for (int c = 0; c < 4; ++c) {
+    // Relative to the base, at their height on the ground (the base at x = y = 0, no yaw).
+    EXPECT_NEAR((g->stanceOffset(c) - n.foot[c]).norm(), 0.0, 1e-12) << c;
+    EXPECT_NEAR(n.foot[c].z(), 0.0, 1e-6) << "stride_quad's feet stand on z = 0";
+  }
+  // The four feet are spread around the base (front ahead, left to the left).
+  EXPECT_GT(n.foot[FL].x(), 0.1);
+  EXPECT_LT(n.foot[HL].x(), -0.1);
+  EXPECT_GT(n.foot[FL].y(), 0.05);
+  EXPECT_LT(n.foot[FR].y(), -0.05);
+  EXPECT_EQ(g->footholdGain(), 0.0);
+  // The default gain: the capture point's time constant sqrt(h / g).
+  GaitGeneratorOptions o = hand();
+  o.foothold_gain = -1.0;
+  Generator d(o);
+  EXPECT_NEAR(d->footholdGain(), std::sqrt(n.z / 9.81), 1e-12);
+}
+
+// 0.5 m/s forward in force and as target, trotting, from standing at the origin.
+TEST(GaitGenerator, StraightLine) {
+  const Nominal n;
+  const Quad& r = quad();
+  Generator g;
+  g->setCommand(velocity(0.5), velocity(0.5));
+  ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
+
+  Eigen::VectorXd x_ref(r.x_nominal.size());
+  const int nq = r.robot.model.nq;
+  for (double t : {0.0, 0.25, 0.5, 0.73, 1.0, 1.6}) {
+    const Eigen::Vector3d b = g->basePosition(t);
+    EXPECT_NEAR(b.x(), 0.5 * t, 1e-12) << t;
+    EXPECT_NEAR(b.y(), 0.0, 1e-12) << t;
+    EXPECT_NEAR(b.z(), n.z, 1e-12) << t;
+    EXPECT_NEAR(g->baseYaw(t), 0.0, 1e-12);
+    g->state(t, x_ref);
+    EXPECT_NEAR(x_ref[0], 0.5 * t, 1e-12);
+    EXPECT_NEAR(x_ref[2], n.z, 1e-12);
+    EXPECT_NEAR(x_ref[6], 1.0, 1e-12);  // no turn, no tilt
+    EXPECT_NEAR(x_ref[nq + 0], 0.5, 1e-12) << "forward velocity reference";
+    EXPECT_NEAR(x_ref.segment<5>(nq + 1).norm(), 0.0, 1e-12);
+    EXPECT_EQ((x_ref.segment(7, nq - 7) - r.x_nominal.segment(7, nq - 7)).norm(), 0.0)
+        << "joints: nominal";
+    EXPECT_EQ(x_ref.tail(r.robot.model.nv - 6).norm(), 0.0) << "joints at rest";
+    const Eigen::Vector3d com = g->com(t);
+    EXPECT_NEAR(com.x(), n.com.x() + 0.5 * t, 1e-12);
+    EXPECT_NEAR(com.z(), n.com.z(), 1e-12);
+  }
+
+  // FL: down until 0.1, swings to 0.3, down until 0.7 (mid-stance 0.5: base at 0.25), swings,
+  // down 0.9-1.3 (mid 1.1), the first touch-down after the window (1.5, mid 1.7).
+  ASSERT_EQ(g->stances(FL), 4);
+  const GaitGenerator::Stance& s0 = g->stance(FL, 0);
+  EXPECT_NEAR(s0.touch_down, 0.0, kTime);
+  EXPECT_NEAR(s0.lift_off, 0.1, kTime);
+  EXPECT_NEAR((s0.p - n.foot[FL]).norm(), 0.0, 1e-12) << "where it was measured";
+  const double td[] = {0.0, 0.3, 0.9, 1.5}, lo[] = {0.1, 0.7, 1.3, 1.9};
+  const double base_x[] = {0.0, 0.25, 0.55, 0.85};
+  for (int i = 1; i < 4; ++i) {
+    const GaitGenerator::Stance& s = g->stance(FL, i);
+    EXPECT_NEAR(s.touch_down, td[i], kTime) << i;
+    EXPECT_NEAR(s.lift_off, lo[i], kTime) << i;
+    EXPECT_NEAR(s.p.x(), n.foot[FL].x() + base_x[i], 1e-9) << i;
+    EXPECT_NEAR(s.p.y(), n.foot[FL].y(), 1e-12) << i;
+    EXPECT_NEAR(s.p.z(), n.foot[FL].z(), 1e-12) << i;
+  }
+  // FR: down until 0.4, lands at 0.6 until 1.0 (mid 0.8: base at 0.4), then 1.2 (mid 1.4).
+  ASSERT_EQ(g->stances(FR), 3);
+  EXPECT_NEAR(g->stance(FR, 0).lift_off, 0.4, kTime);
+  EXPECT_NEAR(g->stance(FR, 1).touch_down, 0.6, kTime);
+  EXPECT_NEAR(g->stance(FR, 1).lift_off, 1.0, kTime);
+  EXPECT_NEAR(g->stance(FR, 1).p.x(), n.foot[FR].x() + 0.4, 1e-9);
+  EXPECT_NEAR(g->stance(FR, 2).p.x(), n.foot[FR].x() + 0.7, 1e-9);
+
+  // The swing arc: at the stances' positions while down, the apex half way at 0.2.
+  const Eigen::Vector3d a = g->stance(FL, 0).p, b = g->stance(FL, 1).p;
+  EXPECT_NEAR((g->foot(FL, 0.05) - a).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((g->foot(FL, 0.1) - a).norm(), 0.0, 1e-12);
+  const Eigen::Vector3d apex = g->foot(FL, 0.2);
+  EXPECT_NEAR(apex.x(), n.foot[FL].x() + 0.125, 1e-9);
+  EXPECT_NEAR(apex.y(), n.foot[FL].y(), 1e-12);
+  EXPECT_NEAR(apex.z(), n.foot[FL].z() + 0.05, 1e-12);
+  for (double t : {0.12, 0.15, 0.26, 0.29})
+    EXPECT_NEAR((g->foot(FL, t) - arc(a, b, (t - 0.1) / 0.2, 0.05)).norm(), 0.0, 1e-12) << t;
+  EXPECT_NEAR((g->foot(FL, 0.3) - b).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((g->foot(FL, 0.55) - b).norm(), 0.0, 1e-12);
+  // The FR-HL pair is down during the FL-HR swing.
+  EXPECT_NEAR((g->foot(FR, 0.2) - n.foot[FR]).norm(), 0.0, 1e-12);
+  EXPECT_TRUE(g->closed(FR, 0.2));
+  EXPECT_FALSE(g->closed(FL, 0.2));
+  EXPECT_EQ(g->mask(0.2), (1u << FR) | (1u << HL));
+  // No turn: feet keep their nominal headings.
+  for (double t : {0.05, 0.2, 0.5})
+    EXPECT_TRUE(g->footRotation(FL, t).isApprox(n.foot_R[FL], 1e-12)) << t;
+}
+
+// Turning in place at 1 rad/s.
+TEST(GaitGenerator, PureTurn) {
+  const Nominal n;
+  const Quad& r = quad();
+  const int nq = r.robot.model.nq;
+  Generator g;
+  g->setCommand(velocity(0.0, 0.0, 1.0), velocity(0.0, 0.0, 1.0));
+  ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
+  Eigen::VectorXd x_ref(r.x_nominal.size());
+  for (double t : {0.0, 0.3, 0.5, 1.0}) {
+    EXPECT_NEAR(g->baseYaw(t), t, 1e-12);
+    EXPECT_NEAR(g->basePosition(t).head<2>().norm(), 0.0, 1e-12) << "turns in place";
+    g->state(t, x_ref);
+    const Eigen::Quaterniond o(x_ref[6], x_ref[3], x_ref[4], x_ref[5]);
+    EXPECT_TRUE(o.toRotationMatrix().isApprox(Rz(t), 1e-12)) << t;
+    EXPECT_NEAR(x_ref[nq + 5], 1.0, 1e-12) << "yaw rate reference";
+    EXPECT_NEAR(x_ref.segment<5>(nq).norm(), 0.0, 1e-12);
+    const Eigen::Vector3d com_xy(n.com.x(), n.com.y(), 0.0);
+    EXPECT_NEAR((g->com(t).head<2>() - (Rz(t) * com_xy).head<2>()).norm(), 0.0, 1e-12);
+  }
+  // FL lands at 0.3 for 0.4 s: mid-stance 0.5, its nominal place turned by 0.5 rad.
+  for (int c : {FL, HR}) {
+    const Eigen::Vector3d expected = Rz(0.5) * n.foot[c];
+    EXPECT_NEAR((g->stance(c, 1).p - expected).norm(), 0.0, 1e-12) << c;
+    EXPECT_NEAR((g->stance(c, 2).p - Rz(1.1) * n.foot[c]).norm(), 0.0, 1e-12) << c;
+  }
+  // FR lands at 0.6 (mid-stance 0.8).
+  EXPECT_NEAR((g->stance(FR, 1).p - Rz(0.8) * n.foot[FR]).norm(), 0.0, 1e-12);
+  // Headings: the nominal one while down at the start, turned by 0.5 from the touch-down on, half
+  // of that (the cosine ramp at s = ½) at the swing's middle.
+  EXPECT_TRUE(g->footRotation(FL, 0.05).isApprox(n.foot_R[FL], 1e-12));
+  EXPECT_TRUE(g->footRotation(FL, 0.2).isApprox(Rz(0.25) * n.foot_R[FL], 1e-12));
+  EXPECT_TRUE(g->footRotation(FL, 0.4).isApprox(Rz(0.5) * n.foot_R[FL], 1e-12));
+  EXPECT_NEAR(g->stance(FL, 1).yaw - g->stance(FL, 0).yaw, 0.5, 1e-12);
+}
+
+// From standing still to 0.5 m/s at 1 m/s² (and to 1 rad/s at 2 rad/s²).
+TEST(GaitGenerator, CommandRamp) {
+  const Quad& r = quad();
+  const int nq = r.robot.model.nq;
+  Generator g;
+  g->setCommand(velocity(0.0), velocity(0.5, 0.0, 1.0));
+  ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
+  auto x = [](double t) { return t <= 0.5 ? 0.5 * t * t : 0.125 + 0.5 * (t - 0.5); };
+  auto yaw = [](double t) { return t <= 0.5 ? t * t : 0.25 + (t - 0.5); };
+  Eigen::VectorXd x_ref(r.x_nominal.size());
+  for (int k : {0, 10, 30, 50, 70, 100}) {  // on the base samples
+    const double t = 0.01 * k;
+    EXPECT_NEAR(g->baseYaw(t), yaw(t), 1e-12) << t;
+    g->state(t, x_ref);
+    EXPECT_NEAR(x_ref[nq], std::min(t, 0.5), 1e-12) << "the velocity ramps";
+    EXPECT_NEAR(x_ref[nq + 5], std::min(2.0 * t, 1.0), 1e-12);
+  }
+  // The base turns as it speeds up: along its heading, the distance is the ramp's integral.
+  g->setCommand(velocity(0.0), velocity(0.5));
+  ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
+  for (int k : {0, 10, 30, 50, 70, 100}) {
+    const double t = 0.01 * k;
+    EXPECT_NEAR(g->basePosition(t).x(), x(t), 1e-12) << t;
+  }
+  // Between samples: linear interpolation of a parabola, off by at most a h² / 8.
+  for (double t : {0.055, 0.255, 0.4949})
+    EXPECT_NEAR(g->basePosition(t).x(), x(t), 1.0 * 0.01 * 0.01 / 8 + 1e-12) << t;
+  // Slowing down from 0.5 to 0.2 at 1 m/s²: 0.3 s.
+  g->setCommand(velocity(0.5), velocity(0.2));
+  ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
+  EXPECT_NEAR(g->basePosition(0.3).x(), 0.5 * 0.3 - 0.5 * 0.09, 1e-12);
+  EXPECT_NEAR(g->basePosition(0.8).x(), 0.105 + 0.2 * 0.5, 1e-12);
+}
+
+TEST(GaitGenerator, BodyHeightRampsAtItsRate) {
+  const Nominal n;
+  const Quad& r = quad();
+  Generator g;
+  g->setCommand(velocity(0.0), velocity(0.0, 0.0, 0.0, 0.04));
+  ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
+  Eigen::VectorXd x_ref(r.x_nominal.size());
+  for (int k : {0, 10, 20, 40, 60, 100}) {
+    const double t = 0.01 * k, dz = std::min(0.1 * t, 0.04);
+    EXPECT_NEAR(g->basePosition(t).z(), n.z + dz, 1e-12) << t;
+    g->state(t, x_ref);
+    EXPECT_NEAR(x_ref[2], n.z + dz, 1e-12) << t;
+    EXPECT_NEAR(g->com(t).z(), n.com.z() + dz, 1e-12) << t;
+  }
+  // Feet stay on the ground: only the base rises.
+  EXPECT_NEAR(g->stance(FL, 1).p.z(), n.foot[FL].z(), 1e-12);
+  // Down again from 0.04 in force.
+  g->setCommand(velocity(0.0, 0.0, 0.0, 0.04), velocity(0.0, 0.0, 0.0, -0.02));
+  ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
+  EXPECT_NEAR(g->basePosition(0.3).z(), n.z + 0.01, 1e-12);
+  EXPECT_NEAR(g->basePosition(0.9).z(), n.z - 0.02, 1e-12);
+}
+
+// Trot to stand, asked at 0.15 (FL and HR in the air): the switch is at 0.3.
+TEST(GaitGenerator, GaitSwitchAtAPhaseBoundary) {
+  const Nominal n;
+  const Quad& r = quad();
+  Generator g;
+  g->setCommand(velocity(0.5), velocity(0.5));
+  ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
+  ASSERT_NEAR(g->timeline().switchTo(g.stand, 0.15), 0.3, kTime);
+  ASSERT_TRUE(g->plan(0.15, r.x_nominal, 0.15, 1.15));
+  for (double t = 0.3; t < 1.15; t += 0.01) EXPECT_EQ(g->mask(t), 0xfu) << t;
+  for (int c : {FL, HR}) {
+    ASSERT_EQ(g->stances(c), 2) << c;
+    EXPECT_EQ(g->stance(c, 0).touch_down, -kNever);
+    EXPECT_NEAR(g->stance(c, 0).lift_off, 0.1, kTime);
+    EXPECT_NEAR(g->stance(c, 1).touch_down, 0.3, kTime);
+    EXPECT_EQ(g->stance(c, 1).lift_off, kNever) << "never lifts again";
+    // Mid-stance capped at 0.3 + 0.5 = 0.8: the base reference is at 0.5 × 0.8 there.
+    EXPECT_NEAR(g->stance(c, 1).p.x(), n.foot[c].x() + 0.4, 1e-9) << c;
+    EXPECT_NEAR(g->stance(c, 1).p.y(), n.foot[c].y(), 1e-12) << c;
+    // It lands there and stays.
+    EXPECT_NEAR((g->foot(c, 0.3) - g->stance(c, 1).p).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((g->foot(c, 1.1) - g->stance(c, 1).p).norm(), 0.0, 1e-12);
+  }
+  for (int c : {FR, HL}) {  // down since 0 and for good
+    ASSERT_EQ(g->stances(c), 1) << c;
+    EXPECT_NEAR(g->stance(c, 0).touch_down, 0.0, kTime);
+    EXPECT_EQ(g->stance(c, 0).lift_off, kNever);
+    EXPECT_NEAR((g->foot(c, 0.9) - n.foot[c]).norm(), 0.0, 1e-12);
+  }
+}
+
+// Feet that are down keep where they were measured; feet in the air keep where they lifted from.
+TEST(GaitGenerator, LatchesTheMeasuredFeet) {
+  const Nominal n;
+  const Quad& r = quad();
+  Generator g;
+  Data data(r.robot.model);
+  auto feet = [&](const Eigen::VectorXd& x, Eigen::Vector3d(&p)[4]) {
+    framesForwardKinematics(r.robot.model, data, x.head(r.robot.model.nq));
+    for (int c = 0; c < 4; ++c) p[c] = data.oMf[r.contacts[c].frame].p;
+  };
+  const Eigen::VectorXd x0 = placed(0.03, -0.02, 0.1);
+  Eigen::Vector3d p0[4], p1[4];
+  feet(x0, p0);
+  ASSERT_TRUE(g->plan(0.0, x0, 0.0, 1.0));
+  for (int c = 0; c < 4; ++c) {
+    EXPECT_NEAR((g->stance(c, 0).p - p0[c]).norm(), 0.0, 1e-12) << c;
+    EXPECT_NEAR((g->foot(c, 0.0) - p0[c]).norm(), 0.0, 1e-12) << c;
+    const Eigen::Matrix3d R = Rz(0.1) * n.foot_R[c];  // the base turned by 0.1
+    EXPECT_NEAR(g->stance(c, 0).yaw, std::atan2(R(1, 0), R(0, 0)), 1e-12) << c;
+  }
+  // At 0.15 FL and HR are in the air, FR and HL down: the robot has slid by 1 cm.
+  const Eigen::VectorXd x1 = placed(0.04, -0.02, 0.1);
+  feet(x1, p1);
+  ASSERT_TRUE(g->plan(0.15, x1, 0.15, 1.15));
+  for (int c : {FR, HL}) {
+    EXPECT_NEAR((g->stance(c, 0).p - p1[c]).norm(), 0.0, 1e-12) << c;
+    EXPECT_NEAR((g->foot(c, 0.2) - p1[c]).norm(), 0.0, 1e-12) << c;
+  }
+  for (int c : {FL, HR}) {
+    EXPECT_NEAR((g->stance(c, 0).p - p0[c]).norm(), 0.0, 1e-12) << c;
+    // The swing starts from there: at 0.1 + a little, close to it.
+    EXPECT_NEAR((g->foot(c, 0.1) - p0[c]).norm(), 0.0, 1e-12) << c;
+  }
+}
+
+// The velocity beyond the command moves each foot's next touch-down, and only that one.
+TEST(GaitGenerator, RaibertCorrectionOfTheNextTouchDown) {
+  const Nominal n;
+  const Quad& r = quad();
+  const int nq = r.robot.model.nq;
+  GaitGeneratorOptions o = hand();
+  o.foothold_gain = 0.1;
+  o.max_foothold_correction = 0.1;
+  Generator g(o), plain;  // plain: gain 0
+  Eigen::VectorXd x = r.x_nominal;
+  x[nq] = 0.2;  // measured 0.2 m/s forward, commanded 0
+  ASSERT_TRUE(g->plan(0.0, x, 0.0, 1.0));
+  ASSERT_TRUE(plain->plan(0.0, x, 0.0, 1.0));
+  for (int c = 0; c < 4; ++c) {
+    ASSERT_EQ(g->stances(c), plain->stances(c));
+    ASSERT_GE(g->stances(c), 3);
+    const Eigen::Vector3d shift = g->stance(c, 1).p - plain->stance(c, 1).p;
+    EXPECT_NEAR(shift.x(), 0.02, 1e-12) << c;  // 0.1 s × 0.2 m/s
+    EXPECT_NEAR(shift.y(), 0.0, 1e-12) << c;
+    EXPECT_NEAR(shift.z(), 0.0, 1e-12) << c;
+    EXPECT_NEAR(plain->stance(c, 1).p.x(), n.foot[c].x(), 1e-12) << "commanded to stand still";
+    for (int i = 2; i < g->stances(c); ++i)
+      EXPECT_NEAR((g->stance(c, i).p - plain->stance(c, i).p).norm(), 0.0, 1e-12) << c << i;
+    EXPECT_NEAR((g->stance(c, 0).p - plain->stance(c, 0).p).norm(), 0.0, 1e-12);
+  }
+
+  // Capped: 0.01 m at most, along the excess (0.2, 0.1) m/s.
+  o.max_foothold_correction = 0.01;
+  Generator capped(o);
+  x[nq + 1] = 0.1;
+  ASSERT_TRUE(capped->plan(0.0, x, 0.0, 1.0));
+  ASSERT_TRUE(plain->plan(0.0, x, 0.0, 1.0));
+  const Eigen::Vector2d dir = Eigen::Vector2d(0.2, 0.1).normalized();
+  for (int c = 0; c < 4; ++c) {
+    const Eigen::Vector3d shift = capped->stance(c, 1).p - plain->stance(c, 1).p;
+    EXPECT_NEAR((shift.head<2>() - 0.01 * dir).norm(), 0.0, 1e-12) << c;
+    EXPECT_NEAR((capped->stance(c, 2).p - plain->stance(c, 2).p).norm(), 0.0, 1e-12) << c;
+  }
+
+  // In world axes, against the command: heading along +y, 0.3 m/s forward (base frame) with 0.1
+  // commanded: 0.2 m/s too fast along +y.
+  o.max_foothold_correction = 0.1;
+  Generator turned(o), turned_plain;
+  Eigen::VectorXd xt = placed(0.0, 0.0, 0.5 * kPi);
+  xt[nq] = 0.3;
+  turned->setCommand(velocity(0.1), velocity(0.1));
+  turned_plain->setCommand(velocity(0.1), velocity(0.1));
+  ASSERT_TRUE(turned->plan(0.0, xt, 0.0, 1.0));
+  ASSERT_TRUE(turned_plain->plan(0.0, xt, 0.0, 1.0));
+  for (int c = 0; c < 4; ++c) {
+    const Eigen::Vector3d shift = turned->stance(c, 1).p - turned_plain->stance(c, 1).p;
+    EXPECT_NEAR((shift.head<2>() - Eigen::Vector2d(0.0, 0.02)).norm(), 0.0, 1e-12) << c;
+  }
+
+  // A later plan: the touch-down at 0.3 is past at 0.35, the next one (0.9) takes the shift.
+  ASSERT_TRUE(g->plan(0.35, x, 0.35, 1.35));
+  ASSERT_TRUE(plain->plan(0.35, x, 0.35, 1.35));
+  const Eigen::Vector2d excess = Eigen::Vector2d(0.2, 0.1) * 0.1;
+  EXPECT_NEAR(g->stance(FL, 1).touch_down, 0.9, kTime);
+  EXPECT_NEAR((g->stance(FL, 1).p - plain->stance(FL, 1).p).head<2>().norm(), excess.norm(), 1e-12);
+  EXPECT_NEAR(g->stance(FR, 1).touch_down, 0.6, kTime);  // FR still has its 0.6 ahead
+  EXPECT_NEAR((g->stance(FR, 1).p - plain->stance(FR, 1).p).head<2>().norm(), excess.norm(), 1e-12);
+  EXPECT_NEAR((g->stance(FR, 2).p - plain->stance(FR, 2).p).norm(), 0.0, 1e-12);
+}
+
+// The base reference runs ahead of a robot that does not follow, on a leash; footholds too.
+TEST(GaitGenerator, LeashToTheMeasuredBase) {
+  const Nominal n;
+  const Quad& r = quad();
+  GaitGeneratorOptions o = hand();
+  o.max_position_lead = 0.1;
+  o.max_yaw_lead = 0.3;
+  o.max_foothold_lead = 0.05;
+  Generator g(o);
+  g->setCommand(velocity(0.5), velocity(0.5));
+  ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
+  EXPECT_NEAR(g->basePosition(1.0).x(), 0.5, 1e-12);  // the first plan is anchored at the robot
+  ASSERT_TRUE(g->plan(1.0, r.x_nominal, 1.0, 2.0));   // the robot has not moved
+  EXPECT_NEAR(g->basePosition(1.0).x(), 0.1, 1e-12) << "max_position_lead ahead";
+  EXPECT_NEAR(g->basePosition(1.0).y(), 0.0, 1e-12);
+  EXPECT_NEAR(g->basePosition(1.4).x(), 0.3, 1e-12);
+  // Footholds: within 5 cm of the same command carried from the robot (at the origin at t = 1).
+  // FL is down 0.9-1.3; its next stance is 1.5-1.9 (mid 1.7): 0.35 from the robot, 0.45 on the
+  // reference, so 0.35 + 0.05.
+  EXPECT_NEAR(g->stance(FL, 1).touch_down, 1.5, kTime);
+  EXPECT_NEAR(g->stance(FL, 1).p.x(), n.foot[FL].x() + 0.4, 1e-9);
+  EXPECT_NEAR(g->stance(FL, 1).p.y(), n.foot[FL].y(), 1e-12);
+  for (int c = 0; c < 4; ++c)
+    for (int i = 0; i < g->stances(c); ++i) {
+      const GaitGenerator::Stance& s = g->stance(c, i);
+      if (s.touch_down <= 1.0) continue;  // latched
+      const double mid = s.touch_down + std::min(0.5 * (s.lift_off - s.touch_down), 0.5);
+      const Eigen::Vector3d on_robot = n.foot[c] + Eigen::Vector3d(0.5 * (mid - 1.0), 0.0, 0.0);
+      EXPECT_LE((s.p - on_robot).norm(), 0.05 + 1e-12) << c << " " << i;
+      EXPECT_NEAR((s.p - on_robot).norm(), 0.05, 1e-9) << "the reference leads by 0.1 > 0.05";
+    }
+
+  // Yaw: 1 rad/s for 1 s with the robot not turning: 0.3 rad ahead.
+  Generator t(o);
+  t->setCommand(velocity(0.0, 0.0, 1.0), velocity(0.0, 0.0, 1.0));
+  ASSERT_TRUE(t->plan(0.0, r.x_nominal, 0.0, 1.0));
+  ASSERT_TRUE(t->plan(1.0, r.x_nominal, 1.0, 2.0));
+  EXPECT_NEAR(t->baseYaw(1.0), 0.3, 1e-12);
+  EXPECT_NEAR(t->baseYaw(1.5), 0.8, 1e-12);
+  // A robot within the leash keeps the reference where the last plan had it.
+  Generator w(o);
+  w->setCommand(velocity(0.5), velocity(0.5));
+  ASSERT_TRUE(w->plan(0.0, r.x_nominal, 0.0, 1.0));
+  ASSERT_TRUE(w->plan(0.1, placed(0.02, 0.01, 0.0), 0.1, 1.1));
+  EXPECT_NEAR(w->basePosition(0.1).x(), 0.05, 1e-12);
+  EXPECT_NEAR(w->basePosition(0.1).y(), 0.0, 1e-12);
+}
+
+TEST(GaitGenerator, BadInputChangesNothing) {
+  const Quad& r = quad();
+  const int nq = r.robot.model.nq, nx = nq + r.robot.model.nv;
+  Generator g;
+  g->setCommand(velocity(0.3), velocity(0.3));
+  ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d base = g->basePosition(0.5), fl1 = g->stance(FL, 1).p;
+  const Eigen::Vector3d fr0 = g->stance(FR, 0).p;
+  const int n_fl = g->stances(FL);
+  Eigen::VectorXd x = placed(0.05, 0.05, 0.2);  // would move everything, were it taken
+  g->setCommand(velocity(-0.3), velocity(-0.3));
+  EXPECT_FALSE(g->plan(nan, x, 0.1, 1.1));
+  EXPECT_FALSE(g->plan(inf, x, 0.1, 1.1));
+  EXPECT_FALSE(g->plan(0.1, x, nan, 1.1));
+  EXPECT_FALSE(g->plan(0.1, x, 0.1, inf));
+  EXPECT_FALSE(g->plan(0.1, x, 0.1, 1.2)) << "a window longer than the horizon";
+  EXPECT_FALSE(g->plan(0.1, x, 1.1, 0.1)) << "a window that ends before it begins";
+  EXPECT_FALSE(g->plan(2e9, x, 2e9, 2e9 + 1.0)) << "an absurd time";
+  EXPECT_FALSE(g->plan(0.1, x.head(nx - 1), 0.1, 1.1)) << "a wrong size";
+  Eigen::VectorXd bad = x;
+  bad[nq + 2] = nan;
+  EXPECT_FALSE(g->plan(0.1, bad, 0.1, 1.1));
+  bad = x;
+  bad[0] = inf;
+  EXPECT_FALSE(g->plan(0.1, bad, 0.1, 1.1));
+  bad = x;
+  bad.segment<4>(3).setZero();  // no orientation
+  EXPECT_FALSE(g->plan(0.1, bad, 0.1, 1.1));
+  EXPECT_EQ(g->basePosition(0.5), base);
+  EXPECT_EQ(g->stance(FL, 1).p, fl1);
+  EXPECT_EQ(g->stance(FR, 0).p, fr0);
+  EXPECT_EQ(g->stances(FL), n_fl);
+  // And the next good plan is as if the bad ones never came.
+  Generator h;
+  h->setCommand(velocity(0.3), velocity(0.3));
+  ASSERT_TRUE(h->plan(0.0, r.x_nominal, 0.0, 1.0));
+  h->setCommand(velocity(-0.3), velocity(-0.3));
+  ASSERT_TRUE(h->plan(0.1, x, 0.1, 1.1));
+  ASSERT_TRUE(g->plan(0.1, x, 0.1, 1.1));
+  EXPECT_EQ(g->basePosition(0.7), h->basePosition(0.7));
+  for (int c = 0; c < 4; ++c) {
+    ASSERT_EQ(g->stances(c), h->stances(c));
+    for (int i = 0; i < g->stances(c); ++i) EXPECT_EQ(g->stance(c, i).p, h->stance(c, i).p);
+  }
+}
+
+TEST(GaitGenerator, ConstructionRefusesBadOptions) {
+  const Quad& r = quad();
+  auto make = [&](const GaitGeneratorOptions& o) {
+    GaitGenerator g(r.robot.model, r.contacts, r.x_nominal, o);
+  };
+  EXPECT_NO_THROW(make(hand()));
+  GaitGeneratorOptions o = hand();
+  o.horizon = 0.0;
+  EXPECT_THROW(make(o), std::invalid_argument);
+  o = hand();
+  o.sample_dt = -0.01;
+  EXPECT_THROW(make(o), std::invalid_argument);
+  o = hand();
+  o.acceleration.y() = 0.0;
+  EXPECT_THROW(make(o), std::invalid_argument);
+  o = hand();
+  o.height_rate = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(make(o), std::invalid_argument);
+  o = hand();
+  o.max_foothold_correction = -1.0;
+  EXPECT_THROW(make(o), std::invalid_argument);
+  EXPECT_THROW(GaitGenerator(r.robot.model, r.contacts, r.x_nominal.head(5), hand()),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace stride
