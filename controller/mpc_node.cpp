@@ -107,8 +107,12 @@ void MpcNode::onCommand(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     ++commands_malformed_;
     return;
   }
+  // An unknown gait is refused without consuming its stamp: the sender may resend it corrected.
+  if (!commands_.receive(command_msg_, now())) {
+    reject(msg::Reject::BadField);
+    return;
+  }
   last_command_utime_ = command_msg_.utime;
-  if (!commands_.receive(command_msg_, now())) reject(msg::Reject::BadField);  // unknown gait
 }
 
 void MpcNode::applyPendingPlan() {

@@ -359,7 +359,8 @@ bool Solver::backwardPass() {
         invertFromCholesky(qp.freeFactor(), nf, Quu_inv_);
         const auto Hinv = Quu_inv_.topLeftCorner(nf, nf);
         if (nf == nu) {
-          KK.noalias() = -Hinv * Qxu.transpose();  // F is 0..nu-1 in order
+          KK.noalias() = Hinv * Qxu.transpose();  // F is 0..nu-1 in order
+          KK = -KK;  // negated after the product: see below
         } else {
           auto Wf = W.topRows(nf);
           for (int a = 0; a < nf; ++a) Wf.row(a) = Qxu.col(F[a]).transpose();
@@ -381,8 +382,11 @@ bool Solver::backwardPass() {
         // sizes.
         invertFromCholesky(Quu_, nu, Quu_inv_);
         const auto Quu_inv = Quu_inv_.topLeftCorner(nu, nu);
-        kk.noalias() = -Quu_inv * Qu;
-        KK.noalias() = -Quu_inv * Qxu.transpose();
+        // Negated after the products, as in the box branch (no heap temporary when nu = 1).
+        kk.noalias() = Quu_inv * Qu;
+        kk = -kk;
+        KK.noalias() = Quu_inv * Qxu.transpose();
+        KK = -KK;
       }
       // At the (box-)QP solution Kᵀ(Qu + Quu k) = 0 and Kᵀ(Qux + Quu K) = 0 on the free set, so
       // V'x = Qx + Qxu k and V'xx = Qxx + Qxu K for both branches.

@@ -66,8 +66,9 @@ Run run(const ControllerConfig& config, const Options& options) {
     const double t = sim.simulator().time();
     clock = sim.utime();
     const std::int64_t stamp = sim.publishState();
-    if (!options.script.empty() && t < options.commands_until) {
-      const ScriptedCommand& c = options.script[commandAt(options.script, t)];
+    if (!options.script.empty() && t + 1e-9 < options.commands_until) {
+      // The sim's time is a sum of steps (3.9999999999997 for 4): an entry at 4 s applies at 4 s.
+      const ScriptedCommand& c = options.script[commandAt(options.script, t + 1e-9)];
       command.utime = sim.utime();
       command.vx = c.vx;
       command.vy = c.vy;
