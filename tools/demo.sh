@@ -75,7 +75,7 @@ if [ "$teleop" = 1 ]; then
     exit 2
   }
   mode=realtime
-  [ -t 0 ] && [ -t 1 ] || { echo "demo.sh: --teleop needs a terminal (stdin and stdout)" >&2; exit 2; }
+  [ -t 0 ] || { echo "demo.sh: --teleop reads the keyboard: stdin must be a terminal" >&2; exit 2; }
 else
   commands="${commands:-$root/config/commands/$robot.yaml}"
   [ -f "$commands" ] || { echo "demo.sh: no command script '$commands'" >&2; exit 2; }
@@ -98,8 +98,8 @@ summary="${summary:-$out/summary.json}"
 if [ -z "${STRIDE_DEMO_INSIDE:-}" ]; then
   "$root/tools/install-deps.sh"
   "$root/tools/build.sh"
-  mkdir -p "$out"
 fi
+mkdir -p "$out"
 
 # The robot's model, before anything starts: its URDF (public robots: example-robot-data through
 # --robots-dir, the build's package view, ROS_PACKAGE_PATH), the robot YAML and its gaits.
@@ -139,7 +139,7 @@ fi
 
 if [ -n "${STRIDE_DEMO_INSIDE:-}" ]; then
   ip link set lo up
-  ip route add 224.0.0.0/4 dev lo
+  ip route replace 224.0.0.0/4 dev lo
   # Refuse to run if anything but loopback is visible: this must be our private namespace.
   if [ "$(awk -F: 'NR > 2 { gsub(/ /, "", $1); print $1 }' /proc/net/dev | sort -u)" != "lo" ]; then
     echo "demo.sh: the namespace has interfaces other than lo; refusing to send multicast" >&2
