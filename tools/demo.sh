@@ -16,7 +16,9 @@
 #                     which the build makes from ../shared)
 #   --humanoid        short for --robot stride_humanoid
 #   --commands FILE   the command script stride-teleop plays on the robot's clock (default
-#                     config/commands/NAME.yaml; format in tools/README.md, "stride-teleop")
+#                     config/commands/NAME.yaml; format in tools/README.md, "stride-teleop");
+#                     `--commands none`: no command source, the robot stands until you send
+#                     commands yourself (the demo prints how; default duration 60 s)
 #   --teleop          drive from the keyboard instead (real time, no time limit): arrows / WASD,
 #                     Q/E turn, space stands, 1-4 gaits, x or Ctrl-C quits and ends the demo
 #   --duration S      seconds of robot time (default: the script's last entry + 4 s)
@@ -56,7 +58,7 @@ while [ $# -gt 0 ]; do
     --out) need_value "$@"; out="$2"; shift 2 ;;
     --summary) need_value "$@"; summary="$2"; shift 2 ;;
     --spy) spy=1; shift ;;
-    -h|--help) sed -n '2,34p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown option '$1' (--help)" >&2; exit 2 ;;
   esac
 done
@@ -76,6 +78,8 @@ if [ "$teleop" = 1 ]; then
   }
   mode=realtime
   [ -t 0 ] || { echo "demo.sh: --teleop reads the keyboard: stdin must be a terminal" >&2; exit 2; }
+elif [ "$commands" = none ]; then
+  duration="${duration:-60}"
 else
   commands="${commands:-$root/config/commands/$robot.yaml}"
   [ -f "$commands" ] || { echo "demo.sh: no command script '$commands'" >&2; exit 2; }
@@ -215,7 +219,23 @@ if ! wait_for "$out/mpc.txt" "^stride-mpc: .* mode" 30 "$mpc_pid"; then
   exit 1
 fi
 teleop_bin="$build/tools/stride-teleop"
-if [ "$teleop" = 0 ]; then
+if [ "$commands" = none ]; then
+  # No command source: whoever joins the bus drives (the controller stands until then).
+  join=""
+  if [ -n "${STRIDE_DEMO_INSIDE:-}" ]; then
+    join="nsenter --target $$ --net "
+    command -v sudo > /dev/null && join="sudo $join"
+    [ "$(awk '$1 == 0 { print $2 }' /proc/self/uid_map)" != 0 ] &&
+      join="nsenter --target $$ --user --net --preserve-credentials "
+  fi
+  echo "demo: $robot, $mode, ${duration} s of robot time, no commands (the robot stands until you"
+  echo "  send some); drive it from another terminal with"
+  echo "  ${join}env LCM_DEFAULT_URL='$LCM_DEFAULT_URL' $teleop_bin --gaits $gaits"
+  echo "logging to $log"
+  sim_status=0
+  timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 ||
+    sim_status=$?
+elif [ "$teleop" = 0 ]; then
   # The script's t = 0 is the first state the teleop receives: it listens before the sim starts.
   timeout "$limit" "$teleop_bin" --commands "$commands" --gaits "$gaits" \
     > "$out/teleop.txt" 2>&1 &
