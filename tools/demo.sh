@@ -1,70 +1,149 @@
 #!/usr/bin/env bash
-# README command 1: installs the packages, builds Release, then runs the closed loop: stride-sim
-# (the mock robot) and stride-mpc (the controller) as two processes talking LCM over UDP
-# multicast, each pinned to one of the two cores, with lcm-logger recording the session. By
-# default everything runs inside a private network namespace this script creates (only a loopback
-# interface, multicast routed to it, ttl=0): nothing reaches the host's network.
+# README command 1: installs the packages, builds Release, then drives a robot in closed loop:
+# stride-sim (the mock robot) and stride-mpc (the controller) as two processes talking LCM over UDP
+# multicast, each pinned to one of the two cores, stride-teleop sending the velocity commands (a
+# command script, or the keyboard) and lcm-logger recording the session. By default everything
+# runs inside a private network namespace this script creates (only a loopback interface,
+# multicast routed to it, ttl=0): nothing reaches the host's network.
 #
-#   tools/demo.sh [--duration S] [--humanoid] [--realtime | --lockstep] [--host-network]
-#                 [--out DIR] [--summary FILE] [--spy]
+#   tools/demo.sh [--robot NAME | --humanoid] [--commands FILE | --teleop] [--duration S]
+#                 [--realtime | --lockstep] [--robots-dir DIR]... [--check-tracking]
+#                 [--host-network] [--out DIR] [--summary FILE] [--spy]
 #
-#   --duration S     seconds of robot time (default 10: the quadruped stands 2 s, trots in place,
-#                    walks forward from 5 s)
-#   --humanoid       the in-house humanoid walking instead of the quadruped
-#   --lockstep       deterministic lock-step: the sim waits for every answer (the quadruped's
-#                    default: on a 2-core machine its 200 Hz tick does not fit the period yet when
-#                    the sim shares the machine, see tools/bench/README.md)
-#   --realtime       wall clock: the sim at 1 kHz, the controller at its rate (the humanoid's default)
-#   --host-network   use the host's loopback instead of a private namespace (multicast with ttl=0
-#                    on lo; for watching with lcm-spy from the host: tools/lcm-spy.sh)
-#   --out DIR        where the log and summaries go (default build/demo)
-#   --summary FILE   the summary as JSON (default DIR/summary.json)
-#   --spy            also start lcm-spy (tools/lcm-spy.sh) on the demo's bus; needs a display
+#   --robot NAME      stride_quad (default), solo12, anymal_c, stride_humanoid, talos_reduced:
+#                     config/controller/NAME.yaml; solo12, anymal_c and talos_reduced need
+#                     example-robot-data (--robots-dir, ROS_PACKAGE_PATH, or build/robot_packages,
+#                     which the build makes from ../shared)
+#   --humanoid        short for --robot stride_humanoid
+#   --commands FILE   the command script stride-teleop plays on the robot's clock (default
+#                     config/commands/NAME.yaml; format in tools/README.md, "stride-teleop");
+#                     `--commands none`: no command source, the robot stands until you send
+#                     commands yourself (the demo prints how; default duration 60 s)
+#   --teleop          drive from the keyboard instead (real time, no time limit): arrows / WASD,
+#                     Q/E turn, space stands, 1-4 gaits, x or Ctrl-C quits and ends the demo
+#   --duration S      seconds of robot time (default: the script's last entry + 4 s)
+#   --lockstep        deterministic lock-step: the sim waits for every answer (the default, except
+#                     for stride_humanoid: on this 2-core machine the quadrupeds' 200 Hz ticks and
+#                     the sim do not fit real time together yet, see tools/bench/README.md)
+#   --realtime        wall clock: the sim at 1 kHz, the controller at its rate
+#   --robots-dir DIR  where example-robot-data is looked for (repeatable), before
+#                     build/robot_packages and ROS_PACKAGE_PATH
+#   --check-tracking  exit 1 when a command segment missed its command or the robot fell
+#   --host-network    use the host's loopback instead of a private namespace (multicast with ttl=0
+#                     on lo; for watching with lcm-spy from the host: tools/lcm-spy.sh)
+#   --out DIR         where the log and summaries go (default build/demo)
+#   --summary FILE    the summary as JSON (default DIR/summary.json)
+#   --spy             also start lcm-spy (tools/lcm-spy.sh) on the demo's bus; needs a display
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 
-duration=10 robot=quad mode="" host_network=0 out="" summary="" spy=0
+robot=stride_quad commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
+spy=0 check=0
+robots_dirs=()
 args=("$@")
+need_value() { [ $# -ge 2 ] || { echo "demo.sh: $1 needs a value (--help)" >&2; exit 2; }; }
 while [ $# -gt 0 ]; do
   case "$1" in
-    --duration) duration="$2"; shift 2 ;;
-    --humanoid) robot=humanoid; shift ;;
+    --robot) need_value "$@"; robot="$2"; shift 2 ;;
+    --humanoid) robot=stride_humanoid; shift ;;
+    --commands) need_value "$@"; commands="$2"; shift 2 ;;
+    --teleop) teleop=1; shift ;;
+    --duration) need_value "$@"; duration="$2"; shift 2 ;;
     --lockstep) mode=lockstep; shift ;;
     --realtime) mode=realtime; shift ;;
+    --robots-dir) need_value "$@"; robots_dirs+=("$(cd "$2" 2>/dev/null && pwd || echo "$2")"); shift 2 ;;
+    --check-tracking) check=1; shift ;;
     --host-network) host_network=1; shift ;;
-    --out) out="$2"; shift 2 ;;
-    --summary) summary="$2"; shift 2 ;;
+    --out) need_value "$@"; out="$2"; shift 2 ;;
+    --summary) need_value "$@"; summary="$2"; shift 2 ;;
     --spy) spy=1; shift ;;
-    -h|--help) sed -n '2,25p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown option '$1' (--help)" >&2; exit 2 ;;
   esac
 done
+
+config="$root/config/controller/$robot.yaml"
+if [ ! -f "$config" ]; then
+  echo "demo.sh: no robot '$robot' (config/controller/$robot.yaml); the robots:" \
+    $(cd "$root/config/controller" && ls *.yaml | sed 's/\.yaml$//') >&2
+  exit 2
+fi
+if [ "$teleop" = 1 ]; then
+  [ -n "$commands" ] && { echo "demo.sh: --teleop or --commands, not both" >&2; exit 2; }
+  [ -n "$duration" ] && { echo "demo.sh: --teleop runs until you quit it (x); no --duration" >&2; exit 2; }
+  [ "$mode" = lockstep ] && {
+    echo "demo.sh: --teleop runs in real time (the keyboard's commands are on the wall clock)" >&2
+    exit 2
+  }
+  mode=realtime
+  [ -t 0 ] || { echo "demo.sh: --teleop reads the keyboard: stdin must be a terminal" >&2; exit 2; }
+elif [ "$commands" = none ]; then
+  duration="${duration:-60}"
+else
+  commands="${commands:-$root/config/commands/$robot.yaml}"
+  [ -f "$commands" ] || { echo "demo.sh: no command script '$commands'" >&2; exit 2; }
+  commands=$(cd "$(dirname "$commands")" && echo "$(pwd)/$(basename "$commands")")
+  if [ -z "$duration" ]; then
+    # The last entry's time (entries `- {at: T, ...}` or `- at: T`), comments stripped.
+    last=$(sed 's/#.*//' "$commands" | grep -oE '(^|[{ ,-])at: *[-+0-9.eE]+' |
+      sed 's/.*at: *//' | tail -n 1)
+    [ -n "$last" ] || { echo "demo.sh: '$commands' has no entry with 'at:'" >&2; exit 2; }
+    duration=$(awk -v t="$last" 'BEGIN { printf "%g", t + 4 }')
+  fi
+fi
+awk -v d="$duration" 'BEGIN { exit !(d == "" || d + 0 > 0) }' ||
+  { echo "demo.sh: --duration must be a positive number of seconds" >&2; exit 2; }
+[ -z "$mode" ] && { [ "$robot" = stride_humanoid ] && mode=realtime || mode=lockstep; }
 out="${out:-$build/demo}"
-[ -z "$mode" ] && { [ "$robot" = quad ] && mode=lockstep || mode=realtime; }
 summary="${summary:-$out/summary.json}"
 
 # Set-up (skipped inside the namespace: the outer invocation did it).
 if [ -z "${STRIDE_DEMO_INSIDE:-}" ]; then
   "$root/tools/install-deps.sh"
   "$root/tools/build.sh"
-  mkdir -p "$out"
-  if [ "$host_network" = 0 ]; then
-    # Re-run this script in a new network namespace (as root directly, else as a user namespace's
-    # root). The namespace and everything in it disappear when the script ends.
-    ns=(unshare --net)
-    [ "$(id -u)" -ne 0 ] && ns=(unshare --user --map-root-user --net)
-    if ! "${ns[@]}" true 2>/dev/null; then
-      echo "demo.sh: cannot create a network namespace here; rerun with --host-network" >&2
-      exit 1
-    fi
-    STRIDE_DEMO_INSIDE=1 exec "${ns[@]}" "$0" "${args[@]}"
+fi
+mkdir -p "$out"
+
+# The robot's model, before anything starts: its URDF (public robots: example-robot-data through
+# --robots-dir, the build's package view, ROS_PACKAGE_PATH), the robot YAML and its gaits.
+[ -d "$build/robot_packages" ] && robots_dirs+=("$build/robot_packages")
+dirs_args=()
+for d in "${robots_dirs[@]}"; do dirs_args+=(--robots-dir "$d"); done
+if ! model=$("$build/controller/stride-mpc" --config "$config" "${dirs_args[@]}" --print-model 2>&1); then
+  echo "$model" >&2
+  echo "demo.sh: cannot load the robot '$robot' (above)." >&2
+  if echo "$model" | grep -q 'package://'; then
+    echo "  Its URDF comes from example-robot-data (https://github.com/Gepetto/example-robot-data):" >&2
+    echo "  pass the folder that holds that package with --robots-dir DIR (repeatable), add it to" >&2
+    echo "  ROS_PACKAGE_PATH, or get the package (with ../shared beside the repository the build" >&2
+    echo "  makes build/robot_packages)." >&2
   fi
+  exit 1
+fi
+robot_yaml=$(echo "$model" | sed -n 's/^  yaml  //p')
+gaits=biped
+echo "$model" | grep -q '^gaits:.* trot' && gaits=quadruped
+rate=$(sed -n 's/^rate_hz: *\([0-9.]*\).*/\1/p' "$config")  # lock-step: a state per tick
+# The sim's PD before the first policy: the controller's own hold gains.
+hold_kp=$(sed -n 's/^  hold_kp: *\([0-9.eE+-]*\).*/\1/p' "$config")
+hold_kd=$(sed -n 's/^  hold_kd: *\([0-9.eE+-]*\).*/\1/p' "$config")
+
+if [ -z "${STRIDE_DEMO_INSIDE:-}" ] && [ "$host_network" = 0 ]; then
+  # Re-run this script in a new network namespace (as root directly, else as a user namespace's
+  # root). The namespace and everything in it disappear when the script ends.
+  ns=(unshare --net)
+  [ "$(id -u)" -ne 0 ] && ns=(unshare --user --map-root-user --net)
+  if ! "${ns[@]}" true 2>/dev/null; then
+    echo "demo.sh: cannot create a network namespace here; rerun with --host-network" >&2
+    exit 1
+  fi
+  STRIDE_DEMO_INSIDE=1 exec "${ns[@]}" "$0" "${args[@]}"
 fi
 
 if [ -n "${STRIDE_DEMO_INSIDE:-}" ]; then
   ip link set lo up
-  ip route add 224.0.0.0/4 dev lo
+  ip route replace 224.0.0.0/4 dev lo
   # Refuse to run if anything but loopback is visible: this must be our private namespace.
   if [ "$(awk -F: 'NR > 2 { gsub(/ /, "", $1); print $1 }' /proc/net/dev | sort -u)" != "lo" ]; then
     echo "demo.sh: the namespace has interfaces other than lo; refusing to send multicast" >&2
@@ -80,29 +159,38 @@ else
 fi
 export LCM_DEFAULT_URL='udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304'
 
-if [ "$robot" = quad ]; then
-  config="$root/config/controller/stride_quad.yaml"
-  robot_yaml="$root/config/robots/stride_quad/stride_quad.yaml"
-  hold=(--hold-kp 5 --hold-kd 0.1)  # the sim's PD until the first policy arrives
-else
-  config="$root/config/controller/stride_humanoid.yaml"
-  robot_yaml="$root/config/robots/stride_humanoid/stride_humanoid.yaml"
-  hold=(--hold-kp 300 --hold-kd 10)
-fi
-rate=$(sed -n 's/^rate_hz: *\([0-9.]*\).*/\1/p' "$config")  # lock-step: a state per tick
 log="$out/session.lcmlog"
-rm -f "$log"
+rm -f "$log" "$out/teleop.txt"
 pids=()
 cleanup() {
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
   wait 2>/dev/null || true
 }
 trap cleanup EXIT
+# Waits up to $3 s for the pattern $2 in the file $1 while the process $4 lives.
+wait_for() {
+  local i
+  for ((i = 0; i < $3 * 10; i++)); do
+    grep -q "$2" "$1" 2>/dev/null && return 0
+    kill -0 "$4" 2>/dev/null || return 1
+    sleep 0.1
+  done
+  return 1
+}
 
-# Two cores: the controller on one, the mock robot on the other (lcm-logger is light and floats).
+# Two cores: the controller on one, the mock robot on the other (lcm-logger and stride-teleop are
+# light and float). A wall-clock safety net on every process, except when driving by keyboard.
 cpus=$(nproc)
 mpc_cpu=$((cpus > 1 ? 1 : 0))
-limit=$(awk -v d="$duration" 'BEGIN { printf "%d", d * 4 + 120 }')  # wall-clock safety net
+if [ "$teleop" = 1 ]; then
+  limit=0  # timeout 0: none
+  sim_duration=1e9
+else
+  # Lock-step runs as fast as the controller answers: slower than real time for the big robots.
+  limit=$(awk -v d="$duration" -v m="$mode" 'BEGIN { printf "%d", d * (m == "lockstep" ? 30 : 4) + 120 }')
+  sim_duration=$duration
+fi
+started=$(date +%s.%N)
 
 timeout "$limit" lcm-logger --quiet "$log" &
 pids+=($!)
@@ -111,8 +199,9 @@ if [ "$spy" = 1 ]; then
   pids+=($!)
   sleep 3  # the JVM starts slowly
 fi
-mpc_args=(--config "$config" --summary "$out/mpc.json")
-sim_args=(--robot "$robot_yaml" --duration "$duration" --summary "$out/sim.json" "${hold[@]}")
+mpc_args=(--config "$config" "${dirs_args[@]}" --summary "$out/mpc.json")
+sim_args=(--robot "$robot_yaml" "${dirs_args[@]}" --duration "$sim_duration"
+  --summary "$out/sim.json" --hold-kp "${hold_kp:-5}" --hold-kd "${hold_kd:-0.1}")
 if [ "$mode" = lockstep ]; then
   mpc_args+=(--lockstep)
   sim_args+=(--lockstep --rate "$rate")
@@ -123,20 +212,91 @@ timeout "$limit" taskset -c "$mpc_cpu" "$build/controller/stride-mpc" "${mpc_arg
   > "$out/mpc.txt" 2>&1 &
 mpc_pid=$!
 pids+=($mpc_pid)
-sleep 0.5  # the controller subscribes before the first estimate
-echo "demo: $robot, $mode, ${duration} s of robot time; logging to $log"
-timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1
+# The controller prints its line once subscribed (the first udpm subscribe can take seconds).
+if ! wait_for "$out/mpc.txt" "^stride-mpc: .* mode" 30 "$mpc_pid"; then
+  cat "$out/mpc.txt" >&2
+  echo "demo.sh: stride-mpc did not start" >&2
+  exit 1
+fi
+teleop_bin="$build/tools/stride-teleop"
+if [ "$commands" = none ]; then
+  # No command source: whoever joins the bus drives (the controller stands until then).
+  join=""
+  if [ -n "${STRIDE_DEMO_INSIDE:-}" ]; then
+    join="nsenter --target $$ --net "
+    command -v sudo > /dev/null && join="sudo $join"
+    [ "$(awk '$1 == 0 { print $2 }' /proc/self/uid_map)" != 0 ] &&
+      join="nsenter --target $$ --user --net --preserve-credentials "
+  fi
+  echo "demo: $robot, $mode, ${duration} s of robot time, no commands (the robot stands until you"
+  echo "  send some); drive it from another terminal with"
+  echo "  ${join}env LCM_DEFAULT_URL='$LCM_DEFAULT_URL' $teleop_bin --gaits $gaits"
+  echo "logging to $log"
+  sim_status=0
+  timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 ||
+    sim_status=$?
+elif [ "$teleop" = 0 ]; then
+  # The script's t = 0 is the first state the teleop receives: it listens before the sim starts.
+  timeout "$limit" "$teleop_bin" --commands "$commands" --gaits "$gaits" \
+    > "$out/teleop.txt" 2>&1 &
+  teleop_pid=$!
+  pids+=($teleop_pid)
+  if ! wait_for "$out/teleop.txt" "waiting for states" 30 "$teleop_pid"; then
+    cat "$out/teleop.txt" >&2
+    echo "demo.sh: stride-teleop did not start" >&2
+    exit 1
+  fi
+  echo "demo: $robot, $mode, ${duration} s of robot time, commands from $commands; logging to $log"
+  sim_status=0
+  timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 ||
+    sim_status=$?
+  kill -TERM "$teleop_pid" 2>/dev/null || true
+  wait "$teleop_pid" 2>/dev/null || true
+else
+  timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 &
+  sim_pid=$!
+  pids+=($sim_pid)
+  echo "demo: $robot, real time, driven from the keyboard until you quit (x); logging to $log"
+  # The teleop reads the terminal in the foreground. When the sim stops first (the robot fell),
+  # a watcher stops the teleop, which restores the terminal.
+  pidfile="$out/teleop.pid"
+  rm -f "$pidfile"
+  (
+    while kill -0 "$sim_pid" 2>/dev/null; do sleep 0.5; done
+    [ -s "$pidfile" ] && kill -TERM "$(cat "$pidfile")" 2>/dev/null
+  ) &
+  pids+=($!)
+  trap 'true' INT  # a stray SIGINT must not end the demo before its summary
+  sim_status=0
+  bash -c 'echo $$ > "$1"; shift; exec "$@"' teleop "$pidfile" \
+    "$teleop_bin" --gaits "$gaits" || true
+  trap - INT
+  if ! kill -0 "$sim_pid" 2>/dev/null; then
+    wait "$sim_pid" || sim_status=$?
+    echo "demo: the sim stopped before the teleop (see below)"
+  fi
+  kill -TERM "$sim_pid" 2>/dev/null || true
+  wait "$sim_pid" 2>/dev/null || true
+fi
 # Stop the controller at once: from now on its states go stale and it would (rightly) fall back.
 kill -TERM "$mpc_pid" 2>/dev/null || true
 wait "$mpc_pid" 2>/dev/null || true
 sleep 0.2
 cleanup
 trap - EXIT
+wall=$(awk -v a="$started" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
 
 cat "$out/mpc.txt" "$out/sim.txt" | grep -E '^stride-(mpc|sim):' || true
+[ -f "$out/teleop.txt" ] && grep -E '^stride-teleop: stopped' "$out/teleop.txt" || true
+[ "$sim_status" = 124 ] && echo "demo: the sim was stopped by the safety net after $limit s"
 echo
 echo "== summary (from the log) =="
-"$build/tools/stride-log-summary" "$log" --summary "$summary"
+summary_args=("$log" --summary "$summary")
+[ "$check" = 1 ] && summary_args+=(--check-tracking)
+status=0
+"$build/tools/stride-log-summary" "${summary_args[@]}" || status=$?
 echo
-echo "log: $log (replay: $build/controller/stride-mpc --config $config --replay $log)"
+echo "wall time: $wall s ($mode)"
+echo "log: $log (replay: $build/controller/stride-mpc --config $config ${dirs_args[*]} --replay $log)"
 echo "summary: $summary"
+exit "$status"

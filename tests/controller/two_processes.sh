@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # The closed loop as two processes over LCM UDP multicast, in a private network namespace this test
 # creates (only lo, multicast routed to it, ttl=0): stride-sim --lockstep and stride-mpc --lockstep,
-# with lcm-logger recording; then the log must show a quadruped that stood and trotted without
-# falling, every tick answered. Exit 77 (ctest: skipped) only when namespaces are not permitted.
+# with lcm-logger recording; then the log must show a quadruped that stood without falling, every
+# tick answered. Then the demo's drive, tools/demo.sh itself in this namespace: stride-teleop plays
+# a command script (stand 1 s, trot forward at 0.3 m/s for 5 s) in lock-step, and
+# `stride-log-summary --check-tracking` (demo.sh --check-tracking) must find the trot tracked.
+# Exit 77 (ctest: skipped) only when namespaces are not permitted.
 #   two_processes.sh BUILD_DIR CONFIG_DIR
 set -euo pipefail
 build=$1 config=$2
@@ -27,7 +30,8 @@ pids=()
 trap 'for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; rm -rf "$dir"' EXIT
 
 timeout 120 lcm-logger --quiet "$dir/session.lcmlog" &
-pids+=($!)
+logger=$!
+pids+=($logger)
 # Trot from 1 s (a 1.5 s stand makes the test short; the horizon sees the trot from 0.5 s).
 sed -e 's/^  stand: .*/  stand: 1.0/' "$config/controller/stride_quad.yaml" > "$dir/quad.yaml"
 sed -i "s|^robot: .*|robot: $config/robots/stride_quad/stride_quad.yaml|" "$dir/quad.yaml"
@@ -60,3 +64,23 @@ ticks=$(sed -n 's/.*"ticks": \([0-9]*\).*/\1/p' "$dir/summary.json")
 policies=$(sed -n 's/.*"policies": \([0-9]*\).*/\1/p' "$dir/sim.json")
 [ "$policies" -ge 600 ] || { echo "FAIL: the sim received $policies policies"; exit 1; }
 echo "PASS: two processes over udpm in a private namespace, $ticks ticks"
+kill -INT "$logger"
+wait "$logger" || true
+
+# The demo's drive. STRIDE_DEMO_INSIDE tells demo.sh it already runs in its private namespace (this
+# one): it skips the packages, the build and its own namespace, and checks that only lo is here.
+printf -- '- {at: 0.0, gait: stand}\n- {at: 1.0, gait: trot, vx: 0.3}\n' > "$dir/drive.yaml"
+status=0
+STRIDE_DEMO_INSIDE=1 STRIDE_BUILD_DIR="$build" timeout 120 "$config/../tools/demo.sh" \
+  --robot stride_quad --lockstep --commands "$dir/drive.yaml" --duration 6 --out "$dir/demo" \
+  --check-tracking > "$dir/demo.txt" 2>&1 || status=$?
+cat "$dir/demo.txt"
+[ "$status" = 0 ] || { echo "FAIL: tools/demo.sh exited $status"; exit 1; }
+grep -q '"fell": false' "$dir/demo/summary.json" || { echo "FAIL: the robot fell"; exit 1; }
+segments=$(grep -c '"t0"' "$dir/demo/summary.json")
+[ "$segments" = 2 ] || { echo "FAIL: $segments segments, expected 2 (stand, trot)"; exit 1; }
+grep -q "tracking: every segment tracked its command (1 of 2 segments" "$dir/demo.txt" || {
+  echo "FAIL: the trot segment was not checked and tracked"
+  exit 1
+}
+echo "PASS: tools/demo.sh drove the quadruped with a command script, the trot at 0.3 m/s tracked"
