@@ -241,6 +241,7 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   // The references ramp over the horizon as the command does between ticks.
   gen.acceleration = Eigen::Vector3d(cmd.accel_x, cmd.accel_y, cmd.accel_yaw);
   gen.height_rate = cmd.height_rate;
+  gen.max_height = cmd.max_height;
   gen.horizon = lo.knots * lo.dt;
   gen.sample_dt = lo.dt;
 

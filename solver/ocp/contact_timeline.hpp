@@ -42,6 +42,11 @@ class ContactTimeline {
   double switchTo(int id, double t);
 
   int patternAt(double t) const { return segments_[segmentAt(t)].pattern; }
+  // The pattern in force at t closes every contact in all its phases, and no switch follows.
+  bool standsAt(double t) const {
+    const int s = segmentAt(t);
+    return s == n_ - 1 && standing(segments_[s].pattern);
+  }
   int lastPattern() const { return segments_[n_ - 1].pattern; }
   double lastSwitch() const { return segments_[n_ - 1].begin; }
 

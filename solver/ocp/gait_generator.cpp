@@ -7,6 +7,8 @@
 
 #include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/frames.hpp"
+#include "solver/multibody/jacobian.hpp"
+#include "solver/multibody/lie_group.hpp"
 
 namespace stride {
 
@@ -18,6 +20,8 @@ constexpr double kGravity = 9.81;
 constexpr double kLookahead = 2.0;
 // Mid-stance of a stance that does not end (a stand): at most this long after the touch-down.
 constexpr double kHalfStanceCap = 0.5;
+// Body-height postures solved at construction (odd: one at the nominal height).
+constexpr int kCrouches = 9;
 
 double yawOf(double qx, double qy, double qz, double qw) {
   return std::atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz));
@@ -86,6 +90,7 @@ GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
   gain_ =
       o.foothold_gain > -0.99 ? o.foothold_gain : std::sqrt(std::max(z_nominal_, 0.0) / kGravity);
 
+  buildCrouches(contacts);
   latched_.assign(nc_, Eigen::Vector3d::Zero());
   latched_yaw_.assign(nc_, 0.0);
   samples_.assign(static_cast<size_t>(std::ceil((o.horizon + kLookahead) / o.sample_dt)) + 2,
@@ -97,6 +102,53 @@ GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
     n_stances_[c] = 1;
   }
   sampleBase(0.0, base.head<2>(), yaw);
+}
+
+void GaitGenerator::buildCrouches(const ContactSet& contacts) {
+  const int nq = model_.nq, nv = model_.nv, nj = nv - 6;
+  const int n = options_.max_height > 0.0 ? kCrouches : 1;
+  Data data(model_);
+  Eigen::VectorXd q0 = x_nominal_.head(nq);
+  framesForwardKinematics(model_, data, q0);
+  std::vector<SE3> targets;
+  int rows = 0;
+  for (int c = 0; c < nc_; ++c) {
+    targets.push_back(data.oMf[contacts[c].frame]);
+    rows += contacts[c].dim == 6 ? 6 : 3;
+  }
+  Eigen::MatrixXd J(rows, nj), Jc(6, nv);
+  Eigen::VectorXd e(rows), dv = Eigen::VectorXd::Zero(nv);
+  for (int i = 0; i < n; ++i) {
+    const double h = n == 1 ? 0.0 : options_.max_height * (2.0 * i / (n - 1) - 1.0);
+    Eigen::VectorXd q = q0;
+    q[2] += h;
+    // Damped Gauss-Newton on the joints only: every foot back on its nominal place (soles flat).
+    for (int it = 0; it < 100; ++it) {
+      computeJointJacobians(model_, data, q);
+      updateFramePlacements(model_, data);
+      int r = 0;
+      for (int c = 0; c < nc_; ++c) {
+        const int f = contacts[c].frame;
+        if (contacts[c].dim == 6) {
+          const SE3 error = targets[c].actInv(data.oMf[f]);
+          getFrameJacobian(model_, data, f, ReferenceFrame::Local, Jc);
+          e.segment<6>(r) = log6(error);
+          J.middleRows<6>(r) = Jlog6(error) * Jc.rightCols(nj);
+          r += 6;
+        } else {
+          getFrameJacobian(model_, data, f, ReferenceFrame::LocalWorldAligned, Jc);
+          e.segment<3>(r) = data.oMf[f].p - targets[c].p;
+          J.middleRows<3>(r) = Jc.topRows<3>().rightCols(nj);
+          r += 3;
+        }
+      }
+      if (e.norm() < 1e-10) break;
+      const Eigen::MatrixXd JJt = J * J.transpose() + 1e-8 * Eigen::MatrixXd::Identity(rows, rows);
+      dv.tail(nj) = -J.transpose() * JJt.ldlt().solve(e);
+      q = integrate(model_, q, dv);
+    }
+    crouch_.push_back(q.tail(nq - 7));
+  }
 }
 
 void GaitGenerator::setCommand(const BodyCommand& now, const BodyCommand& target) {
@@ -188,10 +240,23 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
   if (!(n > 0.5)) return false;
   framesForwardKinematics(model_, data_, q);
   const double yaw = yawOf(q[3] / n, q[4] / n, q[5] / n, q[6] / n);
-  // The base reference carries on from the last plan, but stays within a leash of the robot.
+  for (int c = 0; c < nc_; ++c)
+    if (!latched_any_ || timeline_.closed(c, t)) {
+      const SE3& M = data_.oMf[frames_[c]];
+      latched_[c] = M.p;
+      latched_yaw_[c] = std::atan2(M.R(1, 0), M.R(0, 0));
+    }
+  // The base reference carries on from the last plan, but stays within a leash of the robot. A
+  // robot that stands for good is centred over the feet it stands on instead: wherever a stop left
+  // the reference, the stance it settles in is the nominal one.
   Eigen::Vector2d anchor = q.head<2>();
   double anchor_yaw = yaw;
-  if (latched_any_) {
+  if (timeline_.standsAt(t) && latched_any_) {
+    anchor.setZero();
+    for (int c = 0; c < nc_; ++c)
+      anchor += latched_[c].head<2>() - rotate(yaw, offset_[c].x(), offset_[c].y());
+    anchor /= nc_;
+  } else if (latched_any_) {
     const Sample before = baseAt(t);
     Eigen::Vector2d lead = Eigen::Vector2d(before.x, before.y) - anchor;
     if (lead.norm() > options_.max_position_lead) lead *= options_.max_position_lead / lead.norm();
@@ -203,12 +268,6 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
   robot_xy_ = q.head<2>();
   robot_turn_ = yaw - anchor_yaw;
 
-  for (int c = 0; c < nc_; ++c)
-    if (!latched_any_ || timeline_.closed(c, t)) {
-      const SE3& M = data_.oMf[frames_[c]];
-      latched_[c] = M.p;
-      latched_yaw_[c] = std::atan2(M.R(1, 0), M.R(0, 0));
-    }
   latched_any_ = true;
 
   // The velocity the robot has beyond the command (world axes, horizontal): the next touch-down
@@ -297,6 +356,15 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
   x_ref[2] = z_nominal_ + s.height;
   const Eigen::Quaterniond o = Eigen::AngleAxisd(s.yaw, Eigen::Vector3d::UnitZ()) * tilt_;
   x_ref.segment<4>(3) << o.x(), o.y(), o.z(), o.w();
+  // The joints of the posture for this height (interpolated between the solved ones).
+  const int n = static_cast<int>(crouch_.size());
+  if (n > 1) {
+    const double H = options_.max_height;
+    const double u = std::clamp((s.height + H) / (2.0 * H), 0.0, 1.0) * (n - 1);
+    const int i = std::min(static_cast<int>(u), n - 2);
+    const double r = u - i;
+    x_ref.segment(7, nq - 7) = (1.0 - r) * crouch_[i] + r * crouch_[i + 1];
+  }
   // The twist in the base frame: the heading frame's, seen through the nominal tilt.
   const Eigen::Matrix3d untilt = tilt_.conjugate().toRotationMatrix();
   x_ref.segment<3>(nq) = untilt * Eigen::Vector3d(s.vx, s.vy, 0.0);

@@ -4,6 +4,10 @@
 // touch-down lands, the swing arcs between footholds, and the base's pose and twist over the
 // horizon. The locomotion problem (locomotion.hpp) reads them knot by knot.
 //
+// Body height: the base height offset ramps at its rate, and the joints' reference follows it: the
+// posture that keeps every foot on its nominal place with the base raised (or lowered) by the
+// offset, solved at construction for offsets across [-max_height, max_height] and interpolated.
+//
 // Base: anchored at the measured base position and heading at the state's time t, then integrated
 // from the command: the velocity (vx, vy in the heading frame, yaw rate) ramps from the command in
 // force to the target command at the configured accelerations (the body height offset at its
@@ -58,6 +62,7 @@ struct GaitGeneratorOptions {
   // The command's ramp over the horizon: vx, vy [m/s²], yaw rate [rad/s²]; height rate [m/s].
   Eigen::Vector3d acceleration = Eigen::Vector3d(1.0, 1.0, 2.0);
   double height_rate = 0.1;
+  double max_height = 0.0;  // the largest |height offset| a command may ask for [m]
   // The longest span plan() is asked to cover (t_end - t_begin) [s], and the step of the base
   // trajectory's samples.
   double horizon = 1.0;
@@ -145,6 +150,9 @@ class GaitGenerator {
   std::vector<double> foot_yaw_;            // each foot's nominal yaw relative to the base
   std::vector<Eigen::Matrix3d> foot_tilt_;  // each foot's nominal orientation without its yaw
   Eigen::Vector3d com_offset_;              // nominal CoM relative to the base, heading frame
+  // Joint postures for height offsets spread evenly over [-max_height, max_height].
+  std::vector<Eigen::VectorXd> crouch_;
+  void buildCrouches(const ContactSet& contacts);
   BodyCommand now_, target_;
 
   Data data_;  // forward kinematics of the measured state

@@ -597,18 +597,17 @@ TEST(CommandsClosedLoop, DeadmanStopsATrottingRobot) {
 }
 
 // Malformed commands mixed into a trot: an unknown gait, NaN and 5 m/s (clamped to the
-// configuration's limit) and a body height beyond its limit (clamped, counted; the base height
-// itself is not checked: the joint references stay at the nominal posture, which holds the base
-// within a few mm of its nominal height whatever the offset). The robot keeps trotting at the
-// clamped speed; the counters add up to what was sent.
+// configuration's limit) and a body height beyond its limit (clamped, counted; the base rises by
+// the clamped offset). The robot keeps trotting at the clamped speed; the counters add up to what
+// was sent.
 TEST(CommandsClosedLoop, MalformedCommandsInTheLoop) {
   ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
   config.command.max_vx = 0.3;  // the clamp this robot trots at
-  ASSERT_EQ(config.command.max_height, 0.04);
+  ASSERT_EQ(config.command.max_height, 0.02);
   std::vector<ScriptedCommand> script = {entry(0.0, "stand", 0.0),  entry(0.5, "trot", 5.0),
                                          entry(1.5, "gallop", 0.1), entry(1.7, "trot", 5.0),
                                          entry(2.5, "trot", kNaN),  entry(2.6, "trot", 5.0)};
-  script[5].body_height = -0.2;  // clamped to -0.04
+  script[5].body_height = 0.2;  // clamped to 0.02
   const drive::Run r = drive::run(config, drive(6.5, script));
   ASSERT_FALSE(r.fell());
   int gallop = 0, nan = 0, clamped = 0;
@@ -637,6 +636,13 @@ TEST(CommandsClosedLoop, MalformedCommandsInTheLoop) {
   EXPECT_TRUE(misses.empty()) << describe(misses, {last});
   EXPECT_GT(last.achieved[0], 0.2);
   EXPECT_LT(std::abs(last.achieved[1]), 0.05);
+  // Raised by the clamped 2 cm (mean over the last 2 s of the trot).
+  const Robot robot = loadRobot(config.robot_yaml);
+  double z = 0.0;
+  int n = 0;
+  for (const drive::Sample& s : r.samples)
+    if (s.t > 4.5) z += s.q[2], ++n;
+  EXPECT_NEAR(z / n - robot.default_q[2], 0.02, 0.01);
 }
 
 }  // namespace
