@@ -109,6 +109,9 @@ if [ "$do_push" = 1 ]; then
   push_top=$lo
 fi
 
-echo "$robot: top speed held 10 s: $speed_top m/s; largest lateral push survived at $push_speed m/s: $push_top N s"
+speed_text="$speed_top m/s" push_text="$push_top N s"
+[ "$do_speed" = 1 ] || { speed_top=null; speed_text="not measured"; }
+[ "$do_push" = 1 ] || { push_top=null; push_text="not measured"; }
+echo "$robot: top speed held 10 s: $speed_text; largest lateral push survived at $push_speed m/s: $push_text"
 printf '{"robot": "%s", "top_speed_mps": %s, "push_speed_mps": %s, "max_lateral_push_Ns": %s}\n' \
   "$robot" "$speed_top" "$push_speed" "$push_top" > "$out/sweep_$robot.json"
