@@ -1,6 +1,8 @@
 #include "sim/disturbances.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 namespace stride::sim {
@@ -80,6 +82,16 @@ double PushSchedule::activeUntil(double t) const {
   for (const Push& p : pushes)
     if (t >= p.start && t < p.start + p.duration) until = std::max(until, p.start + p.duration);
   return until;
+}
+
+bool parsePush(const std::string& text, Push& push) {
+  std::istringstream in(text);
+  char c1, c2, c3, c4;
+  double fx, fy, fz;
+  if (!(in >> push.start >> c1 >> push.duration >> c2 >> fx >> c3 >> fy >> c4 >> fz)) return false;
+  if (c1 != ':' || c2 != ':' || c3 != ',' || c4 != ',' || !(push.duration > 0.0)) return false;
+  push.force = Eigen::Vector3d(fx, fy, fz);
+  return push.force.allFinite() && std::isfinite(push.start) && std::isfinite(push.duration);
 }
 
 }  // namespace stride::sim

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "solver/multibody/model.hpp"
@@ -64,6 +65,10 @@ struct Push {
   Eigen::Vector3d force = Eigen::Vector3d::Zero();   // world axes, at the base origin
   Eigen::Vector3d moment = Eigen::Vector3d::Zero();  // world axes, about the base origin
 };
+
+// A push from the command line's "start:duration:fx,fy,fz" (seconds, newtons, world axes); false
+// when the text is not that, the duration not positive or a number not finite.
+bool parsePush(const std::string& text, Push& push);
 
 struct PushSchedule {
   std::vector<Push> pushes;

@@ -10,7 +10,6 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
-#include <sstream>
 
 #include "config/describe_model.hpp"
 #include "sim/sim_node.hpp"
@@ -27,16 +26,6 @@ std::int64_t monotonicMicros() {
   return static_cast<std::int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
 }
 
-// "start:duration:fx,fy,fz" (seconds, newtons, world axes).
-bool parsePush(const std::string& text, stride::sim::Push& push) {
-  std::istringstream in(text);
-  char c1, c2, c3, c4;
-  double fx, fy, fz;
-  if (!(in >> push.start >> c1 >> push.duration >> c2 >> fx >> c3 >> fy >> c4 >> fz)) return false;
-  if (c1 != ':' || c2 != ':' || c3 != ',' || c4 != ',' || !(push.duration > 0.0)) return false;
-  push.force = Eigen::Vector3d(fx, fy, fz);
-  return push.force.allFinite() && std::isfinite(push.start);
-}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -84,7 +73,7 @@ int main(int argc, char** argv) {
   try {
     for (const std::string& p : pushes) {
       stride::sim::Push push;
-      if (!parsePush(p, push)) {
+      if (!stride::sim::parsePush(p, push)) {
         std::fprintf(stderr, "stride-sim: --push '%s': expected start:duration:fx,fy,fz\n",
                      p.c_str());
         return 2;

@@ -9,21 +9,9 @@
 #   teleop_script.sh STRIDE_TELEOP STRIDE_LOG_SUMMARY COMMAND_ROBOT
 set -euo pipefail
 teleop=$1 summary=$2 robot=$3
-if [ -z "${STRIDE_NETNS:-}" ]; then
-  ns=(unshare --net)
-  [ "$(id -u)" -ne 0 ] && ns=(unshare --user --map-root-user --net)
-  if ! "${ns[@]}" true 2>/dev/null; then
-    echo "SKIPPED: network namespaces are not permitted here (unshare --net failed)"
-    exit 77
-  fi
-  STRIDE_NETNS=1 exec "${ns[@]}" "$0" "$@"
-fi
-ip link set lo up
-ip route add 224.0.0.0/4 dev lo
-[ "$(awk -F: 'NR > 2 { gsub(/ /, "", $1); print $1 }' /proc/net/dev | sort -u)" = lo ] || {
-  echo "not a private namespace: refusing to multicast" >&2
-  exit 1
-}
+# shellcheck source=../private_netns.sh
+source "$(dirname "$0")/../private_netns.sh"
+private_netns "$@"
 dir=$(mktemp -d)
 pids=()
 trap 'for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; rm -rf "$dir"' EXIT

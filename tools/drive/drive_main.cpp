@@ -10,21 +10,10 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
-#include <sstream>
 
 #include "tools/drive/closed_loop.hpp"
 
 namespace {
-
-bool parsePush(const std::string& text, stride::sim::Push& push) {
-  std::istringstream in(text);
-  char c1, c2, c3, c4;
-  double fx, fy, fz;
-  if (!(in >> push.start >> c1 >> push.duration >> c2 >> fx >> c3 >> fy >> c4 >> fz)) return false;
-  if (c1 != ':' || c2 != ':' || c3 != ',' || c4 != ',' || !(push.duration > 0.0)) return false;
-  push.force = Eigen::Vector3d(fx, fy, fz);
-  return push.force.allFinite() && std::isfinite(push.start);
-}
 
 void writeJson(const std::string& path, const stride::drive::Run& run,
                const std::vector<stride::logs::Segment>& segments, bool tracked) {
@@ -82,7 +71,7 @@ int main(int argc, char** argv) {
     if (options.duration <= 0.0) options.duration = options.script.back().at + 4.0;
     for (const std::string& p : pushes) {
       stride::sim::Push push;
-      if (!parsePush(p, push)) {
+      if (!stride::sim::parsePush(p, push)) {
         std::fprintf(stderr, "stride-drive: --push '%s': expected start:duration:fx,fy,fz\n",
                      p.c_str());
         return 2;
