@@ -47,7 +47,9 @@ std::string resolvePackage(const std::string& uri, const std::vector<std::string
     throw ConfigError("'" + uri + "' is not of the form package://NAME/PATH");
   const std::string name = body.substr(0, slash), rest = body.substr(slash + 1);
 
-  std::vector<std::string> dirs = robots_dirs;
+  std::vector<std::string> dirs;  // an empty entry would look in the working directory
+  for (const auto& d : robots_dirs)
+    if (!d.empty()) dirs.push_back(d);
   for (auto& d : rosPackagePath()) dirs.push_back(d);
   std::vector<std::string> tried;
   for (const auto& d : dirs)

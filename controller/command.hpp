@@ -55,7 +55,9 @@ class CommandFilter {
   const std::string& gaitName() const { return gaits_[gait_]; }
   const std::vector<std::string>& gaits() const { return gaits_; }
   int gaitIndex(const std::string& name) const;  // -1 when unknown
-  bool timedOut() const { return timed_out_; }
+  bool timedOut() const { return timed_out_; }   // at the last update
+  // No command accepted within `timeout` before `now` (or none at all).
+  bool silentAt(double now) const { return !any_ || now - last_arrival_ > config_.timeout; }
   const CommandCounters& counters() const { return counters_; }
   const CommandConfig& config() const { return config_; }
 

@@ -51,6 +51,15 @@ Mpc::Mpc(const ControllerConfig& config)
   if (!robot_.model.hasFreeFlyer())
     throw ConfigError(config_.path + ": the robot '" + robot_.name +
                       "' has a fixed base: stride-mpc walks legged robots");
+  // What the first state builds (start()) must not fail then: the references' checks (contacts,
+  // the body-height postures) run here, once.
+  try {
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(nq_ + nv_);
+    x.head(nq_) = robot_.default_q;
+    GaitGenerator check(robot_.model, contacts_, x, config_.generator);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(config_.path + ": " + e.what());
+  }
   x_ = Eigen::VectorXd::Zero(nq_ + nv_);
   msg::shape(policy_, config_.policy_knots, nq_, nv_, nu_);
   msg::shape(previous_, config_.policy_knots, nq_, nv_, nu_);

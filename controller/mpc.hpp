@@ -67,8 +67,8 @@ class Mpc {
   bool started() const { return loco_ != nullptr; }
 
   // Replaces the gaits by a planner's contact plan, starting at start_utime on the robot's clock
-  // (the command still sets the velocity). Rebuilds the problem at the next tick (allocates:
-  // between ticks only). Throws std::invalid_argument.
+  // (the command still sets the velocity). Call between ticks; the next tick rebuilds the problem
+  // and solves it to convergence, as at start-up (allocating then). Throws std::invalid_argument.
   void setPlan(const ContactPlan& plan, std::int64_t start_utime);
   // The body command in force and its target (the node's CommandFilter), and the gait asked for
   // (an index into gaits()). Takes effect at the next tick's re-planning.

@@ -25,6 +25,7 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
   msg::shape(incoming_, model.nq, model.nv, kMaxContactFlags);
   msg::shape(newest_, model.nq, model.nv, kMaxContactFlags);
   mpc_status_t status{};
+  status.gait.assign(msg::kMaxGaitName, 'x');  // the longest a status may carry
   buffer_.resize(std::max(msg::policyWireSize(config.policy_knots, model.nq, model.nv, mpc_.nu()),
                           status.getEncodedSize()));
   latencies_.reserve(kLatencyCapacity);
@@ -100,7 +101,11 @@ void MpcNode::onCommand(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   if (why == msg::Reject::None && command_msg_.decode(rbuf->data, 0, size) < 0)
     why = msg::Reject::Undecodable;
   if (why == msg::Reject::None) why = msg::checkCommand(command_msg_);
-  if (why == msg::Reject::None && command_msg_.utime <= last_command_utime_)
+  // Stamps must increase while a sender speaks; after a silence the deadman acted on, any stamp
+  // starts again (a restarted or another teleop, on its own clock: a stamp from the future must
+  // not lock every later command out).
+  if (why == msg::Reject::None && !commands_.silentAt(now()) &&
+      command_msg_.utime <= last_command_utime_)
     why = msg::Reject::OutOfOrder;
   if (why != msg::Reject::None) {
     reject(why);

@@ -90,6 +90,7 @@ bool parsePush(const std::string& text, Push& push) {
   double fx, fy, fz;
   if (!(in >> push.start >> c1 >> push.duration >> c2 >> fx >> c3 >> fy >> c4 >> fz)) return false;
   if (c1 != ':' || c2 != ':' || c3 != ',' || c4 != ',' || !(push.duration > 0.0)) return false;
+  if (!(in >> std::ws).eof()) return false;  // nothing may follow
   push.force = Eigen::Vector3d(fx, fy, fz);
   return push.force.allFinite() && std::isfinite(push.start) && std::isfinite(push.duration);
 }

@@ -201,7 +201,7 @@ if [ "$spy" = 1 ]; then
 fi
 mpc_args=(--config "$config" "${dirs_args[@]}" --summary "$out/mpc.json")
 sim_args=(--robot "$robot_yaml" "${dirs_args[@]}" --duration "$sim_duration"
-  --summary "$out/sim.json" --hold-kp "${hold_kp:-5}" --hold-kd "${hold_kd:-0.1}")
+  --summary "$out/sim.json" --hold-kp "${hold_kp:-5}" --hold-kd "${hold_kd:-0.2}")
 if [ "$mode" = lockstep ]; then
   mpc_args+=(--lockstep)
   sim_args+=(--lockstep --rate "$rate")

@@ -1,7 +1,5 @@
 #include "solver/ocp/contact_timeline.hpp"
 
-#include <stdexcept>
-
 namespace stride {
 
 ContactTimeline::ContactTimeline(const ContactSet& contacts)
@@ -54,13 +52,15 @@ unsigned ContactTimeline::mask(double t) const {
 }
 
 double ContactTimeline::switchTo(int id, double t) {
-  if (!allClosed(id, 0))
-    throw std::invalid_argument("ContactTimeline::switchTo: pattern " + std::to_string(id) +
-                                " does not start with every contact closed");
-  // Pending switches after t are replaced.
-  while (n_ > 1 && segments_[n_ - 1].begin > t + kPlanTimeEpsilon) --n_;
-  const Segment& now = segments_[n_ - 1];
-  if (now.pattern == id) return t;
+  if (id < 0 || id >= patterns() || !allClosed(id, 0)) return kNever;
+  // The segments up to t stay; a switch still pending after t is replaced (or cancelled).
+  int keep = n_;
+  while (keep > 1 && segments_[keep - 1].begin > t + kPlanTimeEpsilon) --keep;
+  const Segment& now = segments_[keep - 1];
+  if (now.pattern == id) {
+    n_ = keep;
+    return t;
+  }
   double at = kNever;
   if (standing(now.pattern)) {
     at = t;
@@ -79,7 +79,8 @@ double ContactTimeline::switchTo(int id, double t) {
         }
     }
   }
-  if (at == kNever) return kNever;
+  if (at == kNever) return kNever;  // nothing changes
+  n_ = keep;
   if (n_ == kMaxSegments) {  // drop the oldest (long past: switches are at least a phase apart)
     for (int i = 1; i < n_; ++i) segments_[i - 1] = segments_[i];
     --n_;

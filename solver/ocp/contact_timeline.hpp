@@ -34,11 +34,10 @@ class ContactTimeline {
   void reset(int id, double t);
   // Switches to pattern `id` at the first instant at or after t at which the pattern in force
   // enters a phase with every contact closed (t itself when that pattern closes every contact
-  // all the time: a stand). Pattern `id` plays from its phase 0 there, which must close every
-  // contact (std::invalid_argument otherwise: a programming error, checked before any state
-  // changes). A switch still pending after t is replaced; asking for the pattern in force cancels
-  // it. Returns the switch time, or kNever when the pattern in force never closes every contact
-  // again (nothing changes then).
+  // all the time: a stand). Pattern `id` plays from its phase 0 there. A switch still pending
+  // after t is replaced; asking for the pattern in force cancels it. Returns the switch time, or
+  // kNever, and nothing changes, when the pattern in force never closes every contact again or
+  // pattern `id` does not start with every contact closed (or does not exist).
   double switchTo(int id, double t);
 
   int patternAt(double t) const { return segments_[segmentAt(t)].pattern; }

@@ -54,6 +54,8 @@ GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
       data_(model) {
   if (!model.hasFreeFlyer())
     throw std::invalid_argument("GaitGenerator: the robot needs a free-flyer base");
+  if (contacts.size() == 0)
+    throw std::invalid_argument("GaitGenerator: the robot needs at least one contact to walk on");
   if (x_nominal.size() != model.nq + model.nv || !x_nominal.allFinite())
     throw std::invalid_argument("GaitGenerator: x_nominal must be finite of size nq + nv");
   const GaitGeneratorOptions& o = options;
@@ -88,7 +90,7 @@ GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
   }
   com_offset_ = unyaw * (centerOfMass(model, data_, q) - base);
   gain_ =
-      o.foothold_gain > -0.99 ? o.foothold_gain : std::sqrt(std::max(z_nominal_, 0.0) / kGravity);
+      o.foothold_gain >= 0.0 ? o.foothold_gain : std::sqrt(std::max(z_nominal_, 0.0) / kGravity);
 
   buildCrouches(contacts);
   latched_.assign(nc_, Eigen::Vector3d::Zero());
@@ -123,6 +125,7 @@ void GaitGenerator::buildCrouches(const ContactSet& contacts) {
     Eigen::VectorXd q = q0;
     q[2] += h;
     // Damped Gauss-Newton on the joints only: every foot back on its nominal place (soles flat).
+    double residual = 0.0;
     for (int it = 0; it < 100; ++it) {
       computeJointJacobians(model_, data, q);
       updateFramePlacements(model_, data);
@@ -142,11 +145,16 @@ void GaitGenerator::buildCrouches(const ContactSet& contacts) {
           r += 3;
         }
       }
-      if (e.norm() < 1e-10) break;
+      residual = e.norm();
+      if (residual < 1e-10) break;
       const Eigen::MatrixXd JJt = J * J.transpose() + 1e-8 * Eigen::MatrixXd::Identity(rows, rows);
       dv.tail(nj) = -J.transpose() * JJt.ldlt().solve(e);
       q = integrate(model_, q, dv);
     }
+    if (!(residual < 1e-6))
+      throw std::invalid_argument(
+          "GaitGenerator: with the base " + std::to_string(h) +
+          " m from its nominal height the feet cannot reach their places (max_height too large)");
     crouch_.push_back(q.tail(nq - 7));
   }
 }
@@ -280,7 +288,8 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
     correction *= options_.max_foothold_correction / norm;
 
   const double t_from = std::min(t_begin, t);
-  timeline_.forget(t_from);
+  // Kept from one knot before: the first knot asks whether a foot lands there (mask(t0 - dt)).
+  timeline_.forget(t_from - options_.sample_dt);
   for (int c = 0; c < nc_; ++c) {
     std::vector<Stance>& st = stances_[c];
     if (timeline_.closed(c, t_from))

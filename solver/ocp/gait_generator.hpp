@@ -8,20 +8,23 @@
 // posture that keeps every foot on its nominal place with the base raised (or lowered) by the
 // offset, solved at construction for offsets across [-max_height, max_height] and interpolated.
 //
-// Base: anchored at the measured base position and heading at the state's time t, then integrated
-// from the command: the velocity (vx, vy in the heading frame, yaw rate) ramps from the command in
-// force to the target command at the configured accelerations (the body height offset at its
-// rate), so the horizon already sees a change the robot is heading into. Height and tilt are the
-// nominal posture's (plus the height offset); the base velocity reference is the command.
+// Base: from the last plan's reference at the state's time t, held within a leash of the measured
+// base (max_position_lead, max_yaw_lead), or, for a robot that stands for good, from the centre of
+// the feet it stands on; then integrated from the command: the velocity (vx, vy in the heading
+// frame, yaw rate) ramps from the command in force to the target command at the configured
+// accelerations (the body height offset at its rate), so the horizon already sees a change the
+// robot is heading into. Height and tilt are the nominal posture's (plus the height offset); the
+// base velocity reference is the command.
 //
 // Footholds (Raibert's heuristic, on the reference instead of the hip's current position): a
 // touch-down at t_td that lasts until lift-off t_lo lands under the foot's nominal stance position
 // (its place relative to the base in the nominal posture, on the ground) carried by the base
 // reference to mid-stance t_mid = t_td + ½ min(t_lo - t_td, 1 s), rotated by the reference yaw
-// there. The next touch-down of each foot also moves by k (v - v_cmd), the measured horizontal
-// velocity's excess over the command (capped): a robot that is too fast (pushed) steps further,
-// as a capture point would. A foot down at t keeps the position measured there (latched while it
-// is down, so the foot it lifts from is where it really was).
+// there, and within max_foothold_lead of where the same rule puts it on a reference anchored at the
+// measured base. The next touch-down of each foot also moves by k (v - v_cmd), the measured
+// horizontal velocity's excess over the command (capped): a robot that is too fast (pushed) steps
+// further, as a capture point would. A foot down at t keeps the position measured there (latched
+// while it is down, so the foot it lifts from is where it really was).
 //
 // Swing from foothold a to b, s = (t - lift-off) / (touch-down - lift-off):
 //   p(s) = a + ½ (1 - cos πs)(b - a) + h sin(πs) e_z
@@ -96,7 +99,8 @@ class GaitGenerator {
   bool plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, double t_begin, double t_end);
 
   // After plan(): contact c closed at time t (the timeline's), its reference position (foothold
-  // or swing arc), the state reference (base pose and twist; joints at the nominal posture, at
+  // or swing arc), the state reference (base pose and twist; joints at the posture of the body
+  // height, at
   // rest), the centre of mass reference (the nominal CoM carried by the base reference).
   bool closed(int contact, double t) const { return timeline_.closed(contact, t); }
   unsigned mask(double t) const { return timeline_.mask(t); }

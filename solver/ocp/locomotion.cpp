@@ -97,6 +97,7 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   cop_term_.assign(nc, -1);
   swing_rot_term_.assign(nc, -1);
   const bool with_cop = options.sole_half_extents.minCoeff() > 0.0;
+  const double swing_xy = w.swing_horizontal >= 0.0 ? w.swing_horizontal : w.swing;
   std::vector<std::unique_ptr<ActionModel>> running;
   // One multibody workspace per thread the problem may use (knots.hpp, SharedWorkspace).
   auto workspace = std::make_shared<SharedWorkspace>(model, std::max(omp_get_max_threads(), 2));
@@ -126,10 +127,7 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
           costs.add("swing_" + name,
                     std::make_unique<FrameTranslationResidual>(model, nu, name,
                                                                data.oMf[contacts_[c].frame].p),
-                    Activation::weightedQuadratic(Eigen::Vector3d(
-                        w.swing_horizontal >= 0.0 ? w.swing_horizontal / w.swing : 1.0,
-                        w.swing_horizontal >= 0.0 ? w.swing_horizontal / w.swing : 1.0, 1.0)),
-                    w.swing);
+                    Activation::weightedQuadratic(Eigen::Vector3d(swing_xy, swing_xy, w.swing)));
       if (w.swing_rotation > 0.0 && contacts_[c].dim == 6)
         swing_rot_term_[c] = costs.add("swing_rot_" + name,
                                        std::make_unique<FrameRotationResidual>(

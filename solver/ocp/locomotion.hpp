@@ -5,7 +5,7 @@
 //
 // Every running knot has
 //   "state"        ½ Σ w_i (x ⊖ x_ref)_i²: x_ref = the generator's base pose and twist, the
-//                  joints at the nominal posture, at rest;
+//                  joints at the posture of the commanded body height, at rest;
 //   "control"      ½ w |u - u_ref|²: u_ref = the torques that hold the nominal posture still on
 //                  the knot's closed contacts (minimum-norm forces), so standing costs nothing;
 //   "cone_<c>"     friction cone of contact c, on while c is closed;

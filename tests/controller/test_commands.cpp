@@ -456,6 +456,29 @@ TEST_F(NodeCommands, DeadmanInTheStatus) {
   EXPECT_TRUE(node_.commands().timedOut());
 }
 
+// A stamp from the future (a corrupt one, or a sender on another clock) must not lock every later
+// command out: stamps must increase while commands keep coming, and start again after a silence
+// the deadman acted on.
+TEST_F(NodeCommands, StampsStartAgainAfterASilence) {
+  const std::int64_t period = 5000;
+  std::int64_t utime = period;
+  tick(utime);
+  feed(encode(command(1000000000000, 0.2)));
+  tick(utime += period);
+  feed(encode(command(42, 0.2)));  // while the future one is fresh: out of order
+  EXPECT_EQ(node_.rejected(msg::Reject::OutOfOrder), 1);
+  for (int i = 0; i < 120; ++i) tick(utime += period);  // 0.6 s without a command
+  EXPECT_TRUE(node_.commands().timedOut());
+  feed(encode(command(43, 0.3)));
+  EXPECT_EQ(node_.rejected(msg::Reject::OutOfOrder), 1);
+  EXPECT_EQ(node_.commands().counters().accepted, 2);
+  feed(encode(command(43, 0.3)));  // and from there on, increasing again
+  EXPECT_EQ(node_.rejected(msg::Reject::OutOfOrder), 2);
+  tick(utime += period);
+  EXPECT_FALSE(node_.commands().timedOut());
+  EXPECT_EQ(node_.commands().target().vx, 0.3);
+}
+
 TEST_F(NodeCommands, NoAllocationAfterTheFirstTick) {
   const std::int64_t period = 5000;
   std::int64_t utime = period;

@@ -37,7 +37,7 @@ TEST(KeyboardCommand, LettersAndArrowsStepTheVelocities) {
   EXPECT_NEAR(k.command().body_height, 0.01, 1e-12);
   EXPECT_EQ(k.feed("ff"), Event::Changed);
   EXPECT_NEAR(k.command().body_height, -0.01, 1e-12);
-  EXPECT_EQ(k.command().gait, "stand");  // velocity keys leave the gait alone
+  EXPECT_EQ(k.command().gait, "trot");  // the first velocity key left the stand
 }
 
 TEST(KeyboardCommand, ValuesStopAtTheirLimits) {
@@ -62,7 +62,7 @@ TEST(KeyboardCommand, StepsBackToZeroShowNoNegativeZero) {
   k.feed("ss");
   k.feed("ww");
   EXPECT_EQ(k.command().vx, 0.0);
-  EXPECT_EQ(statusLine(k.command(), 0).substr(0, 14), "stand vx +0.00");
+  EXPECT_EQ(statusLine(k.command(), 0).substr(0, 14), "trot  vx +0.00");
 }
 
 TEST(KeyboardCommand, EscapeSequencesInAnyChunking) {

@@ -110,7 +110,15 @@ Run run(const ControllerConfig& config, const Options& options) {
     if (!sim.advance(sim.stepsPerState())) break;  // fell or diverged
   }
   clock = sim.utime();
-  if (sim.stats().fell) sim.publishState();  // the fallen pose goes into the log too
+  if (sim.stats().fell) {
+    // The fallen pose goes into the samples (its segment is marked fallen) and the log too.
+    sim.publishState();
+    Sample fallen = r.samples.empty() ? Sample{} : r.samples.back();
+    fallen.t = sim.simulator().time();
+    fallen.q = sim.simulator().q();
+    fallen.v = sim.simulator().v();
+    r.samples.push_back(std::move(fallen));
+  }
   drain(lcm);
   r.sim = sim.stats();
   r.mpc = mpc.mpc().counters();

@@ -1,7 +1,7 @@
 // stride-drive: a robot driven by a command script, controller and mock robot in one process, in
 // lock-step (tools/drive/closed_loop.hpp): deterministic, as fast as the machine goes, no network.
 // Prints how each command segment was tracked; optionally writes the session as an LCM log.
-//   stride-drive --config config/controller/solo12.yaml --commands config/commands/quadruped.yaml
+//   stride-drive --config config/controller/solo12.yaml --commands config/commands/solo12.yaml
 //                [--robots-dir DIR] [--duration S] [--push START:DURATION:FX,FY,FZ]...
 //                [--log FILE] [--summary FILE.json] [--settle S] [--check-tracking]
 // Exit status: 0; 1 with --check-tracking when a segment missed its command or the robot fell;
@@ -25,8 +25,13 @@ void writeJson(const std::string& path, const stride::drive::Run& run,
     << ",\n  \"failed_solves\": " << run.mpc.failed_solves << ",\n  \"segments\": [";
   for (std::size_t i = 0; i < segments.size(); ++i) {
     const stride::logs::Segment& s = segments[i];
+    std::string gait;  // a script's gait may be any string: escaped for JSON
+    for (char c : s.gait) {
+      if (c == '"' || c == '\\') gait += '\\';
+      if (static_cast<unsigned char>(c) >= 0x20) gait += c;
+    }
     f << (i ? "," : "") << "\n    {\"t0\": " << s.t0 << ", \"t1\": " << s.t1 << ", \"gait\": \""
-      << s.gait << "\", \"command\": [" << s.command[0] << ", " << s.command[1] << ", "
+      << gait << "\", \"command\": [" << s.command[0] << ", " << s.command[1] << ", "
       << s.command[2] << "], \"achieved\": ";
     if (s.samples > 0)
       f << "[" << s.achieved[0] << ", " << s.achieved[1] << ", " << s.achieved[2] << "]";
@@ -105,11 +110,13 @@ int main(int argc, char** argv) {
         std::printf("  segment %d: %s\n", m.segment,
                     m.kind == stride::logs::TrackingMiss::Kind::Fell ? "fell" : "no states");
     }
-    std::printf("stride-drive: %s\n", misses.empty() ? "every segment tracked its command"
-                                                     : "some segments missed their command");
-    if (!summary.empty()) writeJson(summary, run, segments, misses.empty());
+    const bool tracked = misses.empty() && !run.fell();
+    std::printf("stride-drive: %s\n", tracked      ? "every segment tracked its command"
+                                      : run.fell() ? "the robot fell"
+                                                   : "some segments missed their command");
+    if (!summary.empty()) writeJson(summary, run, segments, tracked);
     if (!options.log.empty()) std::printf("log: %s\n", options.log.c_str());
-    return check && !misses.empty() ? 1 : 0;
+    return check && !tracked ? 1 : 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "stride-drive: %s\n", e.what());
     return 2;

@@ -19,14 +19,15 @@ build="${STRIDE_BUILD_DIR:-$root/build}"
 robot="${1:?usage: sweep.sh ROBOT [options]}"
 shift
 step=0.1 push_speed=0.5 do_push=1 do_speed=1 out="$build/sweep" dirs=()
+need() { [ $# -ge 2 ] || { echo "sweep.sh: $1 needs a value" >&2; exit 2; }; }
 while [ $# -gt 0 ]; do
   case "$1" in
-    --speed-step) step="$2"; shift 2 ;;
-    --push-speed) push_speed="$2"; shift 2 ;;
+    --speed-step) need "$@"; step="$2"; shift 2 ;;
+    --push-speed) need "$@"; push_speed="$2"; shift 2 ;;
     --no-push) do_push=0; shift ;;
     --no-speed) do_speed=0; shift ;;
-    --robots-dir) dirs+=(--robots-dir "$2"); shift 2 ;;
-    --out) out="$2"; shift 2 ;;
+    --robots-dir) need "$@"; dirs+=(--robots-dir "$2"); shift 2 ;;
+    --out) need "$@"; out="$2"; shift 2 ;;
     *) echo "sweep.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
@@ -64,8 +65,15 @@ EOF
     push=(--push "$at:0.1:0,$(awk -v i="$impulse" 'BEGIN { print i / 0.1 }'),0")
   fi
   # The segment's mean velocity over the hold: it settles for the ramp first.
+  rm -f "$summary"
+  local status=0
   "$drive" --config "$config" --commands "$script" "${dirs[@]}" --duration "$duration" \
-    --settle "$ramp" "${push[@]}" --summary "$summary" > "$work/drive.txt" 2>&1 || true
+    --settle "$ramp" "${push[@]}" --summary "$summary" > "$work/drive.txt" 2>&1 || status=$?
+  if [ "$status" != 0 ] || [ ! -s "$summary" ]; then
+    cp "$work/drive.txt" "$out/sweep_${robot}_error.txt"
+    echo "sweep.sh: stride-drive failed (exit $status): $out/sweep_${robot}_error.txt" >&2
+    exit 1
+  fi
   python3 - "$summary" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))

@@ -4,11 +4,14 @@
 #include <cmath>
 #include <cstdio>
 
+#include "controller/gait.hpp"
+
 namespace stride::teleop {
 
 const std::vector<std::string>& gaitNames(GaitSet gaits) {
-  static const std::vector<std::string> quadruped = {"stand", "trot", "walk", "pace"};
-  static const std::vector<std::string> biped = {"stand", "walk"};
+  // The controller's own lists (controller/gait.hpp), by number of contacts.
+  static const std::vector<std::string> quadruped = stride::gaitNames(4);
+  static const std::vector<std::string> biped = stride::gaitNames(2);
   return gaits == GaitSet::Quadruped ? quadruped : biped;
 }
 
@@ -65,6 +68,15 @@ void KeyboardCommand::stop() {
   command_.gait = "stand";
 }
 
+KeyboardCommand::Event KeyboardCommand::move(double& value, double delta, double limit) {
+  const Event e = change(value, delta, limit);
+  // A stand stands (the controller zeroes its velocity): moving means stepping, in the first
+  // stepping gait, until a number key says otherwise.
+  if (e == Event::Changed && value != 0.0 && command_.gait == gaits_[0] && gaits_.size() > 1)
+    command_.gait = gaits_[1];
+  return e;
+}
+
 KeyboardCommand::Event KeyboardCommand::change(double& value, double delta, double limit) {
   const double before = value;
   value = std::clamp(value + delta, -limit, limit);
@@ -104,22 +116,22 @@ KeyboardCommand::Event KeyboardCommand::key(char c) {
   switch (c) {
     case 'w':
     case 'W':
-      return change(command_.vx, l.step_vx, l.max_vx);
+      return move(command_.vx, l.step_vx, l.max_vx);
     case 's':
     case 'S':
-      return change(command_.vx, -l.step_vx, l.max_vx);
+      return move(command_.vx, -l.step_vx, l.max_vx);
     case 'a':
     case 'A':
-      return change(command_.vy, l.step_vy, l.max_vy);
+      return move(command_.vy, l.step_vy, l.max_vy);
     case 'd':
     case 'D':
-      return change(command_.vy, -l.step_vy, l.max_vy);
+      return move(command_.vy, -l.step_vy, l.max_vy);
     case 'q':
     case 'Q':
-      return change(command_.yaw_rate, l.step_yaw, l.max_yaw_rate);
+      return move(command_.yaw_rate, l.step_yaw, l.max_yaw_rate);
     case 'e':
     case 'E':
-      return change(command_.yaw_rate, -l.step_yaw, l.max_yaw_rate);
+      return move(command_.yaw_rate, -l.step_yaw, l.max_yaw_rate);
     case 'r':
     case 'R':
       return change(command_.body_height, l.step_height, l.max_height);

@@ -8,6 +8,8 @@
 //   space                 stop: zero velocity, gait stand (the body height stays)
 //   1 2 3 4               gait: stand trot walk pace (quadruped); 1 2: stand walk (biped)
 //   x, Ctrl-C             quit (the command becomes the stop command)
+// A velocity key while standing also picks the first stepping gait (trot; walk for a biped): the
+// controller would hold a stand still whatever its velocity.
 
 #include <cstddef>
 #include <string>
@@ -50,6 +52,7 @@ class KeyboardCommand {
   Event key(char c);
   Event arrow(char final_byte);
   Event change(double& value, double delta, double limit);
+  Event move(double& value, double delta, double limit);  // a velocity: leaves a stand
 
   std::vector<std::string> gaits_;
   KeyboardLimits limits_;
