@@ -360,7 +360,7 @@ bool Solver::backwardPass() {
         const auto Hinv = Quu_inv_.topLeftCorner(nf, nf);
         if (nf == nu) {
           KK.noalias() = Hinv * Qxu.transpose();  // F is 0..nu-1 in order
-          KK = -KK;  // negated after the product: see below
+          KK = -KK;                               // negated after the product: see below
         } else {
           auto Wf = W.topRows(nf);
           for (int a = 0; a < nf; ++a) Wf.row(a) = Qxu.col(F[a]).transpose();

@@ -206,7 +206,7 @@ void expectPublicRobot(const Robot& robot, const PublicRobot& expected) {
 }
 
 TEST(RobotConfig, PublicRobotsThroughRobotsDir) {
-  if (kPackages.empty()) GTEST_SKIP() << "no ../shared/robots/SOURCES.md: no package view";
+  ASSERT_FALSE(kPackages.empty()) << "no ../shared/robots/SOURCES.md: no package view";
   const ScopedEnv no_ros("ROS_PACKAGE_PATH", nullptr);
   for (const auto& expected : kPublicRobots) {
     testing::internal::CaptureStderr();
@@ -233,7 +233,7 @@ TEST(RobotConfig, PublicRobotsThroughRobotsDir) {
 }
 
 TEST(RobotConfig, PublicRobotsThroughRosPackagePath) {
-  if (kPackages.empty()) GTEST_SKIP() << "no ../shared/robots/SOURCES.md: no package view";
+  ASSERT_FALSE(kPackages.empty()) << "no ../shared/robots/SOURCES.md: no package view";
   // An entry that does not hold the package comes first: the search goes on to the next.
   const std::string path = "/nonexistent/stride:" + kPackages + ":";
   const ScopedEnv ros("ROS_PACKAGE_PATH", path.c_str());
@@ -469,7 +469,7 @@ const std::string kSoloHeader =
     "torque_limits: 2.7\n";
 
 TEST(RobotConfig, SrdfPostureWithYamlOverrides) {
-  if (kPackages.empty()) GTEST_SKIP() << "no ../shared/robots/SOURCES.md: no package view";
+  ASSERT_FALSE(kPackages.empty()) << "no ../shared/robots/SOURCES.md: no package view";
   const std::string dir = testDir();
   const std::string yaml =
       writeFile(dir + "/solo.yaml", kSoloHeader +

@@ -3,7 +3,8 @@
 //                    they change, gait switches at the next all-feet-down phase (replaced,
 //                    cancelled, refused), across segment boundaries, forgetting the past;
 //   GaitGenerator    on the in-house quadruped (stride_quad): the base reference of a straight
-//                    line, a pure turn, a ramp, a body height change; footholds at mid-stance and
+//                    line, a pure turn, a ramp, a body height change and the joint posture that
+//                    keeps the feet in place at that height; footholds at mid-stance and
 //                    the swing arcs between them; a gait switch at a phase boundary; feet latched
 //                    where they were measured; the Raibert correction of the next touch-down only;
 //                    the leash of the base reference and of the footholds; bad input refused.
@@ -586,6 +587,40 @@ TEST(GaitGenerator, BodyHeightRampsAtItsRate) {
   ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
   EXPECT_NEAR(g->basePosition(0.3).z(), n.z + 0.01, 1e-12);
   EXPECT_NEAR(g->basePosition(0.9).z(), n.z - 0.02, 1e-12);
+}
+
+// The joints' reference follows the body height: the posture of each height keeps every foot on
+// its nominal place (solved at 9 heights across max_height, interpolated between them).
+TEST(GaitGenerator, BodyHeightPostureKeepsTheFeetInPlace) {
+  const Nominal n;
+  const Quad& r = quad();
+  GaitGeneratorOptions o = hand();
+  o.max_height = 0.02;  // postures every 5 mm from -2 to +2 cm
+  Generator g(o);
+  Data data(r.robot.model);
+  Eigen::VectorXd x_ref(r.x_nominal.size());
+  for (double h : {-0.02, -0.0125, 0.0, 0.0075, 0.02}) {
+    g->setCommand(velocity(0.0, 0.0, 0.0, h), velocity(0.0, 0.0, 0.0, h));
+    ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
+    g->state(0.0, x_ref);
+    EXPECT_NEAR(x_ref[2], n.z + h, 1e-12);
+    framesForwardKinematics(r.robot.model, data, x_ref.head(r.robot.model.nq));
+    // On a solved height, exactly; between two, within the interpolation's error.
+    const double tolerance = std::fmod(std::abs(h), 0.005) < 1e-9 ? 1e-9 : 2e-4;
+    for (int c = 0; c < 4; ++c)
+      EXPECT_LT((data.oMf[r.contacts[c].frame].p - n.foot[c]).norm(), tolerance)
+          << "height " << h << " foot " << c;
+    if (h != 0.0)  // the legs really moved
+      EXPECT_GT((x_ref.segment(7, 12) - r.x_nominal.segment(7, 12)).norm(), 1e-3) << h;
+  }
+  // Heights the legs cannot reach are refused at construction, naming the height.
+  o.max_height = 0.2;
+  try {
+    Generator too_high(o);
+    FAIL() << "a 20 cm body height must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("max_height"), std::string::npos) << e.what();
+  }
 }
 
 // Trot to stand, asked at 0.15 (FL and HR in the air): the switch is at 0.3.
