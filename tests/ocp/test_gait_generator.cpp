@@ -607,11 +607,13 @@ TEST(GaitGenerator, BodyHeightPostureKeepsTheFeetInPlace) {
     framesForwardKinematics(r.robot.model, data, x_ref.head(r.robot.model.nq));
     // On a solved height, exactly; between two, within the interpolation's error.
     const double tolerance = std::fmod(std::abs(h), 0.005) < 1e-9 ? 1e-9 : 2e-4;
-    for (int c = 0; c < 4; ++c)
+    for (int c = 0; c < 4; ++c) {
       EXPECT_LT((data.oMf[r.contacts[c].frame].p - n.foot[c]).norm(), tolerance)
           << "height " << h << " foot " << c;
-    if (h != 0.0)  // the legs really moved
+    }
+    if (h != 0.0) {  // the legs really moved
       EXPECT_GT((x_ref.segment(7, 12) - r.x_nominal.segment(7, 12)).norm(), 1e-3) << h;
+    }
   }
   // Heights the legs cannot reach are refused at construction, naming the height.
   o.max_height = 0.2;
