@@ -162,12 +162,17 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, SolveStatus& result) {
   if (!use_prepared) {
     solver_->discardPreparation();  // made for another time, or left over from before a restart
     if (!first) ++counters_.unprepared_solves;
-    if (need_restart_ || !shiftTo(t)) restartWarmStart(t);
     // The knots' phases and references on the warm start's own time grid: its knot 0 is at
     // t_warm_. Updated for t instead, a touch-down half a knot away would land on the next knot
     // while the shifted trajectory has its velocity jump on this one: a gap of tens of rad/s at
-    // every impulse knot after each shift, and line searches that stall.
-    if (need_restart_ || !replan(t)) return false;
+    // every impulse knot after each shift, and line searches that stall. (A restart re-plans for
+    // its own warm start, at t.)
+    if (need_restart_ || !shiftTo(t)) {
+      restartWarmStart(t);
+      if (need_restart_) return false;  // the references could not be planned
+    } else if (!replan(t)) {
+      return false;
+    }
   }
   startup_tick_ = first;
   // The start-up solve may backtrack as far as it needs; the ticks' line search is bounded.

@@ -177,6 +177,13 @@ wait_for() {
   done
   return 1
 }
+# wait_for, or show the program's output and stop the demo.
+started() {  # FILE PATTERN PID NAME
+  wait_for "$1" "$2" 30 "$3" && return 0
+  cat "$1" >&2
+  echo "demo.sh: $4 did not start" >&2
+  exit 1
+}
 
 # Two cores: the controller on one, the mock robot on the other (lcm-logger and stride-teleop are
 # light and float). A wall-clock safety net on every process, except when driving by keyboard.
@@ -213,11 +220,7 @@ timeout "$limit" taskset -c "$mpc_cpu" "$build/controller/stride-mpc" "${mpc_arg
 mpc_pid=$!
 pids+=($mpc_pid)
 # The controller prints its line once subscribed (the first udpm subscribe can take seconds).
-if ! wait_for "$out/mpc.txt" "^stride-mpc: .* mode" 30 "$mpc_pid"; then
-  cat "$out/mpc.txt" >&2
-  echo "demo.sh: stride-mpc did not start" >&2
-  exit 1
-fi
+started "$out/mpc.txt" "^stride-mpc: .* mode" "$mpc_pid" stride-mpc
 teleop_bin="$build/tools/stride-teleop"
 if [ "$commands" = none ]; then
   # No command source: whoever joins the bus drives (the controller stands until then).
@@ -241,11 +244,7 @@ elif [ "$teleop" = 0 ]; then
     > "$out/teleop.txt" 2>&1 &
   teleop_pid=$!
   pids+=($teleop_pid)
-  if ! wait_for "$out/teleop.txt" "waiting for states" 30 "$teleop_pid"; then
-    cat "$out/teleop.txt" >&2
-    echo "demo.sh: stride-teleop did not start" >&2
-    exit 1
-  fi
+  started "$out/teleop.txt" "waiting for states" "$teleop_pid" stride-teleop
   echo "demo: $robot, $mode, ${duration} s of robot time, commands from $commands; logging to $log"
   sim_status=0
   timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 ||
