@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <set>
 
@@ -18,6 +19,24 @@ const char* toString(SolverKind kind) {
       return "box-fddp";
   }
   return "?";
+}
+
+std::string describeHorizon(const LocomotionOptions& h) {
+  char buf[64];
+  if (h.grid.empty()) {
+    std::snprintf(buf, sizeof buf, "%d knots of %.0f ms", h.knots, h.dt * 1e3);
+    return buf;
+  }
+  std::string parts;
+  double span = 0.0;
+  for (const KnotSegment& s : h.grid) {
+    std::snprintf(buf, sizeof buf, "%s%d x %.0f ms", parts.empty() ? "" : ", ", s.knots,
+                  s.dt * 1e3);
+    parts += buf;
+    span += s.knots * s.dt;
+  }
+  std::snprintf(buf, sizeof buf, "%d knots, %.2f s: ", h.knots, span);
+  return buf + parts;
 }
 
 namespace {
@@ -96,10 +115,36 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
 
   LocomotionOptions& lo = c.locomotion;
   const YAML::Node horizon = root["horizon"];
-  r.onlyKeys(horizon, "horizon", {"knots", "dt"});
+  r.onlyKeys(horizon, "horizon", {"knots", "dt", "grid"});
   if (horizon) {
     r.get(horizon, "knots", "horizon", lo.knots);
     r.get(horizon, "dt", "horizon", lo.dt);
+  }
+  // A non-uniform grid: segments {knots, dt} from now on (LocomotionOptions::grid).
+  if (horizon && horizon["grid"]) {
+    if (horizon["knots"] || horizon["dt"])
+      r.fail("horizon", "give either grid or knots and dt, not both");
+    const YAML::Node grid = horizon["grid"];
+    if (!grid.IsSequence() || grid.size() == 0)
+      r.fail("horizon.grid", "must be a list of {knots, dt}");
+    lo.knots = 0;
+    for (std::size_t i = 0; i < grid.size(); ++i) {
+      const std::string where = "horizon.grid[" + std::to_string(i) + "]";
+      r.onlyKeys(grid[i], where, {"knots", "dt"});
+      KnotSegment seg;
+      r.get(grid[i], "knots", where, seg.knots);
+      r.get(grid[i], "dt", where, seg.dt);
+      if (seg.knots < 1) r.fail(where + ".knots", "must be at least 1");
+      r.positive(seg.dt, where + ".dt");
+      lo.grid.push_back(seg);
+      lo.knots += seg.knots;
+    }
+    lo.dt = lo.grid.front().dt;
+    // The policy's knots are the horizon's first ones, evenly spaced by dt (policy_t).
+    if (c.policy_knots > lo.grid.front().knots)
+      r.fail("policy_knots",
+             "exceeds the grid's first segment (the policy's knots are evenly "
+             "spaced)");
   }
   if (lo.knots < 2 || lo.knots > 1000) r.fail("horizon.knots", "must be in [2, 1000]");
   r.positive(lo.dt, "horizon.dt");
@@ -242,7 +287,9 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   gen.acceleration = Eigen::Vector3d(cmd.accel_x, cmd.accel_y, cmd.accel_yaw);
   gen.height_rate = cmd.height_rate;
   gen.max_height = cmd.max_height;
-  gen.horizon = lo.knots * lo.dt;
+  gen.horizon = 0.0;
+  if (lo.grid.empty()) gen.horizon = lo.knots * lo.dt;
+  for (const KnotSegment& seg : lo.grid) gen.horizon += seg.knots * seg.dt;
   gen.sample_dt = lo.dt;
 
   const YAML::Node lcm = root["lcm"];

@@ -68,5 +68,7 @@ struct ControllerConfig {
 ControllerConfig loadControllerConfig(const std::string& yaml_path);
 
 const char* toString(SolverKind kind);
+// "45 knots, 1.2 s: 20 x 10 ms, 10 x 20 ms, 15 x 40 ms" (or "100 knots of 10 ms").
+std::string describeHorizon(const LocomotionOptions& horizon);
 
 }  // namespace stride

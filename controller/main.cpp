@@ -101,9 +101,9 @@ int main(int argc, char** argv) {
                          on_stamps ? stride::TimeSource::Stamps : stride::TimeSource::RealTime);
     node.subscribe(in);
     std::printf(
-        "stride-mpc: %s, %d knots of %.0f ms, %s, %d iteration(s) per tick at %.0f Hz, "
+        "stride-mpc: %s, %s, %s, %d iteration(s) per tick at %.0f Hz, "
         "%s mode, in '%s', out '%s'\n",
-        node.mpc().robot().name.c_str(), config.locomotion.knots, config.locomotion.dt * 1e3,
+        node.mpc().robot().name.c_str(), stride::describeHorizon(config.locomotion).c_str(),
         stride::toString(config.solver), config.max_iterations, config.rate_hz,
         replaying ? "replay" : (lockstep ? "lock-step" : "real-time"), config.input_url.c_str(),
         config.output_url.c_str());

@@ -18,6 +18,8 @@ constexpr double kContactDamping = 50.0;
 // The planned centre of pressure stays in this fraction of the sole: at the edge, the slightest
 // disturbance tips the foot.
 constexpr double kSoleMargin = 0.8;
+// Ticks in a row whose line search took no step before the warm start is made again.
+constexpr int kMaxStalledTicks = 3;
 
 double millisSince(Solver::Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Solver::Clock::now() - t0).count();
@@ -98,6 +100,7 @@ void Mpc::start(std::int64_t utime) {
       std::make_unique<LocomotionProblem>(robot_.model, contacts_, x_nominal, config_.locomotion);
   loco_->problem().setThreads(config_.threads);
   gen_ = std::make_unique<GaitGenerator>(robot_.model, contacts_, x_nominal, config_.generator);
+  loco_->setPostures(gen_->crouchPostures(), config_.generator.max_height);
   ContactTimeline& timeline = gen_->timeline();
   gait_pattern_.clear();
   for (const std::string& g : gaits_) {
@@ -112,6 +115,8 @@ void Mpc::start(std::int64_t utime) {
   solver_ = std::make_unique<Solver>(loco_->problem(), config_.solver, options);
   if (config_.solver == SolverKind::BoxFddp)
     solver_->setControlBounds(loco_->controlLower(), loco_->controlUpper());
+  knot_times_ = loco_->knotTimes();
+  knot_masks_.assign(config_.locomotion.knots, 0u);
   xs_warm_.assign(config_.locomotion.knots + 1, x_nominal);
   us_warm_.assign(config_.locomotion.knots, Eigen::VectorXd::Zero(nu_));
   rebuild_ = false;
@@ -121,7 +126,37 @@ void Mpc::start(std::int64_t utime) {
 }
 
 bool Mpc::replan(double t) {
-  return gen_->plan(t, x_, t_warm_, t_warm_ + loco_->span()) && loco_->update(t_warm_, *gen_);
+  // The knots' times before the update: where the warm start's states are (knot_masks_: on which
+  // feet, kept from the last update, as the knot models have moved with the shift since).
+  const int T = loco_->problem().horizon();
+  knot_times_ = loco_->knotTimes();
+  if (!gen_->plan(t, x_, t_warm_, t_warm_ + loco_->span()) || !loco_->update(t_warm_, *gen_))
+    return false;
+  // On the new grid (shifted by whole short knots, or moved by an impulse knot coming in), the
+  // warm start at the knots' new times: the short knots near now only change places, the long
+  // ones of the tail are interpolated.
+  const std::vector<double>& times = loco_->knotTimes();
+  solver_->retimeWarmStart(knot_times_, times);
+  // A knot that lifts a foot the warm start had down (a new gait coming in, a step entering the
+  // horizon) starts from the torques that hold the posture on its contacts: the stance torques
+  // on a lifted leg would swing it at thousands of rad/s² (gaps that blew up the first rollouts
+  // of every trot start on a grid of 20-30 ms knots).
+  int j = 0;  // the last old knot at or before knot k's time
+  for (int k = 0; k < T; ++k) {
+    while (j + 1 < T && knot_times_[j + 1] <= times[k] + kPlanTimeEpsilon) ++j;
+    const unsigned mask = knotMask(k);
+    if (knot_masks_[j] & ~mask) solver_->setControl(k, loco_->holdingControl(mask));
+  }
+  for (int k = 0; k < T; ++k) knot_masks_[k] = knotMask(k);
+  return true;
+}
+
+unsigned Mpc::knotMask(int k) const {
+  const auto& knot = static_cast<const KnotModel&>(loco_->problem().knot(k));
+  unsigned mask = 0;
+  for (int c = 0; c < knot.contacts().size(); ++c)
+    if (knot.contacts().isActive(c)) mask |= 1u << c;
+  return mask;
 }
 
 void Mpc::restartWarmStart(double t) {
@@ -134,13 +169,15 @@ void Mpc::restartWarmStart(double t) {
 }
 
 bool Mpc::shiftTo(double t) {
+  // In whole knots of the grid's first (shortest) duration; the trajectory itself moves in
+  // replan() (Solver::retimeWarmStart), the knot models with it here, so that the short knots'
+  // kept solves stay with their states (KeptSolve).
   const double dt = config_.locomotion.dt;
   const double shift = std::floor((t - t_warm_) / dt + 0.5);
-  if (shift >= loco_->problem().horizon()) return false;
+  if (t_warm_ + shift * dt >= loco_->knotTime(loco_->problem().horizon())) return false;
   if (shift >= 1.0) {
     const int n = static_cast<int>(shift);
     loco_->problem().shift(n);
-    solver_->shiftWarmStart(n);
     t_warm_ += n * dt;
   }
   return true;
@@ -243,6 +280,17 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
     const int n_stats = solver_->statsCount();
     status_.step = n_stats > 0 ? solver_->stats()[n_stats - 1].step : 0.0;
     if (ok) {
+      // A line search that takes no step, tick after tick, is stuck on a warm start the new
+      // references broke (a sudden stand on a frozen robot lifted the rollouts of 30 ms knots
+      // into singular postures for 8 ticks until μ hit its limit): start again from the
+      // references instead, at the next tick (counted).
+      const bool stalled = result == SolveStatus::MaxIterations && status_.step == 0.0;
+      stalled_ticks_ = stalled && !startup_tick_ ? stalled_ticks_ + 1 : 0;
+      if (stalled_ticks_ >= kMaxStalledTicks) {
+        stalled_ticks_ = 0;
+        need_restart_ = true;
+        ++counters_.stall_restarts;
+      }
       solved_ = true;
       t_last_ = t;
       const bool cut = result == SolveStatus::Deadline;

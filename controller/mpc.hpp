@@ -51,6 +51,7 @@ struct MpcCounters {
   std::int64_t failed_solves = 0;
   std::int64_t unprepared_solves = 0;  // ticks after start-up that solved without a preparation
   std::int64_t late_ticks = 0;         // started after their time (the last period's work ran over)
+  std::int64_t stall_restarts = 0;     // warm starts made again after line searches stalled
 };
 
 class Mpc {
@@ -113,6 +114,7 @@ class Mpc {
   bool shiftTo(double t);
   bool solveTick(double t, Clock::time_point deadline, SolveStatus& status);
   void restartWarmStart(double t);
+  unsigned knotMask(int k) const;  // the contacts knot k closes
   void writePolicy(std::int64_t utime, double t, std::int8_t status);
   bool previousPolicy(std::int64_t utime);
   void holdPolicy(std::int64_t utime, double t);
@@ -137,6 +139,8 @@ class Mpc {
   std::unique_ptr<Solver> solver_;
   std::vector<Eigen::VectorXd> xs_warm_, us_warm_;  // warm start on the references (restarts)
   double t_warm_ = 0.0;                             // plan time of the warm start's knot 0
+  std::vector<double> knot_times_;                  // replan's copy of the knots' times
+  std::vector<unsigned> knot_masks_;                // and of their contacts (bit c: closed)
   bool need_restart_ = false;  // the last solve failed: start again from standing
   bool have_solved_ = false;   // a solve of this problem succeeded (else the next is the first)
   bool startup_tick_ = false;
@@ -144,6 +148,7 @@ class Mpc {
   double t_last_ = 0.0;      // plan time of the last tick's state (x_ holds it)
   double prepare_ms_ = 0.0;  // its duration
   int previous_ticks_ = 0;   // consecutive ticks on the previous policy
+  int stalled_ticks_ = 0;    // consecutive solves whose line search took no step
 
   Eigen::VectorXd x_;  // the state as a solver vector
   policy_t policy_, previous_;

@@ -94,6 +94,19 @@ class Solver {
   // Shifts the current trajectory by n knots for the next receding-horizon solve: x_k <- x_{k+n},
   // u_k <- u_{k+n}, the tail repeating the last state and control. (Call problem.shift(n) too.)
   void shiftWarmStart(int n);
+  // Moves the current trajectory onto a new time grid (the horizon moved by a few short knots of a
+  // non-uniform grid, or an impulse knot came in): from[k], to[k] are the times of knot k on the
+  // old and the new grid (T + 1 each, non-decreasing; two knots at one time are an impulse knot
+  // and the knot after it). New knot k takes the old trajectory at its time: the old knot's state,
+  // control and gain where one is at that time (for the second of two knots at one time, the
+  // post-impact one); between two old knots, the state interpolated on the manifold and the
+  // control linearly with the same weight, the gain of the nearer knot (a control taken from the
+  // knot before while the state comes mostly from the knot after grew a perturbation by 2x per
+  // tick in the receding horizon); past the old end, the last ones. No allocation.
+  void retimeWarmStart(const std::vector<double>& from, const std::vector<double>& to);
+  // Replaces the warm start's control of knot k (copied, no allocation; false and nothing changed
+  // for a knot or size out of range or a non-finite u).
+  bool setControl(int k, const Eigen::VectorXd& u);
 
   // Iterates from the current trajectory until converged, max_iterations, or the deadline. The
   // first iteration uses a pending preparation (Fddp and BoxFddp; Ddp's rollout from x0 moves the
@@ -162,7 +175,7 @@ class Solver {
   std::vector<Eigen::VectorXd> fs_;  // gaps f_0 = x0 ⊖ x_0, f_{k+1} = f(x_k, u_k) ⊖ x_{k+1}
   // Per knot only what the forward pass reads: the policy.
   std::vector<Eigen::VectorXd> k_;
-  std::vector<Eigen::MatrixXd> K_;
+  std::vector<Eigen::MatrixXd> K_, K_old_;  // K_old_: retimeWarmStart's copy
   // Value function of the knot after the current one and of the current one (rolling buffers).
   Eigen::VectorXd Vx_next_, Vx_, Vx_gap_;
   Eigen::MatrixXd Vxx_next_, Vxx_;

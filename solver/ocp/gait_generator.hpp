@@ -85,6 +85,9 @@ class GaitGenerator {
   const ContactTimeline& timeline() const { return timeline_; }
   const GaitGeneratorOptions& options() const { return options_; }
   double footholdGain() const { return gain_; }
+  // The joints of the body-height postures, for offsets spread evenly over
+  // [-options.max_height, options.max_height] (empty without a body-height range).
+  const std::vector<Eigen::VectorXd>& crouchPostures() const { return crouch_; }
 
   // The command in force now and the one the controller is heading to (its smoothed command and
   // its target): the base references ramp from one to the other.

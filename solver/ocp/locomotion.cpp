@@ -52,14 +52,59 @@ void checkOptions(const Model& model, const Eigen::VectorXd& x_nominal,
   if (o.knots < 1) throw std::invalid_argument("LocomotionProblem: knots must be at least 1");
   if (!(o.mu > 0.0)) throw std::invalid_argument("LocomotionProblem: mu must be positive");
 }
+
+// The torques that hold posture q still on each contact mask: g(q) = Sᵀ u + Jcᵀ λ at rest; the
+// base rows fix λ (minimum norm among the forces that carry the weight), the joint rows then give
+// u.
+std::vector<Eigen::VectorXd> holdingTorques(const Model& model, const ContactSet& contacts,
+                                            const Eigen::VectorXd& q) {
+  const int nv = model.nv, nu = actuatedDimension(model), nc = contacts.size();
+  Data data(model);
+  const Eigen::VectorXd g = computeGeneralizedGravity(model, data, q);
+  ContactSet set = contacts;
+  ContactData cd(model, set);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(nv);
+  const int na = nv - nu;  // unactuated (base) dofs
+  std::vector<Eigen::VectorXd> u_hold;
+  for (unsigned mask = 0; mask < (1u << nc); ++mask) {
+    for (int c = 0; c < nc; ++c) set.setActive(c, (mask >> c) & 1u);
+    Eigen::VectorXd u = g.tail(nu);
+    if (na > 0 && set.nc() > 0 &&
+        contactDynamics(model, data, set, cd, q, zero, zero) == ContactStatus::Ok) {
+      const Eigen::MatrixXd Jc = cd.Jc.topRows(set.nc());
+      const Eigen::VectorXd lambda =
+          Jc.leftCols(na).transpose().completeOrthogonalDecomposition().solve(g.head(na));
+      u -= Jc.rightCols(nu).transpose() * lambda;
+    }
+    u_hold.push_back(u);
+  }
+  return u_hold;
+}
+
+// knots and dt from the grid, when there is one.
+LocomotionOptions withGrid(LocomotionOptions o) {
+  if (o.grid.empty()) return o;
+  o.knots = 0;
+  for (std::size_t i = 0; i < o.grid.size(); ++i) {
+    const KnotSegment& s = o.grid[i];
+    if (s.knots < 1 || !(s.dt > 0.0) || !std::isfinite(s.dt))
+      throw std::invalid_argument(
+          "LocomotionProblem: every grid segment needs at least one knot and a positive duration");
+    if (i > 0 && s.dt < o.grid[i - 1].dt)
+      throw std::invalid_argument("LocomotionProblem: the grid's durations must not decrease");
+    o.knots += s.knots;
+  }
+  o.dt = o.grid.front().dt;
+  return o;
+}
 }  // namespace
 
 LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& contacts,
                                      const Eigen::VectorXd& x_nominal,
                                      const LocomotionOptions& options)
-    : model_(model), contacts_(contacts), x_nominal_(x_nominal), options_(options) {
-  checkOptions(model, x_nominal, options);
-  const int nq = model.nq, nv = model.nv, nu = actuatedDimension(model);
+    : model_(model), contacts_(contacts), x_nominal_(x_nominal), options_(withGrid(options)) {
+  checkOptions(model, x_nominal, options_);
+  const int nq = model.nq, nu = actuatedDimension(model);
   const int nc = contacts_.size();
   if (nc > kMaxContacts)
     throw std::invalid_argument("LocomotionProblem: at most " + std::to_string(kMaxContacts) +
@@ -72,25 +117,8 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   framesForwardKinematics(model, data, q);
   const Eigen::Vector3d com_nominal = centerOfMass(model, data, q);
 
-  // Holding torques per contact mask: g(q) = Sᵀ u + Jcᵀ λ at rest; the base rows fix λ (minimum
-  // norm among the forces that carry the weight), the joint rows then give u.
-  const Eigen::VectorXd g = computeGeneralizedGravity(model, data, q);
-  ContactSet set = contacts_;
-  ContactData cd(model, set);
-  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(nv);
-  const int na = nv - nu;  // unactuated (base) dofs
-  for (unsigned mask = 0; mask < (1u << nc); ++mask) {
-    for (int c = 0; c < nc; ++c) set.setActive(c, (mask >> c) & 1u);
-    Eigen::VectorXd u = g.tail(nu);
-    if (na > 0 && set.nc() > 0 &&
-        contactDynamics(model, data, set, cd, q, zero, zero) == ContactStatus::Ok) {
-      const Eigen::MatrixXd Jc = cd.Jc.topRows(set.nc());
-      const Eigen::VectorXd lambda =
-          Jc.leftCols(na).transpose().completeOrthogonalDecomposition().solve(g.head(na));
-      u -= Jc.rightCols(nu).transpose() * lambda;
-    }
-    u_hold_.push_back(u);
-  }
+  u_hold_ = holdingTorques(model, contacts_, q);
+  u_ref_ = u_hold_[0];
 
   cone_term_.resize(nc);
   swing_term_.resize(nc);
@@ -101,8 +129,8 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   std::vector<std::unique_ptr<ActionModel>> running;
   // One multibody workspace per thread the problem may use (knots.hpp, SharedWorkspace).
   auto workspace = std::make_shared<SharedWorkspace>(model, std::max(omp_get_max_threads(), 2));
-  for (int k = 0; k < options.knots; ++k) {
-    auto knot = std::make_unique<KnotModel>(model, contacts_, options.dt, workspace);
+  for (int k = 0; k < options_.knots; ++k) {
+    auto knot = std::make_unique<KnotModel>(model, contacts_, options_.dt, workspace);
     CostModel& costs = knot->costs();
     state_term_ = costs.add("state", std::make_unique<StateResidual>(model, nu, x_nominal),
                             Activation::weightedQuadratic(w_state));
@@ -149,7 +177,12 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
     u_lower_ = -u_upper_;
   }
   x_ref_ = x_nominal_;
-  knot_time_.assign(options.knots + 1, 0.0);
+  knot_time_.assign(options_.knots + 1, 0.0);
+  segments_ = options_.grid;
+  if (segments_.empty()) segments_.push_back({options_.knots, options_.dt});
+  for (const KnotSegment& s : segments_) span_ += s.knots * s.dt;
+  const CostModel& costs = static_cast<const KnotModel&>(problem_->knot(0)).costs();
+  for (int i = 0; i < costs.size(); ++i) base_weight_.push_back(costs[i].weight);
 }
 
 bool LocomotionProblem::update(double t0, const GaitGenerator& reference) {
@@ -157,17 +190,19 @@ bool LocomotionProblem::update(double t0, const GaitGenerator& reference) {
   if (!std::isfinite(t0) || std::abs(t0) > 1e9) return false;
   t0_ = t0;
   const int T = problem_->horizon(), nc = contacts_.size();
-  const double dt = options_.dt;
+  const double dt0 = options_.dt;
   // An impulse knot takes no time: it is inserted at its touch-down time and the contact knot
-  // after it starts at that same time, so every knot's time is t0 + dt · (contact knots before).
+  // after it starts at that same time.
   double t = t0;
+  double t_before = t0 - dt0;  // the last contact knot's start: a contact that was open there lands
+  int seg = 0, left = segments_[0].knots;  // the grid segment and its knots still due
   bool after_impulse = false;
   for (int k = 0; k < T; ++k) {
     knot_time_[k] = t;
     // Every running knot was built as a KnotModel (shift only reorders them).
     auto& knot = static_cast<KnotModel&>(problem_->knot(k));
     CostModel& costs = knot.costs();
-    const unsigned mask = reference.mask(t), before = reference.mask(t - dt);
+    const unsigned mask = reference.mask(t), before = reference.mask(t_before);
     bool touchdown = false;
     for (int c = 0; c < nc; ++c) {
       const bool closed = (mask >> c) & 1u;
@@ -196,30 +231,84 @@ bool LocomotionProblem::update(double t0, const GaitGenerator& reference) {
     }
     const bool impulse = touchdown && options_.impulses && !after_impulse;
     knot.setMode(impulse ? KnotMode::Impulse : KnotMode::Contact);
-    // An impulse knot's cones bound impulses Λ ≈ f dt [N s], weighted as the same mean force. No
+    // A contact knot's costs weigh its duration (an impulse knot's, one knot of dt0).
+    const double dt = impulse ? dt0 : contactKnotDuration(t, seg, left);
+    const double scale = dt / dt0;
+    knot.setDt(dt);
+    for (int i = 0; i < costs.size(); ++i) costs[i].weight = scale * base_weight_[i];
+    // An impulse knot's cones bound impulses Λ ≈ f dt0 [N s], weighted as the same mean force. No
     // minimum there: a soft landing (no impact speed) has zero impulses, and rightly so.
     const double f_min = impulse ? 0.0 : options_.min_normal_force;
-    const double w_cone = options_.weights.friction / (impulse ? dt * dt : 1.0);
+    const double w_cone = scale * options_.weights.friction / (impulse ? dt0 * dt0 : 1.0);
     for (int c = 0; c < nc; ++c) {
       CostTerm& cone = costs[cone_term_[c]];
       cone.weight = w_cone;
       static_cast<FrictionConeResidual&>(*cone.residual).setMinimumNormalForce(f_min);
       if (cop_term_[c] >= 0)
-        costs[cop_term_[c]].weight = options_.weights.cop / (impulse ? dt * dt : 1.0);
+        costs[cop_term_[c]].weight = scale * options_.weights.cop / (impulse ? dt0 * dt0 : 1.0);
     }
-    static_cast<ControlResidual&>(*costs[control_term_].residual).setReference(u_hold_[mask]);
     reference.state(t, x_ref_);
     static_cast<StateResidual&>(*costs[state_term_].residual).setReference(x_ref_);
+    static_cast<ControlResidual&>(*costs[control_term_].residual)
+        .setReference(holdingControlAt(mask, x_ref_[2] - x_nominal_[2]));
     if (com_term_ >= 0)
       static_cast<ComPositionResidual&>(*costs[com_term_].residual).setReference(reference.com(t));
     after_impulse = impulse;
-    if (!impulse) t += dt;
+    if (!impulse) {
+      t_before = t;
+      t += dt;
+    }
   }
   knot_time_[T] = t;
   auto& terminal = static_cast<TerminalModel&>(problem_->terminal());
   reference.state(t, x_ref_);
   static_cast<StateResidual&>(*terminal.costs()[0].residual).setReference(x_ref_);
   return true;
+}
+
+void LocomotionProblem::setPostures(const std::vector<Eigen::VectorXd>& joints, double max_height) {
+  u_posture_.clear();
+  max_height_ = max_height;
+  if (joints.size() < 2 || !(max_height > 0.0)) return;
+  const int nq = model_.nq;
+  Eigen::VectorXd q = x_nominal_.head(nq);
+  for (const Eigen::VectorXd& j : joints) {
+    if (j.size() != nq - 7)
+      throw std::invalid_argument("LocomotionProblem::setPostures: a posture of the wrong size");
+    q.tail(nq - 7) = j;
+    u_posture_.push_back(holdingTorques(model_, contacts_, q));
+  }
+}
+
+const Eigen::VectorXd& LocomotionProblem::holdingControlAt(unsigned mask, double height) {
+  const int n = static_cast<int>(u_posture_.size());
+  if (n < 2) return u_hold_[mask];
+  // The same interpolation as the joints' reference (GaitGenerator::state).
+  const double s = std::clamp((height + max_height_) / (2.0 * max_height_), 0.0, 1.0) * (n - 1);
+  const int i = std::min(static_cast<int>(s), n - 2);
+  const double r = s - i;
+  u_ref_ = (1.0 - r) * u_posture_[i][mask] + r * u_posture_[i + 1][mask];
+  return u_ref_;
+}
+
+double LocomotionProblem::contactKnotDuration(double t, int& seg, int& left) const {
+  const int n = static_cast<int>(segments_.size());
+  for (;;) {
+    if (left > 0 || seg + 1 == n) {  // the segment's own knots (the last one's, to the end)
+      if (left > 0) --left;
+      return segments_[seg].dt;
+    }
+    // The segment's knots are placed: it goes on until the next segment's boundaries on the plan
+    // clock (multiples of its dt), so that the longer knots keep their times from tick to tick.
+    const double next = segments_[seg + 1].dt;
+    const double boundary = std::ceil((t - kPlanTimeEpsilon) / next) * next;
+    if (boundary - t <= kPlanTimeEpsilon) {
+      ++seg;
+      left = segments_[seg].knots;
+      continue;
+    }
+    return std::min(segments_[seg].dt, boundary - t);
+  }
 }
 
 void LocomotionProblem::referenceWarmStart(const GaitGenerator& reference,

@@ -18,8 +18,21 @@
 //                  when it is on as swing_<c> is (options.weights.swing_rotation > 0): a sole lands
 //                  turned with the body.
 // The terminal knot has "state" only. A touch-down inserts an impulse knot (options.impulses) with
-// the contacts closed after it; it takes no time, so knot k stands for time t0 + dt · (contact
-// knots before k), knotTime(k).
+// the contacts closed after it; it takes no time, so knot k stands for time t0 + the durations of
+// the contact knots before it, knotTime(k).
+//
+// Time grid (options.grid, e.g. 10 ms knots near now and 40 ms ones in the tail; options.dt
+// throughout without one): each segment's knots in turn, then knots of the segment's duration
+// (the last one shortened) up to the next segment's first boundary on the plan clock, a multiple of
+// its duration. So the long knots sit at fixed plan times: as the horizon moves by one short
+// knot, only the short segments change length, and a touch-down in the tail snaps to the same
+// knot boundary at every tick instead of jumping between two. The last segment takes the
+// remaining knots. A knot's costs stand for its duration: its weights are scaled by dt / dt_0, so
+// a 40 ms knot weighs as the four 10 ms knots it replaces. Impulse knots take a slot each but no
+// time: with n touch-downs in the horizon, it ends n long knots earlier, so a grid that is to
+// cover 1 s while trotting lists 1 s plus the long knots of its touch-downs. Contacts switch at
+// knot boundaries: a contact is closed in a knot when it is closed at the knot's start (a
+// touch-down inside a 40 ms knot lands at its end).
 
 #include <algorithm>
 #include <vector>
@@ -51,9 +64,19 @@ struct LocomotionWeights {
   double terminal_state = 10.0;  // the terminal state weights are the running ones times this
 };
 
+// `knots` contact knots of `dt` each, on a non-uniform time grid.
+struct KnotSegment {
+  int knots = 0;
+  double dt = 0.0;
+};
+
 struct LocomotionOptions {
   double dt = 0.01;
   int knots = 100;  // running knots; a terminal knot follows
+  // The time grid as segments, in order from now, durations not decreasing; when not empty it
+  // replaces knots and dt (knots = the segments' sum, dt = the first segment's: the policy's knot
+  // spacing).
+  std::vector<KnotSegment> grid;
   double mu = 0.7;  // friction coefficient (flat ground, normal +z)
   double min_normal_force = 0.0;
   LocomotionWeights weights;
@@ -70,7 +93,8 @@ class LocomotionProblem {
   // LOCAL_WORLD_ALIGNED, for which the flat-ground cone needs no rotation; LOCAL forces get the
   // cone in the foot's axes). x_nominal: the nominal posture (the joints' references, the holding
   // torques). Throws std::invalid_argument for an x_nominal of the wrong size or options out of
-  // range (dt ≤ 0, knots < 1, μ ≤ 0, weights of the wrong size), or too many contacts.
+  // range (dt ≤ 0, knots < 1, a grid segment without knots or duration, μ ≤ 0, weights of the
+  // wrong size), or too many contacts.
   static constexpr int kMaxContacts = 8;
   LocomotionProblem(const Model& model, const ContactSet& contacts,
                     const Eigen::VectorXd& x_nominal, const LocomotionOptions& options = {});
@@ -78,11 +102,13 @@ class LocomotionProblem {
   ShootingProblem& problem() { return *problem_; }
   const ShootingProblem& problem() const { return *problem_; }
   const ContactSet& contacts() const { return contacts_; }
+  // The options as used: with a grid, knots and dt are the grid's (its sum and first duration).
   const LocomotionOptions& options() const { return options_; }
   const Eigen::VectorXd& nominal() const { return x_nominal_; }
   double startTime() const { return t0_; }
-  // The span of the horizon's contact knots [s]: what a generator's window must cover.
-  double span() const { return options_.knots * options_.dt; }
+  // The longest span of the horizon's contact knots [s] (no impulse knot): what a generator's
+  // window must cover.
+  double span() const { return span_; }
 
   // Re-configures every knot in place for the references from time t0 on (the generator planned
   // for a window from t0 of span()): contacts, knot modes, which cost terms are on, swing, state
@@ -91,10 +117,17 @@ class LocomotionProblem {
   bool update(double t0, const GaitGenerator& reference);
   // The time knot k stands for after the last update (k = horizon(): the terminal knot).
   double knotTime(int k) const { return knot_time_[k]; }
+  const std::vector<double>& knotTimes() const { return knot_time_; }  // T + 1
 
   // The torques that hold the nominal posture still on the contacts of `mask` (bit c: contact c
   // closed; minimum-norm forces); the joint gravity torques with no contact.
   const Eigen::VectorXd& holdingControl(unsigned mask) const { return u_hold_[mask]; }
+  // The body-height postures a generator's references move through (GaitGenerator::
+  // crouchPostures: joint positions for offsets spread evenly over [-max_height, max_height]):
+  // each knot's control reference then holds the posture of its reference height instead of the
+  // nominal one (a control cost pulling to the nominal posture's torques kept a quadruped
+  // commanded 2 cm up at less than 1 cm). Setup (allocates); fewer than two postures: none.
+  void setPostures(const std::vector<Eigen::VectorXd>& joints, double max_height);
   // A warm start that follows the references: each knot's state reference and holding control
   // (after update).
   void referenceWarmStart(const GaitGenerator& reference, std::vector<Eigen::VectorXd>& xs,
@@ -110,13 +143,23 @@ class LocomotionProblem {
   LocomotionOptions options_;
   std::unique_ptr<ShootingProblem> problem_;
   int com_term_ = -1;
-  std::vector<Eigen::VectorXd> u_hold_;  // per contact mask
+  std::vector<Eigen::VectorXd> u_hold_;                  // per contact mask
+  std::vector<std::vector<Eigen::VectorXd>> u_posture_;  // per posture, per contact mask
+  double max_height_ = 0.0;
+  Eigen::VectorXd u_ref_;  // scratch: the interpolated holding torques
+  const Eigen::VectorXd& holdingControlAt(unsigned mask, double height);
   Eigen::VectorXd u_lower_, u_upper_;
+  // The duration of the contact knot starting at plan time t, in grid segment seg with left of its
+  // knots still due (both advanced).
+  double contactKnotDuration(double t, int& seg, int& left) const;
   // Term indices, the same in every running knot (all are built alike).
   int state_term_ = -1, control_term_ = -1;
   // cop, swing_rot: -1 for point contacts (and for swing_rot without its weight)
   std::vector<int> cone_term_, swing_term_, cop_term_, swing_rot_term_;
-  Eigen::VectorXd x_ref_;  // scratch for the state references
+  Eigen::VectorXd x_ref_;              // scratch for the state references
+  std::vector<KnotSegment> segments_;  // the grid (one segment without options.grid)
+  std::vector<double> base_weight_;    // per term: the weight of a knot of duration dt
+  double span_ = 0.0;
   double t0_ = 0.0;
   std::vector<double> knot_time_;  // T + 1
 };

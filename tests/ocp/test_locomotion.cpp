@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -208,6 +209,70 @@ TEST(LocomotionProblem, UpdateConfiguresKnots) {
                                      [](LocomotionOptions& o) { o.impulses = false; });
   for (int k = 0; k < no_impulse.loco->problem().horizon(); ++k)
     EXPECT_EQ(knotAt(*no_impulse.loco, k).mode(), KnotMode::Contact);
+}
+
+// A non-uniform grid (LocomotionOptions::grid): the first segment's knots from t0, then each
+// longer segment from its first boundary on the plan clock, so the long knots sit at fixed plan
+// times from tick to tick; weights scale with the duration; impulse knots take no time.
+TEST(LocomotionProblem, GridKnotsSitAtFixedPlanTimes) {
+  const std::vector<KnotSegment> grid = {{10, 0.01}, {10, 0.02}, {15, 0.03}};
+  Case c =
+      loco_cases::make(Problem::SoloTrot, kShared, [&](LocomotionOptions& o) { o.grid = grid; });
+  LocomotionProblem& loco = *c.loco;
+  EXPECT_EQ(loco.options().knots, 35);
+  EXPECT_DOUBLE_EQ(loco.options().dt, 0.01);
+  EXPECT_NEAR(loco.span(), 0.1 + 0.2 + 0.45, 1e-12);
+  const int T = loco.problem().horizon();
+  std::vector<double> tail_previous;  // start times of the 30 ms knots at the last t0
+  for (double t0 : {0.0, 0.01, 0.02, 0.13, 0.14, 0.47}) {
+    ASSERT_TRUE(c.update(t0));
+    std::vector<double> tail;
+    int contact_knots = 0, impulses = 0;
+    for (int k = 0; k < T; ++k) {
+      const KnotModel& knot = knotAt(loco, k);
+      const double t = loco.knotTime(k), next = loco.knotTime(k + 1);
+      const CostTerm& state = knot.costs()[knot.costs().find("state")];
+      if (knot.mode() == KnotMode::Impulse) {
+        ++impulses;
+        EXPECT_DOUBLE_EQ(next, t) << k;  // no time
+        EXPECT_DOUBLE_EQ(state.weight, 1.0);
+        continue;
+      }
+      const double dt = knot.dt();
+      EXPECT_NEAR(next - t, dt, 1e-12) << k;
+      EXPECT_NEAR(state.weight, dt / 0.01, 1e-9) << k;  // a knot weighs its duration
+      if (contact_knots < 10) {
+        EXPECT_DOUBLE_EQ(dt, 0.01) << k;
+      }
+      EXPECT_LE(dt, 0.03 + 1e-12);
+      if (std::abs(dt - 0.03) < 1e-12) {
+        const double n = t / 0.03;
+        EXPECT_NEAR(n, std::round(n), 1e-6) << "a 30 ms knot at " << t;
+        tail.push_back(t);
+      }
+      ++contact_knots;
+    }
+    EXPECT_GE(impulses, 1) << t0;
+    EXPECT_LE(loco.knotTime(T), t0 + loco.span() + 1e-9);
+    EXPECT_GE(tail.size(), 10u) << t0;
+    // Moved on by 10 ms, the long knots still sit where they were (those in both windows).
+    for (double t : tail_previous) {
+      if (t >= tail.front() - 1e-9 && t <= tail.back() + 1e-9) {
+        EXPECT_TRUE(
+            std::any_of(tail.begin(), tail.end(), [&](double u) { return std::abs(u - t) < 1e-9; }))
+            << t << " at t0 " << t0;
+      }
+    }
+    tail_previous = tail;
+  }
+  // Durations that decrease, or a segment without knots, are refused.
+  for (const auto& bad : std::vector<std::vector<KnotSegment>>{
+           {{10, 0.02}, {10, 0.01}}, {{10, 0.01}, {0, 0.02}}, {{10, 0.01}, {5, -0.02}}}) {
+    LocomotionOptions o = loco.options();
+    o.grid = bad;
+    EXPECT_THROW(LocomotionProblem(c.robot->model, c.robot->contacts, c.robot->x_nominal, o),
+                 std::invalid_argument);
+  }
 }
 
 // ---------------------------------------------------------------------------- solves
@@ -477,6 +542,62 @@ TEST(LocomotionSolvers, ThreadCountDoesNotChangeTheSolution) {
 
 // Real-time iteration: the derivatives and the backward pass do not read x0, so an iteration
 // prepared before x0 changed gives the same bits as one done entirely after.
+// Solver::retimeWarmStart on a grid moved by one short knot: a knot at an old knot's time takes
+// that knot's state, control and gain bit for bit (the pre-impact state for an impulse knot, the
+// post-impact one for the knot after it); a knot between two old ones a state on the way between
+// them and the control interpolated with the same weight.
+TEST(LocomotionSolvers, RetimeMovesTheTrajectoryOntoTheNewGrid) {
+  Case c = loco_cases::make(Problem::SoloTrot, kShared, [](LocomotionOptions& o) {
+    o.grid = {{10, 0.01}, {10, 0.02}, {15, 0.03}};
+  });
+  ShootingProblem& problem = c.loco->problem();
+  Solver solver(problem, SolverKind::Fddp);
+  solveFromStanding(c, solver, 30);
+  ASSERT_LT(solver.gap(), 1e-6);
+  const std::vector<double> from = c.loco->knotTimes();
+  const std::vector<Eigen::VectorXd> xs = solver.xs(), us = solver.us();
+  const std::vector<Eigen::MatrixXd> K = solver.K();
+  const StateSpace& space = problem.state();
+  // The next tick's grid: 10 ms later (the problem keeps its knots in place: the test compares
+  // trajectories, not knot models).
+  ASSERT_TRUE(c.update(from[0] + 0.01));
+  const std::vector<double>& to = c.loco->knotTimes();
+  solver.retimeWarmStart(from, to);
+  const int T = problem.horizon();
+  int exact = 0, between = 0;
+  Eigen::VectorXd d(space.ndx()), e(space.ndx());
+  for (int k = 0; k <= T; ++k) {
+    const double t = to[k];
+    const auto first = std::lower_bound(from.begin(), from.end(), t - 1e-9) - from.begin();
+    if (first <= T && std::abs(from[first] - t) < 1e-9) {
+      int j = static_cast<int>(first);
+      if (k > 0 && to[k - 1] == to[k])  // the knot after an impulse knot: post-impact
+        while (j < T && std::abs(from[j + 1] - t) < 1e-9) ++j;
+      EXPECT_TRUE(solver.xs()[k] == xs[j]) << k;
+      if (k < T) {
+        EXPECT_TRUE(solver.us()[k] == us[std::min(j, T - 1)]) << k;
+        EXPECT_TRUE(solver.K()[k] == K[std::min(j, T - 1)]) << k;
+      }
+      ++exact;
+    } else if (first <= T && first > 0) {
+      const int a = static_cast<int>(first) - 1, b = static_cast<int>(first);
+      const double w = (t - from[a]) / (from[b] - from[a]);
+      space.difference(xs[a], xs[b], d);
+      space.difference(xs[a], solver.xs()[k], e);
+      EXPECT_LT((e - w * d).norm(), 1e-9 * (1.0 + d.norm())) << k;
+      if (k < T && b < T) {
+        EXPECT_LT((solver.us()[k] - ((1 - w) * us[a] + w * us[b])).norm(), 1e-9) << k;
+      }
+      ++between;
+    } else {  // past the old end: the last state
+      EXPECT_TRUE(solver.xs()[k] == xs[T]) << k;
+    }
+  }
+  EXPECT_GE(exact, 10);   // the short knots, and the long ones at fixed plan times
+  EXPECT_GE(between, 1);  // the knots where a segment's alignment moved
+  EXPECT_FALSE(solver.prepared());
+}
+
 TEST(LocomotionSolvers, PreparedIterationMatchesAFullOneAtTheNewState) {
   Case c = loco_cases::make(Problem::SoloTrot, kShared);
   ShootingProblem& problem = c.loco->problem();
