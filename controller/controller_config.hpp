@@ -48,6 +48,9 @@ struct ControllerConfig {
   // that keeps one iteration's step within what the linearization predicts, so the first rollout
   // is usually accepted. Each rejected rollout costs a rollout's time in the tick's latency.
   double min_regularization = 1e-9;
+  // Not from the YAML: stride-mpc --emulate-slow-host F (tests of the overload handling) makes
+  // every solver phase take F times its duration (SolverOptions::emulated_slowdown).
+  double emulated_slowdown = 1.0;
   int threads = 1;
 
   std::string state_channel = "STRIDE_STATE", policy_channel = "STRIDE_POLICY",

@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
   CLI::App app{"stride-mpc: real-time whole-body MPC (KKT-DDP) over LCM"};
   std::string config_path, replay, output, input_url, output_url, summary;
   bool lockstep = false, print_model = false;
-  double duration = 0.0;
+  double duration = 0.0, slow_host = 1.0;
   std::vector<std::string> robots_dirs;
   app.add_option("--config", config_path, "controller YAML (config/controller/)")->required();
   app.add_option("--replay", replay, "run on the states of this LCM log, as fast as possible");
@@ -45,6 +45,10 @@ int main(int argc, char** argv) {
                  "(repeatable)");
   app.add_flag("--print-model", print_model,
                "print the robot in wire order (q, v, u, contacts, limits) and exit");
+  app.add_option("--emulate-slow-host", slow_host,
+                 "testing: every solver phase takes this many times its duration (busy), as on a "
+                 "slower host, to exercise the overload handling")
+      ->check(CLI::Range(1.0, 10.0));
   CLI11_PARSE(app, argc, argv);
 
   std::signal(SIGINT, onSignal);
@@ -52,6 +56,7 @@ int main(int argc, char** argv) {
   try {
     stride::ControllerConfig config = stride::loadControllerConfig(config_path);
     config.robots_dirs = robots_dirs;
+    config.emulated_slowdown = slow_host;
     if (print_model) {
       const stride::Robot robot = stride::loadRobot(config.robot_yaml, robots_dirs);
       std::printf("%s", stride::describeModel(robot).c_str());

@@ -18,8 +18,8 @@ constexpr double kContactDamping = 50.0;
 // The planned centre of pressure stays in this fraction of the sole: at the edge, the slightest
 // disturbance tips the foot.
 constexpr double kSoleMargin = 0.8;
-// Ticks in a row whose line search took no step before the warm start is made again.
-constexpr int kMaxStalledTicks = 3;
+// μ at which a line search that takes no step counts as stuck (the solve fails at 1e9).
+constexpr double kStalledRegularization = 1e4;
 
 double millisSince(Solver::Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Solver::Clock::now() - t0).count();
@@ -112,6 +112,7 @@ void Mpc::start(std::int64_t utime) {
   timeline.reset(have_plan_ ? timeline.addPattern(plan_) : gait_pattern_[0], 0.0);
   SolverOptions options;
   options.line_search_steps = config_.line_search_steps;
+  options.emulated_slowdown = config_.emulated_slowdown;
   solver_ = std::make_unique<Solver>(loco_->problem(), config_.solver, options);
   if (config_.solver == SolverKind::BoxFddp)
     solver_->setControlBounds(loco_->controlLower(), loco_->controlUpper());
@@ -183,7 +184,9 @@ bool Mpc::shiftTo(double t) {
   return true;
 }
 
-bool Mpc::solveTick(double t, Clock::time_point deadline, SolveStatus& result) {
+bool Mpc::solveTick(double t, Clock::time_point deadline, bool late, SolveStatus& result,
+                    bool* shed) {
+  if (shed != nullptr) *shed = false;
   ShootingProblem& problem = loco_->problem();
   const double dt = config_.locomotion.dt;
   // The first solve, before any policy went out, runs to convergence (no deadline); a restart
@@ -196,6 +199,14 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, SolveStatus& result) {
   status_.prepared = use_prepared ? 1 : 0;
   status_.prepare_ms = use_prepared ? prepare_ms_ : 0.0;
   problem.setX0(x_);
+  // Overload, last resort: in real time a tick without its preparation (cut by the period's end,
+  // or made for another time) would run a whole iteration before its answer and make the next
+  // period late too. It re-sends the previous policy instead, and the period prepares again.
+  if (shed != nullptr && !use_prepared && !first && !need_restart_ &&
+      deadline != Clock::time_point::max()) {
+    *shed = true;
+    return false;
+  }
   if (!use_prepared) {
     solver_->discardPreparation();  // made for another time, or left over from before a restart
     if (!first) ++counters_.unprepared_solves;
@@ -213,7 +224,9 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, SolveStatus& result) {
   }
   startup_tick_ = first;
   // The start-up solve may backtrack as far as it needs; the ticks' line search is bounded.
-  solver_->options.line_search_steps = first ? 10 : config_.line_search_steps;
+  // A late tick (the last period ran over) tries the full step only: one rollout.
+  solver_->options.line_search_steps = first ? 10 : late ? 1 : config_.line_search_steps;
+  if (late && !first) ++counters_.shed_line_searches;
   solver_->options.reg_min = first ? SolverOptions().reg_min : config_.min_regularization;
   result = first ? solver_->solve(config_.initial_iterations)
                  : solver_->solve(config_.max_iterations, deadline);
@@ -235,6 +248,8 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   status_.solver_status = -1;
   startup_tick_ = false;
   solved_ = false;
+  const bool late = late_;  // countLateTick() before this tick
+  late_ = false;
   status_.prepared = 0;
   status_.prepare_ms = 0.0;
 
@@ -270,7 +285,18 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   } else {
     const Clock::time_point solve_start = Clock::now();
     SolveStatus result = SolveStatus::NonFinite;
-    const bool ok = solveTick(t, deadline, result);
+    bool shed = false;
+    bool ok = solveTick(t, deadline, late, result, &shed);
+    if (shed) {
+      if (have_previous_ && previousPolicy(state->utime)) {
+        ++counters_.shed_ticks;
+        solved_ = true;  // the period prepares for the next tick
+        t_last_ = t;
+        finishStatus(tick_start, policy_.status);
+        return true;
+      }
+      ok = solveTick(t, deadline, late, result, nullptr);  // nothing to re-send: solve now
+    }
     status_.solve_ms = millisSince(solve_start);
     status_.solver_status = static_cast<std::int32_t>(result);
     status_.iterations = solver_->iterations();
@@ -280,14 +306,14 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
     const int n_stats = solver_->statsCount();
     status_.step = n_stats > 0 ? solver_->stats()[n_stats - 1].step : 0.0;
     if (ok) {
-      // A line search that takes no step, tick after tick, is stuck on a warm start the new
-      // references broke (a sudden stand on a frozen robot lifted the rollouts of 30 ms knots
-      // into singular postures for 8 ticks until μ hit its limit): start again from the
-      // references instead, at the next tick (counted).
-      const bool stalled = result == SolveStatus::MaxIterations && status_.step == 0.0;
-      stalled_ticks_ = stalled && !startup_tick_ ? stalled_ticks_ + 1 : 0;
-      if (stalled_ticks_ >= kMaxStalledTicks) {
-        stalled_ticks_ = 0;
+      // A line search that takes no step, tick after tick, while μ climbs to its limit is stuck
+      // on a warm start the new references broke (a sudden stand on a frozen robot lifted the
+      // rollouts of 30 ms knots into singular postures for 8 ticks until the solve failed): start
+      // again from the references at the next tick (counted). Not sooner: a few rejected steps
+      // are part of a hard turn, and a restart then made ANYmal fall.
+      const bool stalled = result == SolveStatus::MaxIterations && status_.step == 0.0 &&
+                           solver_->regularization() >= kStalledRegularization;
+      if (stalled && !startup_tick_) {
         need_restart_ = true;
         ++counters_.stall_restarts;
       }
@@ -325,6 +351,7 @@ void Mpc::prepare(Clock::time_point deadline) {
   SolveStatus why = SolveStatus::MaxIterations;
   if (solver_->prepare(deadline, why)) {
     prepare_ms_ = millisSince(start);
+    if (solver_->staleKnots() > 0) ++counters_.partial_preparations;
   } else if (why == SolveStatus::NonFinite || why == SolveStatus::NoDescent) {
     // The trajectory cannot be linearized: the next tick starts again from standing.
     ++counters_.failed_solves;

@@ -24,6 +24,7 @@
 // the problem around the robot's measured position and solves it to convergence before the first
 // policy goes out.
 
+#include <algorithm>
 #include <chrono>
 #include <memory>
 
@@ -52,6 +53,11 @@ struct MpcCounters {
   std::int64_t unprepared_solves = 0;  // ticks after start-up that solved without a preparation
   std::int64_t late_ticks = 0;         // started after their time (the last period's work ran over)
   std::int64_t stall_restarts = 0;     // warm starts made again after line searches stalled
+  // Overload (a period's work ran past the next tick's start; controller/README.md, "Overload"):
+  std::int64_t shed_line_searches = 0;    // late ticks whose line search tried the full step only
+  std::int64_t partial_preparations = 0;  // preparations that reused the tail's linearization
+  std::int64_t shed_ticks = 0;            // ticks without preparation: the previous policy re-sent
+  std::int64_t max_misses_in_a_row = 0;   // the longest run of periods with a deadline miss
 };
 
 class Mpc {
@@ -92,7 +98,16 @@ class Mpc {
   // Counted by the real-time loop, which knows the period: a tick it skipped because its deadline
   // had passed before it could start (a deadline miss), and a tick that started late but ran.
   void countSkippedTick() { ++counters_.deadline_misses; }
-  void countLateTick() { ++counters_.late_ticks; }
+  // A late tick sheds work: its line search tries the full step only.
+  void countLateTick() {
+    ++counters_.late_ticks;
+    late_ = true;
+  }
+  // After each period: whether it had a deadline miss (for max_misses_in_a_row).
+  void countPeriod(bool missed) {
+    misses_in_a_row_ = missed ? misses_in_a_row_ + 1 : 0;
+    counters_.max_misses_in_a_row = std::max(counters_.max_misses_in_a_row, misses_in_a_row_);
+  }
   // The last tick made the first solve of a (re)built problem, which runs without deadline.
   bool startupTick() const { return startup_tick_; }
 
@@ -112,7 +127,8 @@ class Mpc {
   // (the remainder, under half a knot, is left to FDDP as a gap at x0). False, and nothing
   // shifted, when t is past the horizon: the warm start is used up.
   bool shiftTo(double t);
-  bool solveTick(double t, Clock::time_point deadline, SolveStatus& status);
+  // shed: when not null, a real-time tick without its preparation solves nothing and sets it.
+  bool solveTick(double t, Clock::time_point deadline, bool late, SolveStatus& status, bool* shed);
   void restartWarmStart(double t);
   unsigned knotMask(int k) const;  // the contacts knot k closes
   void writePolicy(std::int64_t utime, double t, std::int8_t status);
@@ -148,7 +164,8 @@ class Mpc {
   double t_last_ = 0.0;      // plan time of the last tick's state (x_ holds it)
   double prepare_ms_ = 0.0;  // its duration
   int previous_ticks_ = 0;   // consecutive ticks on the previous policy
-  int stalled_ticks_ = 0;    // consecutive solves whose line search took no step
+  bool late_ = false;        // the coming tick started late (countLateTick)
+  std::int64_t misses_in_a_row_ = 0;
 
   Eigen::VectorXd x_;  // the state as a solver vector
   policy_t policy_, previous_;

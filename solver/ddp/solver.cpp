@@ -269,8 +269,16 @@ double Solver::computeGaps() {
   return fs_[0].lpNorm<1>() + tail_gap_;
 }
 
-bool Solver::computeDerivatives() {
-  const double cost = problem_.calcDiff(xs_, us_);
+void Solver::emulateSlowHost(Clock::time_point since) const {
+  if (!(options.emulated_slowdown > 1.0)) return;
+  const auto until = Clock::now() + (Clock::now() - since) * (options.emulated_slowdown - 1.0);
+  while (Clock::now() < until) {
+  }
+}
+
+bool Solver::computeDerivatives(int knots) {
+  const SlowHostGuard slow{*this};
+  const double cost = problem_.calcDiff(xs_, us_, knots);
   const double gap = computeGaps();
   if (!std::isfinite(cost) || !std::isfinite(gap)) return false;
   cost_ = cost;
@@ -357,6 +365,7 @@ void Solver::eulerProducts(const ActionData& d, int nu) {
 }
 
 bool Solver::backwardPass() {
+  const SlowHostGuard slow{*this};
   ++backward_passes_;
   backward_nonfinite_ = false;
   const bool box = kind_ == SolverKind::BoxFddp && has_bounds_;
@@ -496,6 +505,7 @@ void Solver::predictChange() {
 }
 
 double Solver::forwardPass(double alpha) {
+  const SlowHostGuard slow{*this};
   ++forward_passes_;
   const StateSpace& state = problem_.state();
   const bool box = kind_ == SolverKind::BoxFddp && has_bounds_;
@@ -537,9 +547,27 @@ bool Solver::prepare(Clock::time_point deadline, SolveStatus& status) {
     status = SolveStatus::Deadline;
     return false;
   }
-  if (!finiteTrajectory() || !computeDerivatives()) {
+  // The knots the time left can linearize, the backward pass's time (with a margin) kept aside;
+  // the others keep their previous linearization (prepare()'s note in solver.hpp).
+  int knots = T_;
+  if (deadline != Clock::time_point::max() && knot_seconds_ > 0.0) {
+    const double left = std::chrono::duration<double>(deadline - start).count();
+    const double budget = left - 1.5 * backward_seconds_;
+    knots = static_cast<int>(std::clamp(budget / knot_seconds_, 0.0, static_cast<double>(T_)));
+    if (knots < T_ / 4) {
+      status = SolveStatus::Deadline;
+      return false;
+    }
+  }
+  stale_knots_ = T_ - knots;
+  if (!finiteTrajectory() || !computeDerivatives(knots)) {
     status = fail(SolveStatus::NonFinite);
     return false;
+  }
+  const Clock::time_point derived = Clock::now();
+  if (knots == T_) {  // a full linearization: update the estimate of a knot's share
+    const double per_knot = std::chrono::duration<double>(derived - start).count() / (T_ + 1);
+    knot_seconds_ = knot_seconds_ > 0.0 ? 0.8 * knot_seconds_ + 0.2 * per_knot : per_knot;
   }
   // A Quu that is not positive definite: more regularization, until the limit or the deadline.
   // From μ = 0 the first raise goes to kRegFloor, so the retries are bounded.
@@ -558,6 +586,8 @@ bool Solver::prepare(Clock::time_point deadline, SolveStatus& status) {
       return false;
     }
   }
+  const double backward = std::chrono::duration<double>(Clock::now() - derived).count();
+  backward_seconds_ = backward_seconds_ > 0.0 ? 0.8 * backward_seconds_ + 0.2 * backward : backward;
   prepare_ms_ = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   prepared_ = true;
   return true;

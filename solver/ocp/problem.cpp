@@ -55,18 +55,21 @@ void forEachKnot(int n, int threads, F&& f) {
 
 double ShootingProblem::calc(const std::vector<Eigen::VectorXd>& xs,
                              const std::vector<Eigen::VectorXd>& us) {
-  return evaluate(xs, us, false);
+  return evaluate(xs, us, false, horizon());
 }
 
 double ShootingProblem::calcDiff(const std::vector<Eigen::VectorXd>& xs,
-                                 const std::vector<Eigen::VectorXd>& us) {
-  return evaluate(xs, us, true);
+                                 const std::vector<Eigen::VectorXd>& us, int knots) {
+  return evaluate(xs, us, true, knots < 0 ? horizon() : std::min(knots, horizon()));
 }
 
 double ShootingProblem::evaluate(const std::vector<Eigen::VectorXd>& xs,
-                                 const std::vector<Eigen::VectorXd>& us, bool derivatives) {
+                                 const std::vector<Eigen::VectorXd>& us, bool derivatives,
+                                 int knots) {
   const int T = horizon();
-  forEachKnot(T + 1, std::min(threads_, max_threads_), [&](int k) {
+  // Knots 0 .. knots - 1, then the terminal one (index `knots` stands for T).
+  forEachKnot(knots + 1, std::min(threads_, max_threads_), [&](int i) {
+    const int k = i < knots ? i : T;
     ActionModel& m = k < T ? *running_[k] : *terminal_;
     ActionData& d = k < T ? *running_data_[k] : *terminal_data_;
     const Eigen::VectorXd& u = k < T ? us[k] : empty_;

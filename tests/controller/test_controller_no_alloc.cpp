@@ -59,13 +59,27 @@ void tickNoAllocation(const std::string& robot, int ticks) {
   }
   EXPECT_EQ(node.mpc().counters().fallbacks, 0);
   EXPECT_EQ(node.mpc().counters().unprepared_solves, ticks / 2);
-  // A deadline already passed: the best iterate, flagged.
+  // A real-time tick (finite deadline) without its preparation: the previous policy re-sent
+  // instead of a whole iteration after the state (overload shedding), and the period prepares.
+  node.prepare(Mpc::Clock::now());  // cut: nothing prepared
   t += period;
   EXPECT_EQ(allocations([&] {
+              feed(t);
+              node.tick(Mpc::Clock::now() + std::chrono::milliseconds(4));
+            }),
+            0);
+  EXPECT_EQ(node.mpc().policy().status, kPolicyPrevious);
+  EXPECT_EQ(node.mpc().counters().shed_ticks, 1);
+  EXPECT_EQ(node.mpc().counters().fallbacks, 0);
+  // Prepared, with a deadline already passed: the best iterate, flagged.
+  t += period;
+  EXPECT_EQ(allocations([&] {
+              node.prepare(Mpc::Clock::time_point::max());
               feed(t);
               node.tick(Mpc::Clock::now());
             }),
             0);
+  EXPECT_EQ(node.mpc().status().prepared, 1);
   EXPECT_EQ(node.mpc().policy().status, kPolicyDeadline);
   // Fallbacks: no new state for longer than max_state_age: the previous policy, then hold.
   std::this_thread::sleep_for(std::chrono::duration<double>(config.max_state_age * 1.5));
