@@ -351,7 +351,6 @@ void Mpc::prepare(Clock::time_point deadline) {
   SolveStatus why = SolveStatus::MaxIterations;
   if (solver_->prepare(deadline, why)) {
     prepare_ms_ = millisSince(start);
-    if (solver_->staleKnots() > 0) ++counters_.partial_preparations;
   } else if (why == SolveStatus::NonFinite || why == SolveStatus::NoDescent) {
     // The trajectory cannot be linearized: the next tick starts again from standing.
     ++counters_.failed_solves;

@@ -54,10 +54,9 @@ struct MpcCounters {
   std::int64_t late_ticks = 0;         // started after their time (the last period's work ran over)
   std::int64_t stall_restarts = 0;     // warm starts made again after line searches stalled
   // Overload (a period's work ran past the next tick's start; controller/README.md, "Overload"):
-  std::int64_t shed_line_searches = 0;    // late ticks whose line search tried the full step only
-  std::int64_t partial_preparations = 0;  // preparations that reused the tail's linearization
-  std::int64_t shed_ticks = 0;            // ticks without preparation: the previous policy re-sent
-  std::int64_t max_misses_in_a_row = 0;   // the longest run of periods with a deadline miss
+  std::int64_t shed_line_searches = 0;   // late ticks whose line search tried the full step only
+  std::int64_t shed_ticks = 0;           // ticks without preparation: the previous policy re-sent
+  std::int64_t max_misses_in_a_row = 0;  // the longest run of periods with a deadline miss
 };
 
 class Mpc {

@@ -97,11 +97,11 @@ void runRealTime(MpcNode& node, lcm::LCM& in, const RunOptions& options) {
     const std::int64_t misses = node.mpc().counters().deadline_misses;
     node.tick(toTimePoint(deadline));
     node.mpc().countPeriod(node.mpc().counters().deadline_misses > misses);
-    // The policy is out: linearize for the next state within this period, so that the next tick
-    // starts on time. Short of time, the preparation linearizes only the knots it can and keeps
-    // the tail's previous linearization; with no time at all, the next tick re-sends the previous
-    // policy and prepares again (controller/README.md, "Overload").
-    node.prepare(toTimePoint(addNanos(next, period_ns)));
+    // The policy is out: linearize for the next state, by half a period into the next one at the
+    // latest, so that the next tick still has time for its rollout before its deadline; a
+    // preparation cut there leaves the next tick to re-send the previous policy and prepare again
+    // (controller/README.md, "Overload").
+    node.prepare(toTimePoint(addNanos(next, period_ns + period_ns / 2)));
     clock_gettime(CLOCK_MONOTONIC, &now);
     // The start-up solve runs without deadline: the periods it took are not ticks.
     if (node.mpc().startupTick()) next = now;
@@ -151,17 +151,16 @@ void writeSummary(const MpcNode& node, const std::string& path) {
       "stride-mpc: %lld ticks, %lld states accepted, %lld rejected, tick latency p50 %.3f ms "
       "p99 %.3f ms max %.3f ms (%ld ticks), %lld deadline misses, %lld late ticks, %lld fallbacks, "
       "%lld stale states, %lld failed solves, %lld unprepared solves, %lld plan updates\n"
-      "stride-mpc: overload: %lld ticks with the full step only, %lld partial preparations, %lld "
-      "ticks re-sending the previous policy, at most %lld misses in a row; %lld stalled-solve "
-      "restarts\n",
+      "stride-mpc: overload: %lld ticks with the full step only, %lld ticks re-sending the "
+      "previous policy, at most %lld misses in a row; %lld stalled-solve restarts\n",
       static_cast<long long>(c.ticks), static_cast<long long>(node.acceptedStates()),
       static_cast<long long>(node.rejected()), lat.p50, lat.p99, lat.max, lat.count,
       static_cast<long long>(c.deadline_misses), static_cast<long long>(c.late_ticks),
       static_cast<long long>(c.fallbacks), static_cast<long long>(c.stale_states),
       static_cast<long long>(c.failed_solves), static_cast<long long>(c.unprepared_solves),
       static_cast<long long>(node.planUpdates()), static_cast<long long>(c.shed_line_searches),
-      static_cast<long long>(c.partial_preparations), static_cast<long long>(c.shed_ticks),
-      static_cast<long long>(c.max_misses_in_a_row), static_cast<long long>(c.stall_restarts));
+      static_cast<long long>(c.shed_ticks), static_cast<long long>(c.max_misses_in_a_row),
+      static_cast<long long>(c.stall_restarts));
   const CommandCounters& cc = node.commands().counters();
   std::printf(
       "stride-mpc: commands: %lld accepted, %lld rejected, %lld clamped, %lld deadman timeouts\n",
@@ -189,7 +188,6 @@ void writeSummary(const MpcNode& node, const std::string& path) {
     << ",\n  \"ticks_without_state\": " << c.ticks_without_state
     << ",\n  \"stall_restarts\": " << c.stall_restarts
     << ",\n  \"overload\": {\"full_step_only\": " << c.shed_line_searches
-    << ", \"partial_preparations\": " << c.partial_preparations
     << ", \"previous_policy_ticks\": " << c.shed_ticks
     << ", \"max_misses_in_a_row\": " << c.max_misses_in_a_row << "}"
     << ",\n  \"commands\": {\"accepted\": " << cc.accepted

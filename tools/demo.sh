@@ -8,7 +8,7 @@
 #
 #   tools/demo.sh [--robot NAME | --humanoid] [--commands FILE | --teleop] [--duration S]
 #                 [--realtime | --lockstep] [--robots-dir DIR]... [--check-tracking]
-#                 [--host-network] [--out DIR] [--summary FILE] [--spy]
+#                 [--host-network] [--out DIR] [--summary FILE] [--spy] [--slow-host F]
 #
 #   --robot NAME      stride_quad (default), solo12, anymal_c, stride_humanoid, talos_reduced:
 #                     config/controller/NAME.yaml; solo12, anymal_c and talos_reduced need
@@ -22,10 +22,10 @@
 #   --teleop          drive from the keyboard instead (real time, no time limit): arrows / WASD,
 #                     Q/E turn, space stands, 1-4 gaits, x or Ctrl-C quits and ends the demo
 #   --duration S      seconds of robot time (default: the script's last entry + 4 s)
-#   --lockstep        deterministic lock-step: the sim waits for every answer (the default, except
-#                     for stride_humanoid: on this 2-core machine the quadrupeds' 200 Hz ticks and
-#                     the sim do not fit real time together yet, see tools/bench/README.md)
-#   --realtime        wall clock: the sim at 1 kHz, the controller at its rate
+#   --realtime        wall clock: the sim at 1 kHz, the controller at its rate, each on its own
+#                     core (the default for every robot)
+#   --lockstep        deterministic lock-step: the sim waits for every answer (the same bits on
+#                     every run, as fast as the machine goes)
 #   --robots-dir DIR  where example-robot-data is looked for (repeatable), before
 #                     build/robot_packages and ROS_PACKAGE_PATH
 #   --check-tracking  exit 1 when a command segment missed its command or the robot fell
@@ -34,12 +34,15 @@
 #   --out DIR         where the log and summaries go (default build/demo)
 #   --summary FILE    the summary as JSON (default DIR/summary.json)
 #   --spy             also start lcm-spy (tools/lcm-spy.sh) on the demo's bus; needs a display
+#   --slow-host F     the controller's solver takes F times its time (busy), as on a host F times
+#                     slower: shows how it sheds work when a period overruns (controller/README.md,
+#                     "Overload")
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
-spy=0 check=0
+spy=0 check=0 slow_host=""
 robots_dirs=()
 args=("$@")
 need_value() { [ $# -ge 2 ] || { echo "demo.sh: $1 needs a value (--help)" >&2; exit 2; }; }
@@ -58,6 +61,7 @@ while [ $# -gt 0 ]; do
     --out) need_value "$@"; out="$2"; shift 2 ;;
     --summary) need_value "$@"; summary="$2"; shift 2 ;;
     --spy) spy=1; shift ;;
+    --slow-host) need_value "$@"; slow_host="$2"; shift 2 ;;
     -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown option '$1' (--help)" >&2; exit 2 ;;
   esac
@@ -94,7 +98,7 @@ else
 fi
 awk -v d="$duration" 'BEGIN { exit !(d == "" || d + 0 > 0) }' ||
   { echo "demo.sh: --duration must be a positive number of seconds" >&2; exit 2; }
-[ -z "$mode" ] && { [ "$robot" = stride_humanoid ] && mode=realtime || mode=lockstep; }
+[ -z "$mode" ] && mode=realtime
 out="${out:-$build/demo}"
 summary="${summary:-$out/summary.json}"
 
@@ -207,6 +211,7 @@ if [ "$spy" = 1 ]; then
   sleep 3  # the JVM starts slowly
 fi
 mpc_args=(--config "$config" "${dirs_args[@]}" --summary "$out/mpc.json")
+[ -n "$slow_host" ] && mpc_args+=(--emulate-slow-host "$slow_host")
 sim_args=(--robot "$robot_yaml" "${dirs_args[@]}" --duration "$sim_duration"
   --summary "$out/sim.json" --hold-kp "${hold_kp:-5}" --hold-kd "${hold_kd:-0.2}")
 if [ "$mode" = lockstep ]; then

@@ -276,9 +276,9 @@ void Solver::emulateSlowHost(Clock::time_point since) const {
   }
 }
 
-bool Solver::computeDerivatives(int knots) {
+bool Solver::computeDerivatives() {
   const SlowHostGuard slow{*this};
-  const double cost = problem_.calcDiff(xs_, us_, knots);
+  const double cost = problem_.calcDiff(xs_, us_);
   const double gap = computeGaps();
   if (!std::isfinite(cost) || !std::isfinite(gap)) return false;
   cost_ = cost;
@@ -547,27 +547,9 @@ bool Solver::prepare(Clock::time_point deadline, SolveStatus& status) {
     status = SolveStatus::Deadline;
     return false;
   }
-  // The knots the time left can linearize, the backward pass's time (with a margin) kept aside;
-  // the others keep their previous linearization (prepare()'s note in solver.hpp).
-  int knots = T_;
-  if (deadline != Clock::time_point::max() && knot_seconds_ > 0.0) {
-    const double left = std::chrono::duration<double>(deadline - start).count();
-    const double budget = left - 1.5 * backward_seconds_;
-    knots = static_cast<int>(std::clamp(budget / knot_seconds_, 0.0, static_cast<double>(T_)));
-    if (knots < T_ / 4) {
-      status = SolveStatus::Deadline;
-      return false;
-    }
-  }
-  stale_knots_ = T_ - knots;
-  if (!finiteTrajectory() || !computeDerivatives(knots)) {
+  if (!finiteTrajectory() || !computeDerivatives()) {
     status = fail(SolveStatus::NonFinite);
     return false;
-  }
-  const Clock::time_point derived = Clock::now();
-  if (knots == T_) {  // a full linearization: update the estimate of a knot's share
-    const double per_knot = std::chrono::duration<double>(derived - start).count() / (T_ + 1);
-    knot_seconds_ = knot_seconds_ > 0.0 ? 0.8 * knot_seconds_ + 0.2 * per_knot : per_knot;
   }
   // A Quu that is not positive definite: more regularization, until the limit or the deadline.
   // From μ = 0 the first raise goes to kRegFloor, so the retries are bounded.
@@ -586,8 +568,6 @@ bool Solver::prepare(Clock::time_point deadline, SolveStatus& status) {
       return false;
     }
   }
-  const double backward = std::chrono::duration<double>(Clock::now() - derived).count();
-  backward_seconds_ = backward_seconds_ > 0.0 ? 0.8 * backward_seconds_ + 0.2 * backward : backward;
   prepare_ms_ = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   prepared_ = true;
   return true;

@@ -121,13 +121,8 @@ class Solver {
   // when not. Until the next solve() only x0 may change: anything else that changes the problem
   // (shift, references, phases) must be followed by discardPreparation(); setWarmStart and
   // shiftWarmStart discard it themselves.
-  // Under a finite deadline the preparation sheds work: it linearizes only the first knots the
-  // time left can take (estimated from the last full preparations, the backward pass's share kept
-  // aside) and the others keep their previous linearization; with time for fewer than a quarter of
-  // the knots it does nothing (Deadline). staleKnots(): how many the last preparation reused.
   bool prepare(Clock::time_point deadline, SolveStatus& status);
   bool prepared() const { return prepared_; }
-  int staleKnots() const { return stale_knots_; }
   void discardPreparation() { prepared_ = false; }
 
   const std::vector<Eigen::VectorXd>& xs() const { return xs_; }
@@ -163,7 +158,7 @@ class Solver {
   // a value is not finite); the nonlinear rollout at step α into the trial trajectory (returns its
   // cost); the cost change the quadratic model of the last backward pass predicts for step α,
   // once predictChange() has run the linearized rollout from the current gap f_0.
-  bool computeDerivatives(int knots = -1);  // of the first `knots` knots (-1: all)
+  bool computeDerivatives();
   bool backwardPass();
   double forwardPass(double alpha);
   void predictChange();  // d1, d2 from the linearized rollout of the step
@@ -204,9 +199,6 @@ class Solver {
   bool backward_nonfinite_ = false;
   bool feasible_ = false;
   bool prepared_ = false;  // derivatives and backward pass done for the next iteration
-  int stale_knots_ = 0;
-  // Running estimates of a knot's calcDiff and of a backward pass [s], for prepare's budget.
-  double knot_seconds_ = 0.0, backward_seconds_ = 0.0;
   void emulateSlowHost(Clock::time_point since) const;
   struct SlowHostGuard {  // emulateSlowHost at the end of the scope
     const Solver& solver;

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Graceful overload: the closed loop in real time (tools/demo.sh --realtime, in a private network
+# namespace this test creates) with the controller's solver emulating a host 2x slower
+# (--slow-host 2: every solver phase busy for twice its duration), so that a period's work
+# (~2.3 ms of the 5 ms on this machine) outgrows the period. The controller must shed work in its
+# documented order (controller/README.md, "Overload"): misses stay isolated (never two periods in
+# a row), every tick that runs sends a policy, the robot is never left without one, and it trots
+# on without falling. Exit 77 only when namespaces are not permitted.
+# Not in ctest yet: at 2x the quadruped trots on, but two periods in a row missed once
+# (controller/README.md, "Overload"; issue 16 stays open on it).
+#   tests/controller/overload.sh build .
+set -euo pipefail
+build=$1 root=$2
+# shellcheck source=../private_netns.sh
+source "$(dirname "$0")/../private_netns.sh"
+private_netns "$@"
+export LCM_DEFAULT_URL='udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304'
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+printf -- '- {at: 0.0, gait: stand}\n- {at: 1.0, gait: trot, vx: 0.3}\n' > "$dir/drive.yaml"
+status=0
+STRIDE_DEMO_INSIDE=1 STRIDE_BUILD_DIR="$build" timeout 150 "$root/tools/demo.sh" \
+  --robot stride_quad --realtime --slow-host 2 --commands "$dir/drive.yaml" --duration 10 \
+  --out "$dir/demo" > "$dir/demo.txt" 2>&1 || status=$?
+cat "$dir/demo.txt"
+[ "$status" = 0 ] || { echo "FAIL: tools/demo.sh exited $status"; exit 1; }
+value() { sed -n "s/.*\"$1\": \([0-9]*\).*/\1/p" "$2" | head -n 1; }
+mpc="$dir/demo/mpc.json" sim="$dir/demo/sim.json"
+cat "$mpc" "$sim"
+grep -q '"fell": false' "$sim" || { echo "FAIL: the robot fell"; exit 1; }
+in_a_row=$(value max_misses_in_a_row "$mpc")
+[ "$in_a_row" -le 1 ] || { echo "FAIL: $in_a_row periods in a row missed their deadline"; exit 1; }
+shed=$(($(value full_step_only "$mpc") +
+  $(value previous_policy_ticks "$mpc")))
+[ "$shed" -gt 0 ] || { echo "FAIL: no work was shed: was the host slow enough?"; exit 1; }
+# Every tick that ran answered: the sim received a policy for each (the ticks before the first
+# state answer nothing).
+ticks=$(value ticks "$mpc") without=$(value ticks_without_state "$mpc")
+policies=$(value policies "$sim")
+[ "$policies" -ge $((ticks - without - 2)) ] ||
+  { echo "FAIL: $ticks ticks ($without without a state), $policies policies received"; exit 1; }
+[ "$(value exhausted_steps "$sim")" = 0 ] && [ "$(value hold_steps "$sim")" = 0 ] ||
+  { echo "FAIL: the robot ran past its policies or on its hold controller"; exit 1; }
+echo "PASS: 2x slower solver in real time: $shed periods shed work, at most $in_a_row miss in a" \
+  "row, $policies policies for $ticks ticks, no fall"
