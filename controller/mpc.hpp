@@ -5,16 +5,18 @@
 //
 // A tick, after start-up:
 //   1. plan time t of the state (its stamp minus the plan's start);
-//   2. shift the horizon and the warm start by the whole knots elapsed since the last solve
-//      (the remainder, under half a knot, stays as an FDDP gap), set x0 = the state;
+//   2. shift the horizon by the whole short knots elapsed since the last solve (the remainder,
+//      under half a knot, stays as an FDDP gap), set x0 = the state;
 //   3. re-plan the references from the state and the command (GaitGenerator::plan: contact timing
-//      with gait switches, footholds, swing arcs, base pose and twist) and rewrite every knot's
-//      contacts and references for them (LocomotionProblem::update);
+//      with gait switches, footholds, swing arcs, base pose and twist), rewrite every knot's
+//      contacts and references for them (LocomotionProblem::update) and move the warm start onto
+//      the knots' new times (Solver::retimeWarmStart; controller/README.md, "Time grid");
 //   4. at most max_iterations of (box-)FDDP, stopped at the deadline;
 //   5. the policy: u_ff, K, x_ref of the first contact knots (impulse knots take no time and have
 //      no control, so they are skipped);
 //   6. on a stale state or a failed solve, a fallback (the previous policy advanced in time, or a
-//      joint hold policy), flagged in both messages and counted.
+//      joint hold policy), flagged in both messages and counted; in real time, a tick whose
+//      preparation did not finish re-sends the previous policy (controller/README.md, "Overload").
 // Steps 2-3 and the first half of step 4 do not need the state (Solver::prepare: derivatives and
 // backward pass never read x0), so prepare() runs them after the policy went out, for the time
 // the next state is expected at; the next tick, when its state is less than a knot from the

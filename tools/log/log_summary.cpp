@@ -44,7 +44,7 @@ struct Window {
 void printWindows(const std::vector<Window>& windows, double width, long long misses_end,
                   long long late_end) {
   std::printf(
-      "by %.0f s window: start [s], ticks, deadline misses, late starts, tick latency p50 "
+      "by %g s window: start [s], ticks, deadline misses, late starts, tick latency p50 "
       "[us], preparation p50 / p99 [us], tick + preparation p50 [us]\n",
       width);
   for (std::size_t i = 0; i < windows.size(); ++i) {
