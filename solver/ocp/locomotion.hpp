@@ -125,8 +125,9 @@ class LocomotionProblem {
   // The body-height postures a generator's references move through (GaitGenerator::
   // crouchPostures: joint positions for offsets spread evenly over [-max_height, max_height]):
   // each knot's control reference then holds the posture of its reference height instead of the
-  // nominal one (a control cost pulling to the nominal posture's torques kept a quadruped
-  // commanded 2 cm up at less than 1 cm). Setup (allocates); fewer than two postures: none.
+  // nominal one, whose torques are not those of a raised or crouched body (on the quadruped's
+  // trot the effect on the height reached is small: ~1 mm). Setup (allocates); fewer than two
+  // postures: none.
   void setPostures(const std::vector<Eigen::VectorXd>& joints, double max_height);
   // A warm start that follows the references: each knot's state reference and holding control
   // (after update).

