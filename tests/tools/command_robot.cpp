@@ -91,9 +91,10 @@ class Robot {
 int run(double duration, double rate, double speed, std::int64_t utime0) {
   const char* env = std::getenv("LCM_DEFAULT_URL");
   const std::string url = env != nullptr ? env : "";
-  if (url.empty() || (url.rfind("udpm://", 0) == 0 && !onlyLoopback())) {
+  const bool udpm = url.rfind("udpm://", 0) == 0;
+  if (url.empty() || (udpm && (!onlyLoopback() || url.find("ttl=0") == std::string::npos))) {
     std::fprintf(stderr,
-                 "command-robot: needs LCM_DEFAULT_URL, and udpm only in a private "
+                 "command-robot: needs LCM_DEFAULT_URL, and udpm only with ttl=0 in a private "
                  "network namespace (only lo in /proc/net/dev)\n");
     return 1;
   }
