@@ -20,9 +20,15 @@ constexpr double kContactDamping = 50.0;
 constexpr double kSoleMargin = 0.8;
 // μ at which a line search that takes no step counts as stuck (the solve fails at 1e9).
 constexpr double kStalledRegularization = 1e4;
+// A tick's rollout may take this much longer than the average before its answer is late.
+constexpr double kTrialMargin = 1.5;
 
 double millisSince(Solver::Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Solver::Clock::now() - t0).count();
+}
+Solver::Clock::time_point millisFromNow(double ms) {
+  return Solver::Clock::now() + std::chrono::duration_cast<Solver::Clock::duration>(
+                                    std::chrono::duration<double, std::milli>(ms));
 }
 }  // namespace
 
@@ -160,8 +166,8 @@ unsigned Mpc::knotMask(int k) const {
   return mask;
 }
 
-void Mpc::restartWarmStart(double t) {
-  t_warm_ = t;
+void Mpc::restartWarmStart(double t, double t_knot0) {
+  t_warm_ = t_knot0;
   if (!replan(t)) return;
   loco_->referenceWarmStart(*gen_, xs_warm_, us_warm_);
   solver_->setWarmStart(xs_warm_, us_warm_);
@@ -200,10 +206,15 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, bool late, SolveStatus
   status_.prepare_ms = use_prepared ? prepare_ms_ : 0.0;
   problem.setX0(x_);
   // Overload, last resort: in real time a tick without its preparation (cut by the period's end,
-  // or made for another time) would run a whole iteration before its answer and make the next
-  // period late too. It re-sends the previous policy instead, and the period prepares again.
-  if (shed != nullptr && !use_prepared && !first && !need_restart_ &&
-      deadline != Clock::time_point::max()) {
+  // made for another time, or a restart after a failed solve) would run a whole iteration before
+  // its answer and make the next period late too. It re-sends the previous policy instead, and
+  // the period prepares again (a restart included: prepare()).
+  // So does a tick that starts too late for even one rollout before its deadline (a late answer
+  // would make two misses in a row: the one that made it late, and its own); its preparation
+  // stays for the next tick.
+  const bool real_time = deadline != Clock::time_point::max();
+  if (shed != nullptr && !first && real_time &&
+      (!use_prepared || millisFromNow(trial_ms_) > deadline)) {
     *shed = true;
     return false;
   }
@@ -216,7 +227,7 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, bool late, SolveStatus
     // every impulse knot after each shift, and line searches that stall. (A restart re-plans for
     // its own warm start, at t.)
     if (need_restart_ || !shiftTo(t)) {
-      restartWarmStart(t);
+      restartWarmStart(t, t);
       if (need_restart_) return false;  // the references could not be planned
     } else if (!replan(t)) {
       return false;
@@ -228,8 +239,16 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, bool late, SolveStatus
   solver_->options.line_search_steps = first ? 10 : late ? 1 : config_.line_search_steps;
   if (late && !first) ++counters_.shed_line_searches;
   solver_->options.reg_min = first ? SolverOptions().reg_min : config_.min_regularization;
+  const Clock::time_point solve_start = Clock::now();
   result = first ? solver_->solve(config_.initial_iterations)
                  : solver_->solve(config_.max_iterations, deadline);
+  // What one rollout of a prepared tick takes on this host (with the rest of the solve, and a
+  // margin): the least time a tick needs before its deadline. Slowly averaged, so that one
+  // interrupted solve does not shed the next ticks.
+  if (use_prepared && !first && solver_->forwardPasses() > 0) {
+    const double need = kTrialMargin * millisSince(solve_start) / solver_->forwardPasses();
+    trial_ms_ = trial_ms_ == 0.0 ? need : 0.9 * trial_ms_ + 0.1 * need;
+  }
   if (result == SolveStatus::NonFinite || result == SolveStatus::NoDescent) {
     ++counters_.failed_solves;
     need_restart_ = true;
@@ -248,6 +267,7 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   status_.solver_status = -1;
   startup_tick_ = false;
   solved_ = false;
+  tried_ = false;
   const bool late = late_;  // countLateTick() before this tick
   late_ = false;
   status_.prepared = 0;
@@ -284,18 +304,33 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
     ++counters_.stale_states;
   } else {
     const Clock::time_point solve_start = Clock::now();
+    t_last_ = t;
+    tried_ = true;
     SolveStatus result = SolveStatus::NonFinite;
     bool shed = false;
     bool ok = solveTick(t, deadline, late, result, &shed);
     if (shed) {
       if (have_previous_ && previousPolicy(state->utime)) {
         ++counters_.shed_ticks;
-        solved_ = true;  // the period prepares for the next tick
-        t_last_ = t;
+        solved_ = !need_restart_;  // the period prepares for the next tick (or restarts)
+        countAnswer(deadline);
         finishStatus(tick_start, policy_.status);
         return true;
       }
-      ok = solveTick(t, deadline, late, result, nullptr);  // nothing to re-send: solve now
+      // Nothing left to re-send (no policy solved for a whole policy's length): a whole iteration
+      // now when the last ones say it ends before the deadline; else the fallback below, and
+      // the period prepares (an iteration past the deadline made several misses in a row at 3x
+      // slowdown).
+      if (millisFromNow(kTrialMargin * (prepare_ms_ + trial_ms_)) < deadline) {
+        ok = solveTick(t, deadline, late, result, nullptr);
+      } else {
+        solved_ = !need_restart_;
+        ++counters_.fallbacks;
+        holdPolicy(state->utime, t);
+        countAnswer(deadline);
+        finishStatus(tick_start, policy_.status);
+        return true;
+      }
     }
     status_.solve_ms = millisSince(solve_start);
     status_.solver_status = static_cast<std::int32_t>(result);
@@ -318,13 +353,12 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
         ++counters_.stall_restarts;
       }
       solved_ = true;
-      t_last_ = t;
+      // Cut: the line search stopped for the deadline (before it, when its next trial would have
+      // ended after it: then on time, not a miss).
       const bool cut = result == SolveStatus::Deadline;
-      // A miss: the solve stopped at the deadline, or its answer is out after it all the same
-      // (not the start-up solve, which runs without one before the first policy).
-      if (cut || (!startup_tick_ && Clock::now() > deadline)) ++counters_.deadline_misses;
       writePolicy(state->utime, t, cut ? kPolicyDeadline : kPolicySolved);
       previous_ticks_ = 0;
+      countAnswer(deadline);
       finishStatus(tick_start, policy_.status);
       return true;
     }
@@ -337,26 +371,56 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   } else {
     holdPolicy(state->utime, t);
   }
+  countAnswer(deadline);
   finishStatus(tick_start, policy_.status);
   return true;
 }
 
+void Mpc::countAnswer(Clock::time_point deadline) {
+  // A deadline is on the answer: whatever policy goes out after it (solved, cut, re-sent, hold)
+  // is a miss; the start-up solve has none.
+  if (!startup_tick_ && deadline != Clock::time_point::max() && Clock::now() > deadline)
+    ++counters_.deadline_misses;
+}
+
 void Mpc::prepare(Clock::time_point deadline) {
-  if (!solved_ || need_restart_) return;
-  solved_ = false;  // one preparation per solved tick
-  // For when the next state is expected; past the horizon the next tick restarts anyway.
-  if (!shiftTo(t_last_ + 1.0 / config_.rate_hz)) return;
-  if (!replan(t_last_)) return;  // on the trajectory's grid, as in solveTick
-  const Clock::time_point start = Clock::now();
+  // After a failed or stalled solve, the warm start is made again here, from the references
+  // planned on the last state, for when the next state is expected: the restart's whole
+  // iteration then runs off the state-to-policy path, as every other preparation does (in the
+  // tick it missed the deadline, 4 of 4 times in a 60 s real-time run).
+  const bool restart = need_restart_ && have_solved_ && tried_;
+  if (!solved_ && !restart) return;
+  solved_ = false;  // one preparation per tick that solved, or tried to
+  tried_ = false;
+  // Past its deadline already (after a missed period it ends at the next tick's start): nothing
+  // to start; the next tick re-sends the previous policy and its period prepares.
+  if (Clock::now() >= deadline) return;
+  const double t_next = t_last_ + 1.0 / config_.rate_hz;
+  // A tick shed for lack of time left its preparation unused: it still serves the next state.
+  if (!restart && solver_->prepared() && std::abs(t_next - t_warm_) < config_.locomotion.dt) return;
+  // A preparation the last period's deadline cut goes on where it stopped while it still serves
+  // the next state (less than a knot from its knot 0, as in solveTick): its work is not redone.
+  const bool resume =
+      !restart && solver_->preparing() && std::abs(t_next - t_warm_) < config_.locomotion.dt;
+  if (!resume) solver_->discardPreparation();
+  if (restart) {
+    restartWarmStart(t_last_, t_next);
+    if (need_restart_) return;  // the references could not be planned: the next tick tries
+  } else if (!resume) {
+    // For when the next state is expected; past the horizon the next tick restarts anyway.
+    if (!shiftTo(t_next)) return;
+    if (!replan(t_last_)) return;  // on the trajectory's grid, as in solveTick
+  }
   SolveStatus why = SolveStatus::MaxIterations;
   if (solver_->prepare(deadline, why)) {
-    prepare_ms_ = millisSince(start);
+    prepare_ms_ = solver_->prepareMillis();
   } else if (why == SolveStatus::NonFinite || why == SolveStatus::NoDescent) {
     // The trajectory cannot be linearized: the next tick starts again from standing.
     ++counters_.failed_solves;
     need_restart_ = true;
   }
-  // At the deadline: nothing prepared; the next tick linearizes after its state came in.
+  // At the deadline: not prepared yet; in real time the next tick re-sends the previous policy
+  // and its period resumes this preparation.
 }
 
 void Mpc::writePolicy(std::int64_t utime, double t, std::int8_t status) {

@@ -130,11 +130,14 @@ class Mpc {
   bool shiftTo(double t);
   // shed: when not null, a real-time tick without its preparation solves nothing and sets it.
   bool solveTick(double t, Clock::time_point deadline, bool late, SolveStatus& status, bool* shed);
-  void restartWarmStart(double t);
+  // The warm start made again from the references planned on the state x_ (at plan time t), with
+  // its knot 0 at t_knot0.
+  void restartWarmStart(double t, double t_knot0);
   unsigned knotMask(int k) const;  // the contacts knot k closes
   void writePolicy(std::int64_t utime, double t, std::int8_t status);
   bool previousPolicy(std::int64_t utime);
   void holdPolicy(std::int64_t utime, double t);
+  void countAnswer(Clock::time_point deadline);  // a miss when the policy is out after it
   void finishStatus(Clock::time_point tick_start, std::int8_t policy_status);
 
   ControllerConfig config_;
@@ -162,8 +165,10 @@ class Mpc {
   bool have_solved_ = false;   // a solve of this problem succeeded (else the next is the first)
   bool startup_tick_ = false;
   bool solved_ = false;      // the last tick solved (prepare() may follow)
+  bool tried_ = false;       // the last tick had a fresh state to solve for (a restart may follow)
   double t_last_ = 0.0;      // plan time of the last tick's state (x_ holds it)
   double prepare_ms_ = 0.0;  // its duration
+  double trial_ms_ = 0.0;    // a prepared tick's solve per rollout, averaged, with a margin
   int previous_ticks_ = 0;   // consecutive ticks on the previous policy
   bool late_ = false;        // the coming tick started late (countLateTick)
   std::int64_t misses_in_a_row_ = 0;

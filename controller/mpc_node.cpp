@@ -165,7 +165,10 @@ void MpcNode::tick(Clock::time_point deadline) {
   if (publish) {
     const policy_t& policy = mpc_.policy();
     const int n = policy.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
-    if (n > 0) out_.publish(config_.policy_channel, buffer_.data(), n);
+    if (n > 0) {
+      out_.publish(config_.policy_channel, buffer_.data(), n);
+      ++policies_published_;
+    }
   }
   if (publish && !mpc_.startupTick()) {  // the first solve has no deadline: not a latency
     const float ms = std::chrono::duration<float, std::milli>(Clock::now() - start).count();

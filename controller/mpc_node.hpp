@@ -55,6 +55,8 @@ class MpcNode {
   std::int64_t rejected(msg::Reject reason) const { return rejected_[static_cast<int>(reason)]; }
   std::int64_t acceptedStates() const { return accepted_; }
   std::int64_t planUpdates() const { return plan_updates_; }
+  std::int64_t policiesPublished() const { return policies_published_; }
+  bool hasState() const { return have_state_; }  // a valid state came in since the start
   const CommandFilter& commands() const { return commands_; }
   // Commands refused before the filter saw them (malformed, non-finite, out of order).
   std::int64_t commandsMalformed() const { return commands_malformed_; }
@@ -78,7 +80,7 @@ class MpcNode {
   std::int64_t newest_arrival_us_ = 0;  // real time: CLOCK_MONOTONIC at arrival
   std::int64_t next_tick_utime_ = 0;
   bool tick_grid_set_ = false;
-  std::int64_t accepted_ = 0, rejected_total_ = 0, plan_updates_ = 0;
+  std::int64_t accepted_ = 0, rejected_total_ = 0, plan_updates_ = 0, policies_published_ = 0;
   std::array<std::int64_t, 8> rejected_{};
   contact_plan_t plan_msg_;
   bool plan_pending_ = false;

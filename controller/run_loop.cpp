@@ -84,9 +84,11 @@ void runRealTime(MpcNode& node, lcm::LCM& in, const RunOptions& options) {
     clock_gettime(CLOCK_MONOTONIC, &now);
     if (!before(now, deadline)) {
       // Its answer could not be on time any more: the tick is lost, and the loop moves on to the
-      // next period instead of bunching late ticks.
-      node.mpc().countSkippedTick();
-      node.mpc().countPeriod(true);
+      // next period instead of bunching late ticks. (Before the first state there is no answer
+      // to miss.)
+      const bool miss = node.hasState();
+      if (miss) node.mpc().countSkippedTick();
+      node.mpc().countPeriod(miss);
       continue;
     }
     if (late) node.mpc().countLateTick();
@@ -96,12 +98,14 @@ void runRealTime(MpcNode& node, lcm::LCM& in, const RunOptions& options) {
     node.applyPendingPlan();
     const std::int64_t misses = node.mpc().counters().deadline_misses;
     node.tick(toTimePoint(deadline));
-    node.mpc().countPeriod(node.mpc().counters().deadline_misses > misses);
+    const bool missed = node.mpc().counters().deadline_misses > misses;
+    node.mpc().countPeriod(missed);
     // The policy is out: linearize for the next state, by half a period into the next one at the
     // latest, so that the next tick still has time for its rollout before its deadline; a
     // preparation cut there leaves the next tick to re-send the previous policy and prepare again
-    // (controller/README.md, "Overload").
-    node.prepare(toTimePoint(addNanos(next, period_ns + period_ns / 2)));
+    // (controller/README.md, "Overload"). After a miss, by the next tick's start: that tick then
+    // starts on time, with its preparation or re-sending the previous policy, and cannot miss too.
+    node.prepare(toTimePoint(addNanos(next, missed ? period_ns : period_ns + period_ns / 2)));
     clock_gettime(CLOCK_MONOTONIC, &now);
     // The start-up solve runs without deadline: the periods it took are not ticks.
     if (node.mpc().startupTick()) next = now;
@@ -177,7 +181,8 @@ void writeSummary(const MpcNode& node, const std::string& path) {
   }
   if (path.empty()) return;
   std::ofstream f(path);
-  f << "{\n  \"ticks\": " << c.ticks << ",\n  \"states_accepted\": " << node.acceptedStates()
+  f << "{\n  \"ticks\": " << c.ticks << ",\n  \"policies\": " << node.policiesPublished()
+    << ",\n  \"states_accepted\": " << node.acceptedStates()
     << ",\n  \"rejected_messages\": " << node.rejected()
     << ",\n  \"tick_latency_ms\": {\"p50\": " << lat.p50 << ", \"p99\": " << lat.p99
     << ", \"max\": " << lat.max << ", \"count\": " << lat.count

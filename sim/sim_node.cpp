@@ -110,7 +110,7 @@ bool SimNode::advance(int steps) {
     if (status == PolicyStatus::Exhausted) ++stats_.exhausted_steps;
     if (status == PolicyStatus::Invalid) {
       hold_.torque(robot_.model, sim_.q(), sim_.v(), tau_);
-      ++stats_.hold_steps;
+      ++(have_policy_ ? stats_.hold_steps : stats_.waiting_steps);
     }
     const StepStatus step = sim_.step(tau_);
     ++stats_.steps;
@@ -144,13 +144,14 @@ void SimNode::writeSummary(const std::string& path) const {
   std::printf(
       "stride-sim: %.2f s simulated, walked %.3f m (x %+.3f), base height %.3f .. %.3f m, max "
       "tilt %.1f deg, %s; %lld states published (%lld dropped), %lld policies (%lld rejected), "
-      "%lld steps on the hold PD, %lld past a policy's end, %lld lock-step timeouts\n",
+      "%lld steps on the hold PD before the first policy and %lld after, %lld past a policy's end, "
+      "%lld lock-step timeouts\n",
       sim_.time(), distance, q[0] - s.x0, s.z_min, s.z_max, s.max_tilt_deg,
       s.diverged ? "DIVERGED" : (s.fell ? "FELL" : "did not fall"),
       static_cast<long long>(s.states_published), static_cast<long long>(s.states_dropped),
       static_cast<long long>(s.policies), static_cast<long long>(s.policies_rejected),
-      static_cast<long long>(s.hold_steps), static_cast<long long>(s.exhausted_steps),
-      static_cast<long long>(s.lockstep_timeouts));
+      static_cast<long long>(s.waiting_steps), static_cast<long long>(s.hold_steps),
+      static_cast<long long>(s.exhausted_steps), static_cast<long long>(s.lockstep_timeouts));
   if (path.empty()) return;
   std::ofstream f(path);
   f << "{\n  \"sim_time_s\": " << sim_.time() << ",\n  \"distance_m\": " << distance
@@ -161,7 +162,8 @@ void SimNode::writeSummary(const std::string& path) const {
     << ",\n  \"peak_normal_force_N\": " << s.peak_normal_force
     << ",\n  \"states_published\": " << s.states_published << ",\n  \"policies\": " << s.policies
     << ",\n  \"policies_rejected\": " << s.policies_rejected
-    << ",\n  \"hold_steps\": " << s.hold_steps << ",\n  \"exhausted_steps\": " << s.exhausted_steps
+    << ",\n  \"waiting_steps\": " << s.waiting_steps << ",\n  \"hold_steps\": " << s.hold_steps
+    << ",\n  \"exhausted_steps\": " << s.exhausted_steps
     << ",\n  \"lockstep_timeouts\": " << s.lockstep_timeouts << "\n}\n";
 }
 

@@ -38,7 +38,9 @@ struct SimNodeOptions {
 struct SimNodeStats {
   std::int64_t states_published = 0, states_dropped = 0;
   std::int64_t policies = 0, policies_rejected = 0;
-  std::int64_t hold_steps = 0, exhausted_steps = 0, steps = 0;
+  // On the hold PD: before the first policy came (waiting, e.g. the controller's start-up solve
+  // in real time), and after (a policy that did not apply: a fallback of the robot).
+  std::int64_t waiting_steps = 0, hold_steps = 0, exhausted_steps = 0, steps = 0;
   std::int64_t lockstep_timeouts = 0;
   double x0 = 0, y0 = 0, z0 = 0, z_min = 1e300, z_max = -1e300, max_tilt_deg = 0.0;
   double peak_normal_force = 0.0;

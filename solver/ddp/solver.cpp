@@ -131,7 +131,7 @@ bool Solver::setWarmStart(const std::vector<Eigen::VectorXd>& xs,
   for (int k = 0; k <= T_; ++k) xs_[k] = xs[k];
   for (int k = 0; k < T_; ++k) us_[k] = us[k];
   feasible_ = false;
-  prepared_ = false;
+  discardPreparation();
   return true;
 }
 
@@ -158,7 +158,7 @@ void Solver::shiftWarmStart(int n) {
       K_[k] = K_last_;
     }
   feasible_ = false;
-  prepared_ = false;
+  discardPreparation();
 }
 
 void Solver::retimeWarmStart(const std::vector<double>& from, const std::vector<double>& to) {
@@ -210,14 +210,14 @@ void Solver::retimeWarmStart(const std::vector<double>& from, const std::vector<
     }
   }
   feasible_ = false;
-  prepared_ = false;
+  discardPreparation();
 }
 
 bool Solver::setControl(int k, const Eigen::VectorXd& u) {
   if (k < 0 || k >= T_ || u.size() != us_[k].size() || !u.allFinite()) return false;
   us_[k] = u;
   feasible_ = false;
-  prepared_ = false;
+  discardPreparation();
   return true;
 }
 
@@ -276,9 +276,29 @@ void Solver::emulateSlowHost(Clock::time_point since) const {
   }
 }
 
-bool Solver::computeDerivatives() {
+bool Solver::computeDerivatives(Clock::time_point deadline) {
+  derive_next_ = 0;
+  return derivatives(deadline);
+}
+
+bool Solver::derivatives(Clock::time_point deadline) {
+  cut_ = false;
+  // In chunks of knots from derive_next_ (knot index T_: the terminal one), the deadline checked
+  // between them; a cut one resumes there.
+  const int chunk = kDeadlineKnots * problem_.threads();
+  double cost = 0.0;
+  while (derive_next_ <= T_) {
+    const Clock::time_point start = Clock::now();
+    const int end = std::min(derive_next_ + chunk, T_ + 1);
+    cost = problem_.calcDiff(xs_, us_, derive_next_, end);  // the total over all knots
+    emulateSlowHost(start);
+    derive_next_ = end;
+    if (derive_next_ <= T_ && Clock::now() >= deadline) {
+      cut_ = true;
+      return false;
+    }
+  }
   const SlowHostGuard slow{*this};
-  const double cost = problem_.calcDiff(xs_, us_);
   const double gap = computeGaps();
   if (!std::isfinite(cost) || !std::isfinite(gap)) return false;
   cost_ = cost;
@@ -364,15 +384,36 @@ void Solver::eulerProducts(const ActionData& d, int nu) {
   Quu.noalias() += H.transpose() * BtVFu;
 }
 
-bool Solver::backwardPass() {
-  const SlowHostGuard slow{*this};
-  ++backward_passes_;
+bool Solver::backwardPass(Clock::time_point deadline) {
+  backward_next_ = -1;
+  return backward(deadline);
+}
+
+bool Solver::backward(Clock::time_point deadline) {
+  SlowHostGuard slow{*this};  // its start moves to each deadline check: emulated per chunk
   backward_nonfinite_ = false;
+  cut_ = false;
   const bool box = kind_ == SolverKind::BoxFddp && has_bounds_;
-  const ActionData& dT = problem_.terminalData();
-  Vx_next_ = dT.Lx;
-  Vxx_next_ = dT.Lxx;
-  for (int k = T_ - 1; k >= 0; --k) {
+  if (backward_next_ < 0) {  // a new pass; else one its deadline cut resumes at backward_next_
+    ++backward_passes_;
+    const ActionData& dT = problem_.terminalData();
+    Vx_next_ = dT.Lx;
+    Vxx_next_ = dT.Lxx;
+    backward_next_ = T_ - 1;
+  }
+  // Any exit but the cut below ends the pass (a failed one starts again at its retry).
+  const int first = backward_next_;
+  backward_next_ = -1;
+  for (int k = first; k >= 0; --k) {
+    if (k != first && (first - k) % kDeadlineKnots == 0) {
+      emulateSlowHost(slow.start);
+      slow.start = Clock::now();
+      if (slow.start >= deadline) {  // Vx_next_, Vxx_next_ hold knot k + 1's value
+        cut_ = true;
+        backward_next_ = k;
+        return false;
+      }
+    }
     const ActionData& d = problem_.data(k);
     const int nu = problem_.nu(k);
     // The value of the next knot seen from this one: V'x = Vx + Vxx f (the gap, FDDP), and Vxx
@@ -540,35 +581,47 @@ double Solver::forwardPass(double alpha) {
 }
 
 bool Solver::prepare(Clock::time_point deadline, SolveStatus& status) {
-  prepared_ = false;
-  backward_passes_ = 0;
   const Clock::time_point start = Clock::now();
-  if (start >= deadline) {
-    status = SolveStatus::Deadline;
-    return false;
+  if (!preparing_) {  // a new preparation; else the one a deadline cut resumes where it stopped
+    prepared_ = false;
+    preparing_ = true;
+    derived_ = false;
+    derive_next_ = 0;
+    backward_next_ = -1;
+    backward_passes_ = 0;
+    prepare_ms_ = 0.0;
   }
-  if (!finiteTrajectory() || !computeDerivatives()) {
-    status = fail(SolveStatus::NonFinite);
+  const auto stop = [&](SolveStatus why) {
+    prepare_ms_ += std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    if (why != SolveStatus::Deadline) {
+      preparing_ = false;
+      why = fail(why);
+    }
+    status = why;
     return false;
+  };
+  if (start >= deadline) return stop(SolveStatus::Deadline);
+  if (!derived_) {
+    if (derive_next_ == 0 && !finiteTrajectory()) return stop(SolveStatus::NonFinite);
+    if (!derivatives(deadline)) return stop(cut_ ? SolveStatus::Deadline : SolveStatus::NonFinite);
+    derived_ = true;
   }
   // A Quu that is not positive definite: more regularization, until the limit or the deadline.
   // From μ = 0 the first raise goes to kRegFloor, so the retries are bounded.
-  while (!backwardPass()) {
-    if (backward_nonfinite_) {
-      status = fail(SolveStatus::NonFinite);
-      return false;
-    }
+  while (!backward(deadline)) {
+    if (cut_) return stop(SolveStatus::Deadline);
+    if (backward_nonfinite_) return stop(SolveStatus::NonFinite);
     reg_ = std::max(reg_ * options.reg_factor, kRegFloor);
-    if (reg_ > options.reg_max) {
-      status = fail(SolveStatus::NoDescent);
-      return false;
-    }
+    if (reg_ > options.reg_max) return stop(SolveStatus::NoDescent);
     if (Clock::now() >= deadline) {
+      // The retry starts at the next call, with the raised μ.
       status = SolveStatus::Deadline;
+      prepare_ms_ += std::chrono::duration<double, std::milli>(Clock::now() - start).count();
       return false;
     }
   }
-  prepare_ms_ = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  prepare_ms_ += std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  preparing_ = false;
   prepared_ = true;
   return true;
 }
@@ -576,9 +629,9 @@ bool Solver::prepare(Clock::time_point deadline, SolveStatus& status) {
 SolveStatus Solver::solve(int max_iterations, Clock::time_point deadline) {
   iterations_ = 0;
   forward_passes_ = 0;
-  if (!prepared_) backward_passes_ = 0;  // else they count the preparation's
+  if (!prepared_ && !preparing_) backward_passes_ = 0;  // else they count the preparation's
   if (kind_ == SolverKind::Ddp) {
-    prepared_ = false;  // the rollout from x0 moves the trajectory the preparation linearized
+    discardPreparation();  // the rollout from x0 moves the trajectory the preparation linearized
     if (!rollout()) return fail(SolveStatus::NonFinite);
   }
   if (!finiteTrajectory()) return fail(SolveStatus::NonFinite);
@@ -601,12 +654,16 @@ SolveStatus Solver::solve(int max_iterations, Clock::time_point deadline) {
     const bool converged = s.stop < options.stop_tolerance && feasible_;
     double alpha = 1.0;
     bool accepted = false, out_of_time = false;
+    Clock::duration trial{0};  // the last trial's duration: the next one's expected
     for (int i = 0; !converged && i < options.line_search_steps; ++i, alpha *= 0.5) {
-      if (Clock::now() >= deadline) {
+      // A trial that would end after the deadline is not started: the answer stays on time.
+      const Clock::time_point trial_start = Clock::now();
+      if (trial_start + trial >= deadline) {
         out_of_time = true;
         break;
       }
       const double cost_try = forwardPass(alpha);
+      trial = Clock::now() - trial_start;
       const double expected = expectedCostChange(alpha);
       const double actual = cost_try - cost_;
       // A predicted decrease must be realized at least in part (Armijo-like); closing gaps may

@@ -41,7 +41,7 @@ enum class SolverKind : std::uint8_t { Ddp, Fddp, BoxFddp };
 enum class SolveStatus : std::uint8_t {
   Converged,      // expected improvement and gaps below the tolerances
   MaxIterations,  // the iteration budget ran out (the iterate is still the best found)
-  Deadline,       // the deadline passed (idem)
+  Deadline,       // stopped for the deadline (idem): passed, or a trial would have passed it
   NoDescent,      // no step length decreased the cost, even at the largest regularization
   NonFinite,      // a knot returned a non-finite value or failed; the last good iterate kept
 };
@@ -111,7 +111,8 @@ class Solver {
   // for a knot or size out of range or a non-finite u).
   bool setControl(int k, const Eigen::VectorXd& u);
 
-  // Iterates from the current trajectory until converged, max_iterations, or the deadline. The
+  // Iterates from the current trajectory until converged, max_iterations, or the deadline (a
+  // line-search trial is not started when one as long as the last would end after it). The
   // first iteration uses a pending preparation (Fddp and BoxFddp; Ddp's rollout from x0 moves the
   // trajectory, so it discards it).
   SolveStatus solve(int max_iterations, Clock::time_point deadline = Clock::time_point::max());
@@ -121,9 +122,16 @@ class Solver {
   // when not. Until the next solve() only x0 may change: anything else that changes the problem
   // (shift, references, phases) must be followed by discardPreparation(); setWarmStart and
   // shiftWarmStart discard it themselves.
+  // A preparation its deadline cut (Deadline) is resumed where it stopped by the next prepare()
+  // or solve(), unless discarded before (controller/README.md, "Overload").
   bool prepare(Clock::time_point deadline, SolveStatus& status);
   bool prepared() const { return prepared_; }
-  void discardPreparation() { prepared_ = false; }
+  bool preparing() const { return preparing_; }         // a preparation was cut and may resume
+  double prepareMillis() const { return prepare_ms_; }  // of the last one, its resumed parts summed
+  void discardPreparation() {
+    prepared_ = false;
+    preparing_ = false;
+  }
 
   const std::vector<Eigen::VectorXd>& xs() const { return xs_; }
   const std::vector<Eigen::VectorXd>& us() const { return us_; }
@@ -158,14 +166,23 @@ class Solver {
   // a value is not finite); the nonlinear rollout at step α into the trial trajectory (returns its
   // cost); the cost change the quadratic model of the last backward pass predicts for step α,
   // once predictChange() has run the linearized rollout from the current gap f_0.
-  bool computeDerivatives();
-  bool backwardPass();
+  // The first two stop, false with cutAtDeadline(), at the first check after the deadline: they
+  // check it every kDeadlineKnots knots (per thread), so that an overrun costs a few knots'
+  // work, not a whole pass (controller/README.md, "Overload").
+  static constexpr int kDeadlineKnots = 8;
+  bool computeDerivatives(Clock::time_point deadline = Clock::time_point::max());
+  bool backwardPass(Clock::time_point deadline = Clock::time_point::max());
+  bool cutAtDeadline() const { return cut_; }  // (a cut pass is not resumed by these two)
   double forwardPass(double alpha);
   void predictChange();  // d1, d2 from the linearized rollout of the step
   double expectedCostChange(double alpha) const { return alpha * (d1_ + 0.5 * alpha * d2_); }
 
  private:
   bool rollout();  // xs from x0 and us (Ddp's feasible start); false (iterate kept) on failure
+  // computeDerivatives and backwardPass from where a deadline cut them (derive_next_,
+  // backward_next_ < 0: a new pass).
+  bool derivatives(Clock::time_point deadline);
+  bool backward(Clock::time_point deadline);
   SolveStatus fail(SolveStatus status);
   double computeGaps();  // f_k of the current trajectory from the knots' x_next; Σ |f|₁
   bool finiteTrajectory() const;
@@ -197,8 +214,15 @@ class Solver {
   Eigen::MatrixXd K_last_;
   bool has_bounds_ = false;
   bool backward_nonfinite_ = false;
+  bool cut_ = false;  // the last computeDerivatives / backwardPass stopped at its deadline
+  // A preparation in progress (cut by its deadline): derivatives done up to derive_next_ (all:
+  // derived_), the backward pass at backward_next_.
+  bool preparing_ = false, derived_ = false;
+  int derive_next_ = 0, backward_next_ = -1;
   bool feasible_ = false;
   bool prepared_ = false;  // derivatives and backward pass done for the next iteration
+  // Busy for (emulated_slowdown - 1) times the time since `since`: the work since then as on a
+  // host that many times slower.
   void emulateSlowHost(Clock::time_point since) const;
   struct SlowHostGuard {  // emulateSlowHost at the end of the scope
     const Solver& solver;

@@ -55,21 +55,23 @@ void forEachKnot(int n, int threads, F&& f) {
 
 double ShootingProblem::calc(const std::vector<Eigen::VectorXd>& xs,
                              const std::vector<Eigen::VectorXd>& us) {
-  return evaluate(xs, us, false, horizon());
+  return evaluate(xs, us, false, 0, horizon() + 1);
 }
 
 double ShootingProblem::calcDiff(const std::vector<Eigen::VectorXd>& xs,
-                                 const std::vector<Eigen::VectorXd>& us, int knots) {
-  return evaluate(xs, us, true, knots < 0 ? horizon() : std::min(knots, horizon()));
+                                 const std::vector<Eigen::VectorXd>& us, int begin, int end) {
+  const int last = horizon() + 1;
+  end = end < 0 ? last : std::min(end, last);
+  return evaluate(xs, us, true, std::max(begin, 0), end);
 }
 
 double ShootingProblem::evaluate(const std::vector<Eigen::VectorXd>& xs,
                                  const std::vector<Eigen::VectorXd>& us, bool derivatives,
-                                 int knots) {
+                                 int begin, int end) {
   const int T = horizon();
-  // Knots 0 .. knots - 1, then the terminal one (index `knots` stands for T).
-  forEachKnot(knots + 1, std::min(threads_, max_threads_), [&](int i) {
-    const int k = i < knots ? i : T;
+  // Knot indices begin .. end - 1, T being the terminal knot.
+  forEachKnot(end - begin, std::min(threads_, max_threads_), [&](int i) {
+    const int k = begin + i;
     ActionModel& m = k < T ? *running_[k] : *terminal_;
     ActionData& d = k < T ? *running_data_[k] : *terminal_data_;
     const Eigen::VectorXd& u = k < T ? us[k] : empty_;

@@ -49,11 +49,11 @@ class ShootingProblem {
   // Evaluates every knot at (xs[k], us[k]) (xs has T + 1 entries, us T); returns the total cost
   // (+inf when a knot failed: see data(k).status).
   double calc(const std::vector<Eigen::VectorXd>& xs, const std::vector<Eigen::VectorXd>& us);
-  // calc and the derivatives of every knot; with `knots` < T, of the first `knots` running knots
-  // and the terminal one only: the others keep the data of their last calcDiff (a preparation
-  // short of time reuses the previous linearization of the tail, Solver::prepare).
+  // calc and the derivatives of knots begin .. end - 1, index T standing for the terminal knot
+  // (every knot by default; Solver::computeDerivatives goes in chunks, to check its deadline
+  // between them); returns the total cost over all knots, each at its last evaluation.
   double calcDiff(const std::vector<Eigen::VectorXd>& xs, const std::vector<Eigen::VectorXd>& us,
-                  int knots = -1);
+                  int begin = 0, int end = -1);
 
   // Moves knot k + n to k for all k (models with their data); the first n knots become the last n.
   void shift(int n);
@@ -65,7 +65,7 @@ class ShootingProblem {
 
  private:
   double evaluate(const std::vector<Eigen::VectorXd>& xs, const std::vector<Eigen::VectorXd>& us,
-                  bool derivatives, int knots);
+                  bool derivatives, int begin, int end);
 
   Eigen::VectorXd x0_;
   Eigen::VectorXd empty_;  // the terminal knot's control

@@ -71,16 +71,30 @@ void tickNoAllocation(const std::string& robot, int ticks) {
   EXPECT_EQ(node.mpc().policy().status, kPolicyPrevious);
   EXPECT_EQ(node.mpc().counters().shed_ticks, 1);
   EXPECT_EQ(node.mpc().counters().fallbacks, 0);
-  // Prepared, with a deadline already passed: the best iterate, flagged.
-  t += period;
-  EXPECT_EQ(allocations([&] {
-              node.prepare(Mpc::Clock::time_point::max());
-              feed(t);
-              node.tick(Mpc::Clock::now());
-            }),
-            0);
+  // A preparation cut by its deadline (1 us: a chunk of knots at most), its tick re-sending the
+  // previous policy, and the next period's preparation resuming it (or starting again when it
+  // no longer serves the next state); its tick uses it.
+  const auto tickAfter = [&](Mpc::Clock::time_point prepare_by, bool late) {
+    return allocations([&] {
+      node.prepare(prepare_by);
+      t += period;
+      feed(t);
+      node.tick(late ? Mpc::Clock::now() : Mpc::Clock::now() + std::chrono::milliseconds(4));
+    });
+  };
+  EXPECT_EQ(tickAfter(Mpc::Clock::now() + std::chrono::microseconds(1), false), 0);
+  EXPECT_EQ(node.mpc().policy().status, kPolicyPrevious);
+  EXPECT_EQ(tickAfter(Mpc::Clock::time_point::max(), false), 0);
   EXPECT_EQ(node.mpc().status().prepared, 1);
-  EXPECT_EQ(node.mpc().policy().status, kPolicyDeadline);
+  EXPECT_NE(node.mpc().policy().status, kPolicyPrevious);
+  // A tick too late for even one rollout: the previous policy re-sent, its preparation kept for
+  // the next tick, which uses it.
+  EXPECT_EQ(tickAfter(Mpc::Clock::time_point::max(), true), 0);
+  EXPECT_EQ(node.mpc().policy().status, kPolicyPrevious);
+  EXPECT_EQ(tickAfter(Mpc::Clock::time_point::max(), false), 0);
+  EXPECT_EQ(node.mpc().status().prepared, 1);
+  EXPECT_NE(node.mpc().policy().status, kPolicyPrevious);
+  EXPECT_EQ(node.mpc().counters().shed_ticks, 3);
   // Fallbacks: no new state for longer than max_state_age: the previous policy, then hold.
   std::this_thread::sleep_for(std::chrono::duration<double>(config.max_state_age * 1.5));
   std::vector<int> statuses;

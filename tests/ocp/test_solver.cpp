@@ -399,6 +399,44 @@ TEST(Solver, DeadlineInThePastReturnsAtOnce) {
   EXPECT_EQ(solver.iterations(), 0);
 }
 
+// A preparation cut by its deadline resumes where it stopped, and ends with exactly the gains of
+// one made in one go. Every call below, on a host emulated 1000x slower, gets 1 ms: it does one
+// chunk of knots (derivatives, then the backward pass) and stops at the check after it.
+TEST(Solver, PreparationCutByItsDeadlineResumesExactly) {
+  LqProblem a = makeLq(6, 3, 40, 21), b = makeLq(6, 3, 40, 21);
+  b.problem->setX0(a.problem->x0());  // (drawn from Eigen's global generator: not the seed)
+  Solver whole(*a.problem), cut(*b.problem);
+  SolveStatus status = SolveStatus::MaxIterations;
+  ASSERT_TRUE(whole.prepare(Solver::Clock::time_point::max(), status));
+  cut.options.emulated_slowdown = 1000.0;
+  int calls = 0;
+  bool done = false;
+  while (!done && calls < 100) {
+    done = cut.prepare(Solver::Clock::now() + std::chrono::milliseconds(1), status);
+    ++calls;
+    if (!done) {
+      ASSERT_EQ(status, SolveStatus::Deadline);
+      EXPECT_TRUE(cut.preparing());
+    }
+  }
+  ASSERT_TRUE(done);
+  EXPECT_FALSE(cut.preparing());
+  // 41 knots of derivatives and 40 of backward pass in chunks of 8: 6 + 5 pieces.
+  EXPECT_GE(calls, 10);
+  EXPECT_EQ(cut.backwardPasses(), 1);
+  for (int k = 0; k < a.T; ++k) {
+    EXPECT_EQ(cut.K()[k], whole.K()[k]) << "knot " << k;
+    EXPECT_EQ(cut.k()[k], whole.k()[k]) << "knot " << k;
+  }
+  // A discarded one starts again from its first knot.
+  cut.options.emulated_slowdown = 1.0;
+  ASSERT_FALSE(cut.prepare(Solver::Clock::now(), status));  // the deadline passed: nothing done
+  EXPECT_TRUE(cut.preparing());
+  cut.discardPreparation();
+  EXPECT_FALSE(cut.preparing());
+  EXPECT_FALSE(cut.prepared());
+}
+
 TEST(Solver, WarmStartRejectsBadSizesAndNaN) {
   LqProblem p = makeLq(4, 2, 5, 3);
   Solver solver(*p.problem);
