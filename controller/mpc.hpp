@@ -59,6 +59,12 @@ struct MpcCounters {
   std::int64_t shed_line_searches = 0;   // late ticks whose line search tried the full step only
   std::int64_t shed_ticks = 0;           // ticks without preparation: the previous policy re-sent
   std::int64_t max_misses_in_a_row = 0;  // the longest run of periods with a deadline miss
+  // Periods in which the host kept the controller off its core for more than kHostStallMs while
+  // it had work (its wall time exceeded its CPU time by that much, or it woke that late from its
+  // sleep), and the longest run of missed periods with no such stall in it: the misses the
+  // controller's own work made (a stall longer than a period makes two in a row whatever it does).
+  std::int64_t host_stalls = 0;
+  std::int64_t max_own_misses_in_a_row = 0;
 };
 
 class Mpc {
@@ -104,10 +110,17 @@ class Mpc {
     ++counters_.late_ticks;
     late_ = true;
   }
-  // After each period: whether it had a deadline miss (for max_misses_in_a_row).
-  void countPeriod(bool missed) {
+  // After each period: whether it had a deadline miss, and whether the host stalled the
+  // controller since the last period was counted (for the counters above).
+  static constexpr double kHostStallMs = 1.0;
+  void countPeriod(bool missed, bool stalled) {
+    counters_.host_stalls += stalled ? 1 : 0;
     misses_in_a_row_ = missed ? misses_in_a_row_ + 1 : 0;
+    run_stalled_ = missed && (run_stalled_ || stalled);
     counters_.max_misses_in_a_row = std::max(counters_.max_misses_in_a_row, misses_in_a_row_);
+    if (!run_stalled_)
+      counters_.max_own_misses_in_a_row =
+          std::max(counters_.max_own_misses_in_a_row, misses_in_a_row_);
   }
   // The last tick made the first solve of a (re)built problem, which runs without deadline.
   bool startupTick() const { return startup_tick_; }
@@ -172,6 +185,7 @@ class Mpc {
   int previous_ticks_ = 0;   // consecutive ticks on the previous policy
   bool late_ = false;        // the coming tick started late (countLateTick)
   std::int64_t misses_in_a_row_ = 0;
+  bool run_stalled_ = false;  // the host stalled the controller in the current run of misses
 
   Eigen::VectorXd x_;  // the state as a solver vector
   policy_t policy_, previous_;

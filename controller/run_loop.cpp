@@ -29,6 +29,25 @@ double secondsBetween(const timespec& a, const timespec& b) {
   return static_cast<double>(b.tv_sec - a.tv_sec) +
          1e-9 * static_cast<double>(b.tv_nsec - a.tv_nsec);
 }
+// Tells host stalls from the controller's own overruns: between two marks, the wall time the
+// process had work minus the CPU time all its threads got (busy work, the emulated slowdown too,
+// counts as CPU time; more threads only lower the difference).
+class StallMeter {
+ public:
+  void mark() {
+    clock_gettime(CLOCK_MONOTONIC, &wall_);
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &cpu_);
+  }
+  // Since the last mark (and marks again).
+  bool stalled() {
+    const timespec wall = wall_, cpu = cpu_;
+    mark();
+    return 1e3 * (secondsBetween(wall, wall_) - secondsBetween(cpu, cpu_)) > Mpc::kHostStallMs;
+  }
+
+ private:
+  timespec wall_{}, cpu_{};
+};
 bool stopped(const RunOptions& o) {
   return o.stop != nullptr && o.stop->load();
 }
@@ -73,6 +92,8 @@ void runRealTime(MpcNode& node, lcm::LCM& in, const RunOptions& options) {
   timespec start, next, now;
   clock_gettime(CLOCK_MONOTONIC, &start);
   next = start;
+  StallMeter meter;
+  bool stalled = false;  // since the last period was counted
   while (!stopped(options)) {
     next = addNanos(next, period_ns);
     clock_gettime(CLOCK_MONOTONIC, &now);
@@ -82,13 +103,17 @@ void runRealTime(MpcNode& node, lcm::LCM& in, const RunOptions& options) {
     }
     const timespec deadline = addNanos(next, deadline_ns);
     clock_gettime(CLOCK_MONOTONIC, &now);
+    meter.mark();
+    // Woken that late from a sleep: the host did not run the controller.
+    if (!late && 1e3 * secondsBetween(next, now) > Mpc::kHostStallMs) stalled = true;
     if (!before(now, deadline)) {
       // Its answer could not be on time any more: the tick is lost, and the loop moves on to the
       // next period instead of bunching late ticks. (Before the first state there is no answer
       // to miss.)
       const bool miss = node.hasState();
       if (miss) node.mpc().countSkippedTick();
-      node.mpc().countPeriod(miss);
+      node.mpc().countPeriod(miss, stalled);
+      stalled = false;
       continue;
     }
     if (late) node.mpc().countLateTick();
@@ -99,13 +124,16 @@ void runRealTime(MpcNode& node, lcm::LCM& in, const RunOptions& options) {
     const std::int64_t misses = node.mpc().counters().deadline_misses;
     node.tick(toTimePoint(deadline));
     const bool missed = node.mpc().counters().deadline_misses > misses;
-    node.mpc().countPeriod(missed);
+    stalled = meter.stalled() || stalled;
+    node.mpc().countPeriod(missed, stalled);
+    stalled = false;
     // The policy is out: linearize for the next state, by half a period into the next one at the
     // latest, so that the next tick still has time for its rollout before its deadline; a
     // preparation cut there leaves the next tick to re-send the previous policy and prepare again
     // (controller/README.md, "Overload"). After a miss, by the next tick's start: that tick then
     // starts on time, with its preparation or re-sending the previous policy, and cannot miss too.
     node.prepare(toTimePoint(addNanos(next, missed ? period_ns : period_ns + period_ns / 2)));
+    stalled = meter.stalled();  // a stalled preparation makes the next tick late
     clock_gettime(CLOCK_MONOTONIC, &now);
     // The start-up solve runs without deadline: the periods it took are not ticks.
     if (node.mpc().startupTick()) next = now;
@@ -156,7 +184,8 @@ void writeSummary(const MpcNode& node, const std::string& path) {
       "p99 %.3f ms max %.3f ms (%ld ticks), %lld deadline misses, %lld late ticks, %lld fallbacks, "
       "%lld stale states, %lld failed solves, %lld unprepared solves, %lld plan updates\n"
       "stride-mpc: overload: %lld ticks with the full step only, %lld ticks re-sending the "
-      "previous policy, at most %lld misses in a row; %lld stalled-solve restarts\n",
+      "previous policy, at most %lld misses in a row (%lld without a host stall; %lld periods "
+      "stalled by the host); %lld stalled-solve restarts\n",
       static_cast<long long>(c.ticks), static_cast<long long>(node.acceptedStates()),
       static_cast<long long>(node.rejected()), lat.p50, lat.p99, lat.max, lat.count,
       static_cast<long long>(c.deadline_misses), static_cast<long long>(c.late_ticks),
@@ -164,6 +193,7 @@ void writeSummary(const MpcNode& node, const std::string& path) {
       static_cast<long long>(c.failed_solves), static_cast<long long>(c.unprepared_solves),
       static_cast<long long>(node.planUpdates()), static_cast<long long>(c.shed_line_searches),
       static_cast<long long>(c.shed_ticks), static_cast<long long>(c.max_misses_in_a_row),
+      static_cast<long long>(c.max_own_misses_in_a_row), static_cast<long long>(c.host_stalls),
       static_cast<long long>(c.stall_restarts));
   const CommandCounters& cc = node.commands().counters();
   std::printf(
@@ -194,7 +224,9 @@ void writeSummary(const MpcNode& node, const std::string& path) {
     << ",\n  \"stall_restarts\": " << c.stall_restarts
     << ",\n  \"overload\": {\"full_step_only\": " << c.shed_line_searches
     << ", \"previous_policy_ticks\": " << c.shed_ticks
-    << ", \"max_misses_in_a_row\": " << c.max_misses_in_a_row << "}"
+    << ", \"max_misses_in_a_row\": " << c.max_misses_in_a_row
+    << ", \"max_own_misses_in_a_row\": " << c.max_own_misses_in_a_row
+    << ", \"host_stalls\": " << c.host_stalls << "}"
     << ",\n  \"commands\": {\"accepted\": " << cc.accepted
     << ", \"rejected\": " << cc.rejected + node.commandsMalformed()
     << ", \"clamped\": " << cc.clamped << ", \"deadman_timeouts\": " << cc.timeouts << "}\n}\n";

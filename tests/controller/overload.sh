@@ -4,8 +4,9 @@
 # every solver phase busy for F times its duration, in chunks of knots), so that a period's work
 # (~2.2 ms of the 5 ms on this machine) reaches or outgrows the period. The controller must shed
 # work in its documented order (controller/README.md, "Overload"): misses stay isolated (never two
-# periods in a row), every tick that runs with a state sends a policy, the robot is never left
-# without one, and it trots on without falling. Exit 77 only when namespaces are not permitted.
+# periods in a row, unless the host stalled it), every tick that runs with a state sends a policy,
+# the robot is never left without one, and it trots on without falling. Exit 77 only when
+# namespaces are not permitted.
 # Timing-sensitive: ctest runs it alone (RUN_SERIAL).
 #   tests/controller/overload.sh build . F
 set -euo pipefail
@@ -27,8 +28,13 @@ value() { sed -n "s/.*\"$1\": \([0-9]*\).*/\1/p" "$2" | head -n 1; }
 mpc="$dir/demo/mpc.json" sim="$dir/demo/sim.json"
 cat "$mpc" "$sim"
 grep -q '"fell": false' "$sim" || { echo "FAIL: the robot fell"; exit 1; }
-in_a_row=$(value max_misses_in_a_row "$mpc")
-[ "$in_a_row" -le 1 ] || { echo "FAIL: $in_a_row periods in a row missed their deadline"; exit 1; }
+# Misses the controller's own work made stay isolated. A run of misses in which the host kept the
+# controller off its core for over 1 ms (wall time beyond CPU time, or a late wake-up) is the
+# host's: a stall longer than a period misses two deadlines whatever the controller does.
+in_a_row=$(value max_misses_in_a_row "$mpc") own=$(value max_own_misses_in_a_row "$mpc")
+stalls=$(value host_stalls "$mpc")
+[ "$own" -le 1 ] ||
+  { echo "FAIL: $own periods in a row missed their deadline, with no host stall"; exit 1; }
 shed=$(($(value full_step_only "$mpc") +
   $(value previous_policy_ticks "$mpc")))
 [ "$shed" -gt 0 ] || { echo "FAIL: no work was shed: was the host slow enough?"; exit 1; }
@@ -42,5 +48,6 @@ published=$(value policies "$mpc") received=$(value policies "$sim")
   { echo "FAIL: $published policies published, $received received"; exit 1; }
 [ "$(value exhausted_steps "$sim")" = 0 ] && [ "$(value hold_steps "$sim")" = 0 ] ||
   { echo "FAIL: the robot ran past its policies or on its hold controller"; exit 1; }
-echo "PASS: ${slow}x slower solver in real time: $shed periods shed work, at most $in_a_row miss" \
-  "in a row, $published policies for $ticks ticks ($received received), no fall"
+echo "PASS: ${slow}x slower solver in real time: $shed periods shed work, at most $own miss in" \
+  "a row of its own ($in_a_row counting host stalls; $stalls periods stalled by the host)," \
+  "$published policies for $ticks ticks ($received received), no fall"

@@ -270,6 +270,28 @@ TEST(Mpc, DeadlineMissesCountAnswersAfterTheDeadline) {
   EXPECT_EQ(mpc.counters().deadline_misses, 2);
 }
 
+// Runs of missed periods: all of them count in max_misses_in_a_row, and those without a host
+// stall in max_own_misses_in_a_row (what the overload test bounds).
+TEST(Mpc, MissRunsWithAHostStallAreTheHosts) {
+  ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  Mpc mpc(config);
+  const auto periods = [&](std::vector<std::pair<bool, bool>> missed_stalled) {
+    for (const auto& [missed, stalled] : missed_stalled) mpc.countPeriod(missed, stalled);
+  };
+  periods({{true, false}, {false, false}, {true, false}, {false, true}});
+  EXPECT_EQ(mpc.counters().max_misses_in_a_row, 1);
+  EXPECT_EQ(mpc.counters().max_own_misses_in_a_row, 1);
+  EXPECT_EQ(mpc.counters().host_stalls, 1);
+  // A stall (here in the second period) makes the whole run the host's.
+  periods({{true, false}, {true, true}, {true, false}, {false, false}});
+  EXPECT_EQ(mpc.counters().max_misses_in_a_row, 3);
+  EXPECT_EQ(mpc.counters().max_own_misses_in_a_row, 1);
+  EXPECT_EQ(mpc.counters().host_stalls, 2);
+  // Without one, two in a row are the controller's.
+  periods({{true, false}, {true, false}, {false, false}});
+  EXPECT_EQ(mpc.counters().max_own_misses_in_a_row, 2);
+}
+
 TEST(Mpc, FallbacksOnStaleStates) {
   ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
   config.max_previous_ticks = 3;
