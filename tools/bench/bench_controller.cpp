@@ -16,6 +16,8 @@
 #include <chrono>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "controller/mpc_node.hpp"
@@ -175,31 +177,21 @@ BENCHMARK_CAPTURE(tickParts, quad_forward, "stride_quad", 2)
 
 // Every shipped controller configuration; the 200 Hz quadrupeds over 2 s of trotting, the 50 Hz
 // humanoids over 2 s of walking (after 1.5 s: standing, then the first steps).
-BENCHMARK_CAPTURE(controllerTick, stride_quad, "stride_quad", 1.5)
-    ->Name("controller_tick/stride_quad")
-    ->UseManualTime()
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(400);
-BENCHMARK_CAPTURE(controllerTick, solo12, "solo12", 1.5)
-    ->Name("controller_tick/solo12")
-    ->UseManualTime()
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(400);
-BENCHMARK_CAPTURE(controllerTick, anymal_c, "anymal_c", 1.5)
-    ->Name("controller_tick/anymal_c")
-    ->UseManualTime()
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(400);
-BENCHMARK_CAPTURE(controllerTick, stride_humanoid, "stride_humanoid", 1.5)
-    ->Name("controller_tick/stride_humanoid")
-    ->UseManualTime()
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(100);
-BENCHMARK_CAPTURE(controllerTick, talos_reduced, "talos_reduced", 1.5)
-    ->Name("controller_tick/talos_reduced")
-    ->UseManualTime()
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(100);
+const bool registered = [] {
+  // The 200 Hz robots tick 400 times (2 s), the 50 Hz ones 100 times (2 s).
+  const std::pair<const char*, int> configs[] = {{"stride_quad", 400},
+                                                 {"solo12", 400},
+                                                 {"anymal_c", 400},
+                                                 {"stride_humanoid", 100},
+                                                 {"talos_reduced", 100}};
+  for (const auto& [robot, ticks] : configs)
+    benchmark::RegisterBenchmark((std::string("controller_tick/") + robot).c_str(), controllerTick,
+                                 robot, 1.5)
+        ->UseManualTime()
+        ->Unit(benchmark::kMillisecond)
+        ->Iterations(ticks);
+  return true;
+}();
 
 }  // namespace
 }  // namespace stride::bench
