@@ -7,9 +7,10 @@
 #          speed that fails.
 #   push   the largest lateral push it survives while walking forward at --push-speed: a 0.1 s
 #          force on the base 4 s into the walk, increasing until the robot falls within the 6 s
-#          after it (bisection to 0.1 N s).
-#   tools/drive/sweep.sh ROBOT [--speed-step 0.1] [--push-speed 0.5] [--no-push] [--no-speed]
-#                        [--robots-dir DIR] [--out DIR]
+#          after it (bisection to 0.1 N s). --push-at moves the push (default 6.0 s, 4 s into the
+#          walk) to another instant of the gait cycle: the largest push depends on the phase.
+#   tools/drive/sweep.sh ROBOT [--speed-step 0.1] [--push-speed 0.5] [--push-at 6.0] [--no-push]
+#                        [--no-speed] [--robots-dir DIR] [--out DIR]
 # ROBOT names config/controller/ROBOT.yaml; its stepping gait is trot (quadrupeds) or walk
 # (bipeds). The command limits of the configuration are lifted for the speed sweep. Prints one line
 # per run and a summary; writes DIR/sweep_ROBOT.json.
@@ -18,12 +19,13 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 robot="${1:?usage: sweep.sh ROBOT [options]}"
 shift
-step=0.1 push_speed=0.5 do_push=1 do_speed=1 out="$build/sweep" dirs=()
+step=0.1 push_speed=0.5 push_at=6.0 do_push=1 do_speed=1 out="$build/sweep" dirs=()
 need() { [ $# -ge 2 ] || { echo "sweep.sh: $1 needs a value" >&2; exit 2; }; }
 while [ $# -gt 0 ]; do
   case "$1" in
     --speed-step) need "$@"; step="$2"; shift 2 ;;
     --push-speed) need "$@"; push_speed="$2"; shift 2 ;;
+    --push-at) need "$@"; push_at="$2"; shift 2 ;;
     --no-push) do_push=0; shift ;;
     --no-speed) do_speed=0; shift ;;
     --robots-dir) need "$@"; dirs+=(--robots-dir "$2"); shift 2 ;;
@@ -101,7 +103,7 @@ if [ "$do_push" = 1 ]; then
   lo=0 hi=0.5
   # Grow until a fall, then bisect.
   while :; do
-    read -r fell got < <(drive_at "$push_speed" 8 "$hi" 6.0)
+    read -r fell got < <(drive_at "$push_speed" 8 "$hi" "$push_at")
     printf "%s push %.2f N s at %.2f m/s: %s\n" "$robot" "$hi" "$push_speed" "$fell"
     [ "$fell" = ok ] || break
     lo=$hi
@@ -110,7 +112,7 @@ if [ "$do_push" = 1 ]; then
   done
   while [ "$(awk -v l="$lo" -v h="$hi" 'BEGIN { print (h - l > 0.1) }')" = 1 ]; do
     mid=$(awk -v l="$lo" -v h="$hi" 'BEGIN { printf "%.3f", (l + h) / 2 }')
-    read -r fell got < <(drive_at "$push_speed" 8 "$mid" 6.0)
+    read -r fell got < <(drive_at "$push_speed" 8 "$mid" "$push_at")
     printf "%s push %.2f N s at %.2f m/s: %s\n" "$robot" "$mid" "$push_speed" "$fell"
     if [ "$fell" = ok ]; then lo=$mid; else hi=$mid; fi
   done
