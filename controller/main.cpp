@@ -49,6 +49,10 @@ int main(int argc, char** argv) {
                  "testing: every solver phase takes this many times its duration (busy), as on a "
                  "slower host, to exercise the overload handling")
       ->check(CLI::Range(1.0, 10.0));
+  app.footer(
+      "Exit status: 0 ran until stopped (or the log's end); 1 an error: configuration, robot, a "
+      "replay log that cannot be read or whose states were all rejected; 2 a usage error or an "
+      "LCM URL that cannot be opened.");
   CLI11_PARSE(app, argc, argv);
 
   std::signal(SIGINT, onSignal);
@@ -85,6 +89,10 @@ int main(int argc, char** argv) {
       return 2;
     }
     lcm::LCM in(config.input_url);
+    if (!in.good() && replaying) {
+      std::fprintf(stderr, "stride-mpc: cannot read the log '%s'\n", replay.c_str());
+      return 1;
+    }
     if (!in.good()) {
       std::fprintf(stderr, "stride-mpc: cannot open LCM input '%s'\n", config.input_url.c_str());
       return 2;
@@ -126,6 +134,23 @@ int main(int argc, char** argv) {
     stride::writeSummary(node, summary);
     if (publisher.failures() > 0)
       std::fprintf(stderr, "stride-mpc: %ld publishes failed\n", publisher.failures());
+    // A replay that accepted no state computed nothing: a log of another robot or of other
+    // channels must not look like a successful run.
+    if (replaying && node.acceptedStates() == 0) {
+      std::fprintf(stderr,
+                   "stride-mpc: the replay accepted none of the log's states on '%s' (%lld "
+                   "rejected:",
+                   config.state_channel.c_str(), static_cast<long long>(node.rejected()));
+      for (int r = 1; r <= static_cast<int>(stride::msg::Reject::Stale); ++r) {
+        const auto reason = static_cast<stride::msg::Reject>(r);
+        if (node.rejected(reason) > 0)
+          std::fprintf(stderr, " %lld %s", static_cast<long long>(node.rejected(reason)),
+                       stride::msg::describe(reason));
+      }
+      std::fprintf(stderr, "); the model expects nq %d, nv %d (%s)\n", node.mpc().robot().model.nq,
+                   node.mpc().robot().model.nv, node.mpc().robot().name.c_str());
+      return 1;
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "stride-mpc: %s\n", e.what());
     return 1;

@@ -66,6 +66,9 @@ int main(int argc, char** argv) {
                  "(repeatable)");
   app.add_flag("--print-model", print_model,
                "print the robot in wire order (q, v, u, contacts, limits) and exit");
+  app.footer(
+      "Exit status: 0 the run ended upright; 1 an error (robot, LCM); 2 a usage error; 3 the "
+      "simulation diverged; 4 the robot fell (sim/README.md).");
   CLI11_PARSE(app, argc, argv);
 
   std::signal(SIGINT, onSignal);
@@ -156,7 +159,13 @@ int main(int argc, char** argv) {
                    node.simulator().time());
       return 3;
     }
-    if (node.stats().fell) std::printf("stride-sim: the robot fell: run stopped\n");
+    // A fall is the run's outcome, not an error of the program, but whoever started the run (a
+    // script, CI, a batch of drives) must see it without parsing the text: its own status.
+    if (node.stats().fell) {
+      std::printf("stride-sim: the robot fell at t = %.3f s: run stopped\n",
+                  node.simulator().time());
+      return 4;
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "stride-sim: %s\n", e.what());
     return 1;

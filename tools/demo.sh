@@ -28,7 +28,8 @@
 #                     every run, as fast as the machine goes)
 #   --robots-dir DIR  where example-robot-data is looked for (repeatable), before
 #                     build/robot_packages and ROS_PACKAGE_PATH
-#   --check-tracking  exit 1 when a command segment missed its command or the robot fell
+#   --check-tracking  exit 1 when a command segment missed its command (a fall always exits 4,
+#                     a diverged simulation 3: stride-sim's and stride-log-summary's statuses)
 #   --host-network    use the host's loopback instead of a private namespace (multicast with ttl=0
 #                     on lo; for watching with lcm-spy from the host: tools/lcm-spy.sh)
 #   --out DIR         where the log and summaries go (default build/demo)
@@ -302,6 +303,10 @@ summary_args=("$log" --summary "$summary")
 [ "$check" = 1 ] && summary_args+=(--check-tracking)
 status=0
 "$build/tools/stride-log-summary" "${summary_args[@]}" || status=$?
+# The sim's own verdict counts too (its fall criterion is the summary's, on every physics step).
+if [ "$status" = 0 ] && { [ "$sim_status" = 3 ] || [ "$sim_status" = 4 ]; }; then
+  status=$sim_status
+fi
 echo
 echo "wall time: $wall s ($mode)"
 echo "log: $log (replay: $build/controller/stride-mpc --config $config ${dirs_args[*]} --replay $log)"

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
 
@@ -103,12 +105,55 @@ TEST(Replay, TwoReplaysGiveBitIdenticalPolicies) {
   }
 }
 
+// A log of another robot (a floating body alone: nq 7, nv 6): every state is rejected, and the
+// replay says so and exits 1 instead of reporting an empty run as a success.
+TEST(Replay, ALogOfAnotherRobotIsAnError) {
+  const Robot robot =
+      loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
+  const std::string path = testing::TempDir() + "/other_robot.lcmlog";
+  {
+    lcm::LogFile log(path, "w");
+    ASSERT_TRUE(log.good());
+    for (int i = 0; i < 50; ++i) {
+      robot_state_t s = controller_cases::standingState(robot, 5000000 + 1000L * i);
+      s.nq = 7;
+      s.nv = 6;
+      s.q.resize(7);
+      s.v.resize(6);
+      std::vector<unsigned char> bytes(s.getEncodedSize());
+      s.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+      lcm::LogEvent e{};
+      e.eventnum = i;
+      e.timestamp = s.utime;
+      e.channel = "STRIDE_STATE";
+      e.datalen = static_cast<int32_t>(bytes.size());
+      e.data = bytes.data();
+      log.writeEvent(&e);
+    }
+  }
+  const std::string err = path + ".err";
+  const std::string cmd = std::string(STRIDE_MPC_BIN) + " --config " +
+                          controller_cases::configPath("stride_quad") + " --replay " + path +
+                          " > /dev/null 2> " + err;
+  const int rc = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(rc));
+  EXPECT_EQ(WEXITSTATUS(rc), 1);
+  std::ifstream f(err);
+  const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("the replay accepted none of the log's states on 'STRIDE_STATE' (50 "
+                      "rejected: 50 sizes do not match the model); the model expects nq 19, nv 18 "
+                      "(stride_quad)"),
+            std::string::npos)
+      << text;
+}
+
 TEST(Replay, MissingLogIsAClearError) {
   const std::string cmd = std::string(STRIDE_MPC_BIN) + " --config " +
                           controller_cases::configPath("stride_quad") +
                           " --replay /nonexistent/session.lcmlog > /dev/null 2>&1";
   const int rc = std::system(cmd.c_str());
-  EXPECT_NE(rc, 0);
+  ASSERT_TRUE(WIFEXITED(rc));
+  EXPECT_EQ(WEXITSTATUS(rc), 1);
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 // stride-log-summary on logs written here (lcm::LogFile, no network): the command segments in the
-// table and the JSON, the rejected commands, and --check-tracking's exit status for a robot that
-// tracks, one that falls short, and one that falls.
+// table and the JSON, the rejected commands, and the exit status for a robot that tracks, one that
+// falls short (1 with --check-tracking), and one that falls (4, with the flag or without).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -129,9 +129,11 @@ TEST(LogSummary, CheckTrackingFailsOnAMissedCommand) {
   EXPECT_EQ(summarize(log, "--check-tracking --tolerance 0.5").status, 0);
 }
 
-TEST(LogSummary, CheckTrackingFailsOnAFall) {
-  const Summary r = summarize(writeSession("falls", Robot::FallsInSegment2), "--check-tracking");
-  EXPECT_EQ(r.status, 1) << r.output;
+TEST(LogSummary, AFallIsItsOwnExitStatusWithOrWithoutCheckTracking) {
+  const std::string log = writeSession("falls", Robot::FallsInSegment2);
+  EXPECT_EQ(summarize(log, "").status, 4);
+  const Summary r = summarize(log, "--check-tracking");
+  EXPECT_EQ(r.status, 4) << r.output;
   EXPECT_NE(r.output.find("tracking: segment 2 (6.00 .. 9.00 s, trot): the robot fell"),
             std::string::npos)
       << r.output;

@@ -198,7 +198,11 @@ int main(int argc, char** argv) {
                  "also print the controller's timing and misses per window of this many seconds")
       ->check(CLI::Range(0.0, 3600.0));
   app.add_flag("--check-tracking", check_tracking,
-               "exit status 1 when a command segment missed its command or the robot fell");
+               "exit status 1 when a command segment missed its command");
+  app.footer(
+      "Exit status: 0 read, upright (and tracked, with --check-tracking); 1 a segment missed its "
+      "command (--check-tracking) or the log or summary could not be read or written; 2 a usage "
+      "error; 4 the robot fell (as stride-sim's).");
   app.add_option("--tolerance", tolerance.relative,
                  "tracking: allowed error as a fraction of the commanded value")
       ->check(CLI::Range(0.0, 10.0))
@@ -421,5 +425,6 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
+  if (fell) return 4;
   return check_tracking && !tracked ? 1 : 0;
 }
