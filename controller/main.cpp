@@ -11,6 +11,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 
+#include "config/command_line.hpp"
 #include "config/describe_model.hpp"
 #include "controller/run_loop.hpp"
 
@@ -28,6 +29,7 @@ std::string defaultUrl() {
 
 int main(int argc, char** argv) {
   CLI::App app{"stride-mpc: real-time whole-body MPC (KKT-DDP) over LCM"};
+  stride::commandLineConventions(app, "stride-mpc");
   std::string config_path, replay, output, input_url, output_url, summary;
   bool lockstep = false, print_model = false;
   double duration = 0.0, slow_host = 1.0;
@@ -53,7 +55,7 @@ int main(int argc, char** argv) {
       "Exit status: 0 ran until stopped (or the log's end); 1 an error: configuration, robot, a "
       "replay log that cannot be read or whose states were all rejected; 2 a usage error or an "
       "LCM URL that cannot be opened.");
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);

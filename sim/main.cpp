@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "config/command_line.hpp"
 #include "config/describe_model.hpp"
 #include "sim/sim_node.hpp"
 
@@ -31,6 +32,7 @@ std::int64_t monotonicMicros() {
 int main(int argc, char** argv) {
   CLI::App app{
       "stride-sim: mock robot for stride-mpc (flat ground, unilateral contacts, friction)"};
+  stride::commandLineConventions(app, "stride-sim");
   std::string robot_yaml, url, summary;
   bool lockstep = false, print_model = false;
   std::vector<std::string> robots_dirs;
@@ -69,7 +71,7 @@ int main(int argc, char** argv) {
   app.footer(
       "Exit status: 0 the run ended upright; 1 an error (robot, LCM); 2 a usage error; 3 the "
       "simulation diverged; 4 the robot fell (sim/README.md).");
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "config/command_line.hpp"
 #include "solver/contact/contact_dynamics.hpp"
 #include "solver/multibody/aba.hpp"
 #include "solver/multibody/aba_derivatives.hpp"
@@ -79,12 +80,13 @@ struct Quantity {
 
 int main(int argc, char** argv) {
   CLI::App app{"Check Stride's dynamics against reference values from an independent library"};
+  stride::commandLineConventions(app, "stride-check-dynamics");
   std::string ref_path, robots_dir = "../shared/robots";
   app.add_option("reference", ref_path, "reference JSON file")->required();
   app.add_option("--robots-dir", robots_dir,
                  "folder the reference's `urdf` path is relative to (default ../shared/robots, "
                  "else the robots/ folder beside the reference's folder)");
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
   YAML::Node ref;
   try {

@@ -11,6 +11,7 @@
 #include <random>
 #include <vector>
 
+#include "config/command_line.hpp"
 #include "config/robot_config.hpp"
 #include "solver/multibody/aba.hpp"
 #include "solver/multibody/center_of_mass.hpp"
@@ -94,11 +95,12 @@ void describe(const Robot& robot, int iterations) {
 
 int main(int argc, char** argv) {
   CLI::App app{"Stride dynamics demo: the in-house robots and the cost of each algorithm"};
+  stride::commandLineConventions(app, "stride-dynamics-demo");
   std::string config_dir = STRIDE_CONFIG_DIR;
   int iterations = 2000;
   app.add_option("--config-dir", config_dir, "folder holding robots/<name>/<name>.yaml");
   app.add_option("--iterations", iterations, "calls per timing batch")->check(CLI::PositiveNumber);
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
   std::printf("Stride dynamics core: rigid-body algorithms on the in-house robots\n");
   try {
     for (const char* name : {"stride_quad", "stride_humanoid"})

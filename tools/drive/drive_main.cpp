@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <fstream>
 
+#include "config/command_line.hpp"
 #include "tools/drive/closed_loop.hpp"
 
 namespace {
@@ -46,6 +47,7 @@ void writeJson(const std::string& path, const stride::drive::Run& run,
 
 int main(int argc, char** argv) {
   CLI::App app{"stride-drive: drive a robot with a command script, in one process, in lock-step"};
+  stride::commandLineConventions(app, "stride-drive");
   std::string config_path, script_path, summary;
   std::vector<std::string> robots_dirs, pushes;
   stride::drive::Options options;
@@ -67,7 +69,7 @@ int main(int argc, char** argv) {
   app.add_flag("--check-tracking", check,
                "exit 1 when a segment of 2 s or more misses its command by more than max(15%, "
                "0.05 m/s, 0.1 rad/s), or the robot fell");
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
   try {
     stride::ControllerConfig config = stride::loadControllerConfig(config_path);

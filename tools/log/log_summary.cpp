@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "config/command_line.hpp"
 #include "messages/validate.hpp"
 #include "stride/mpc_status_t.hpp"
 #include "stride/robot_state_t.hpp"
@@ -179,6 +180,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "stride-log-summary: distance, base height, falls, controller timing and command tracking of "
       "a log"};
+  stride::commandLineConventions(app, "stride-log-summary");
   std::string log_path, summary_path, state_channel = "STRIDE_STATE",
                                       status_channel = "STRIDE_STATUS",
                                       command_channel = "STRIDE_COMMAND";
@@ -223,7 +225,7 @@ int main(int argc, char** argv) {
                  "segments: velocities are averaged from this long after a command's start [s]")
       ->check(CLI::Range(0.0, 3600.0))
       ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
   segment_options.fall = {fall_height, fall_tilt_deg};
 
   lcm::LogFile log(log_path, "r");

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <iostream>
 
+#include "config/command_line.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/kinematics.hpp"
 #include "solver/multibody/lie_group.hpp"
@@ -45,6 +46,7 @@ const std::vector<std::pair<std::string, std::string>> kFigureSegments = {
 
 int main(int argc, char** argv) {
   CLI::App app{"The paper's astronaut reorientation (§V-B): 360° in zero gravity, legs only"};
+  stride::commandLineConventions(app, "stride-paper-astronaut");
   AstronautOptions o;
   std::string robot_yaml =
       std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml";
@@ -84,7 +86,7 @@ int main(int argc, char** argv) {
   app.add_option("--w-mirror-velocity", o.w_mirror_velocity, "same, on their rates");
   app.add_option("--w-mirror-control", o.w_mirror_control, "same, on their torques");
   app.add_flag("-v,--verbose", verbose, "print the iteration table");
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
   o.solver = solver_name == "ddp" ? SolverKind::Ddp : SolverKind::Fddp;
   const Robot robot = loadRobot(robot_yaml);

@@ -12,6 +12,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "config/command_line.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/kinematics.hpp"
 #include "tools/paper/large_stride.hpp"
@@ -60,6 +61,7 @@ void writeFrames(const Model& model, const std::string& path, const std::vector<
 int main(int argc, char** argv) {
   CLI::App app{
       "The paper's large strides (§V-A): IK baseline vs KKT-DDP, checked on the mock robot"};
+  stride::commandLineConventions(app, "stride-paper-large-stride");
   std::string robot_yaml =
       std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml";
   std::string out;
@@ -112,7 +114,7 @@ int main(int argc, char** argv) {
                  "a push on the mock robot's base: start:duration:fx,fy,fz [s, s, N] (repeatable)");
   app.add_flag("--sim-trace", sim_trace, "write the mock robot's 1 ms trace (sim_trace.csv)");
   app.add_flag("-v,--verbose", verbose, "print the iteration table");
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
   for (const std::string& text : pushes) {
     sim::Push p;
     char c1 = 0, c2 = 0, c3 = 0, c4 = 0;

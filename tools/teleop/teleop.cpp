@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "config/command_line.hpp"
 #include "config/robot_config.hpp"
 #include "controller/command_script.hpp"
 #include "messages/validate.hpp"
@@ -294,6 +295,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "stride-teleop: body velocity commands for stride-mpc, from the keyboard or a command "
       "script played on the robot's clock"};
+  stride::commandLineConventions(app, "stride-teleop");
   std::string url, channel = "STRIDE_COMMAND", state_channel = "STRIDE_STATE",
                    gaits_name = "quadruped", commands;
   stride::teleop::KeyboardLimits limits;
@@ -347,11 +349,7 @@ int main(int argc, char** argv) {
                  "script: stop after this much robot time [s] (0: at SIGINT/SIGTERM)")
       ->check(CLI::Range(0.0, 1e9))
       ->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;  // usage errors exit 2, like every configuration error
-  }
+  if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
   script_options.rate_hz = rate_hz;
   const GaitSet gaits = gaits_name == "biped" ? GaitSet::Biped : GaitSet::Quadruped;
 
