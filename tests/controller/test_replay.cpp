@@ -16,8 +16,9 @@ namespace stride {
 namespace {
 
 // A 1 kHz session of the quadruped swaying on its feet, with the faults a real log has: a
-// repeated stamp and a NaN estimate (both must be rejected, not crash the replay).
-std::string writeSession(const std::string& path, int states) {
+// repeated stamp and a NaN estimate (both must be rejected, not crash the replay). other_robot:
+// the states cut to a floating body alone (nq 7, nv 6), as another robot's log would have them.
+std::string writeSession(const std::string& path, int states, bool other_robot = false) {
   const Robot robot =
       loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
   lcm::LogFile log(path, "w");
@@ -30,6 +31,12 @@ std::string writeSession(const std::string& path, int states) {
     s.q[7 + 1] += 0.05 * std::sin(4 * M_PI * t);
     if (i == 300) s.q[9] = std::numeric_limits<double>::quiet_NaN();
     if (i == 301) s.utime -= 2000;  // the stamp of state 299, the newest accepted
+    if (other_robot) {
+      s.nq = 7;
+      s.nv = 6;
+      s.q.resize(7);
+      s.v.resize(6);
+    }
     std::vector<unsigned char> bytes(s.getEncodedSize());
     s.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
     lcm::LogEvent e{};
@@ -108,29 +115,7 @@ TEST(Replay, TwoReplaysGiveBitIdenticalPolicies) {
 // A log of another robot (a floating body alone: nq 7, nv 6): every state is rejected, and the
 // replay says so and exits 1 instead of reporting an empty run as a success.
 TEST(Replay, ALogOfAnotherRobotIsAnError) {
-  const Robot robot =
-      loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
-  const std::string path = testing::TempDir() + "/other_robot.lcmlog";
-  {
-    lcm::LogFile log(path, "w");
-    ASSERT_TRUE(log.good());
-    for (int i = 0; i < 50; ++i) {
-      robot_state_t s = controller_cases::standingState(robot, 5000000 + 1000L * i);
-      s.nq = 7;
-      s.nv = 6;
-      s.q.resize(7);
-      s.v.resize(6);
-      std::vector<unsigned char> bytes(s.getEncodedSize());
-      s.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-      lcm::LogEvent e{};
-      e.eventnum = i;
-      e.timestamp = s.utime;
-      e.channel = "STRIDE_STATE";
-      e.datalen = static_cast<int32_t>(bytes.size());
-      e.data = bytes.data();
-      log.writeEvent(&e);
-    }
-  }
+  const std::string path = writeSession(testing::TempDir() + "/other_robot.lcmlog", 50, true);
   const std::string err = path + ".err";
   const std::string cmd = std::string(STRIDE_MPC_BIN) + " --config " +
                           controller_cases::configPath("stride_quad") + " --replay " + path +
