@@ -15,6 +15,7 @@
 # (bipeds). The command limits of the configuration are lifted for the speed sweep. Prints one line
 # per run and a summary; writes DIR/sweep_ROBOT.json.
 set -euo pipefail
+case "${1:-}" in -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;; esac
 root=$(cd "$(dirname "$0")/../.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 robot="${1:?usage: sweep.sh ROBOT [options]}"

@@ -10,14 +10,20 @@ run_experiment() {
   root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
   build="${STRIDE_BUILD_DIR:-$root/build}"
   out="$build/paper/$subdir"
+  local bin="$build/tools/paper/$program"
   while [ $# -gt 0 ]; do
     case "$1" in
+      # The script's own header, then the program's options; nothing is solved or plotted.
+      -h|--help)
+        sed -n '2,/^set -euo/{/^#/p}' "$0"
+        echo
+        [ -x "$bin" ] && "$bin" --help
+        return 0 ;;
       --out) out="$2"; shift 2 ;;
       --out=*) out="${1#--out=}"; shift ;;
       *) args+=("$1"); shift ;;
     esac
   done
-  local bin="$build/tools/paper/$program"
   if [ ! -x "$bin" ]; then
     "$root/tools/build.sh" >/dev/null
   fi
