@@ -122,6 +122,10 @@ int main(int argc, char** argv) {
         stride::toString(config.solver), config.max_iterations, config.rate_hz,
         replaying ? "replay" : (lockstep ? "lock-step" : "real-time"), config.input_url.c_str(),
         config.output_url.c_str());
+    const std::string datagram =
+        stride::policyDatagramWarning(static_cast<int>(node.mpc().policy().getEncodedSize()),
+                                      config.policy_knots, config.output_url);
+    if (!datagram.empty()) std::fprintf(stderr, "stride-mpc: warning: %s\n", datagram.c_str());
     std::fflush(stdout);
 
     stride::RunOptions options;

@@ -190,4 +190,17 @@ void MpcNode::tick(Clock::time_point deadline) {
   if (n > 0) out_.publish(config_.status_channel, buffer_.data(), n);
 }
 
+std::string policyDatagramWarning(int policy_bytes, int policy_knots, const std::string& url) {
+  constexpr int kDatagram = 65507;  // the largest UDP payload over IPv4
+  if (policy_bytes <= kDatagram || url.rfind("udpm://", 0) != 0) return "";
+  // The knots are most of a policy: the count that fits, leaving the header's share.
+  const int per_knot = policy_bytes / policy_knots;
+  const int fits = std::max(1, (kDatagram - (policy_bytes - per_knot * policy_knots)) / per_knot);
+  return "a policy is " + std::to_string(policy_bytes) + " bytes (" + std::to_string(policy_knots) +
+         " knots), more than one UDP datagram (" + std::to_string(kDatagram) +
+         "): LCM sends it in fragments and a lost fragment loses the policy; policy_knots: " +
+         std::to_string(fits) +
+         " fits in one, or make sure the network and the receive buffers carry the fragments";
+}
+
 }  // namespace stride

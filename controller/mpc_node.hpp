@@ -92,4 +92,10 @@ class MpcNode {
   long latency_count_ = 0;
 };
 
+// LCM over UDP multicast sends a message larger than one datagram (65507 bytes of payload) in
+// fragments, and one lost fragment loses the whole message. The warning stride-mpc prints at start
+// when its policies do not fit in one datagram: the size and the fix. Empty when they fit or when
+// the URL is not udpm.
+std::string policyDatagramWarning(int policy_bytes, int policy_knots, const std::string& url);
+
 }  // namespace stride

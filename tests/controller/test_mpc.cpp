@@ -8,6 +8,7 @@
 
 #include "controller/gait.hpp"
 #include "controller/mpc.hpp"
+#include "controller/mpc_node.hpp"
 #include "controller_cases.hpp"
 
 namespace stride {
@@ -70,6 +71,19 @@ TEST(ControllerConfig, ErrorsNameTheFileAndTheKey) {
 
 // The gaits' cyclic patterns: every one starts with all feet down (where the timeline switches),
 // trot and pace lift pairs, walk one foot at a time; a biped walks, and cannot trot.
+// Policies that need more than one UDP datagram are warned about at start, with the knots that fit
+// (talos_reduced's 4 knots are 81 kB); not on a transport without datagrams.
+TEST(MpcNode, PolicyLargerThanADatagramIsWarnedAbout) {
+  const std::string udpm = "udpm://239.255.76.67:7667?ttl=0";
+  EXPECT_EQ(policyDatagramWarning(30000, 8, udpm), "");
+  EXPECT_EQ(policyDatagramWarning(81000, 8, "memq://"), "");
+  const std::string w = policyDatagramWarning(81000, 8, udpm);
+  EXPECT_NE(w.find("a policy is 81000 bytes (8 knots), more than one UDP datagram (65507)"),
+            std::string::npos)
+      << w;
+  EXPECT_NE(w.find("policy_knots: 6 fits in one"), std::string::npos) << w;
+}
+
 TEST(Gait, Patterns) {
   const Robot quad =
       loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
