@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "stride/command_t.hpp"
+#include "stride/mpc_status_t.hpp"
 #include "stride/robot_state_t.hpp"
 
 namespace {
@@ -142,3 +143,51 @@ TEST(LogSummary, AFallIsItsOwnExitStatusWithOrWithoutCheckTracking) {
 }
 
 }  // namespace
+
+namespace {
+// 2 s of a 100 Hz estimator and controller, with states 50-59 and status ticks 100-104 missing
+// from the log (as lcm-logger drops them under load).
+std::string writeLossySession() {
+  const std::string path = testing::TempDir() + "/lossy.lcmlog";
+  lcm::LogFile log(path, "w");
+  EXPECT_TRUE(log.good());
+  for (int i = 0; i < 200; ++i) {
+    const std::int64_t utime = 7000000 + 10000L * i;
+    if (i < 50 || i >= 60) {
+      stride::robot_state_t s;
+      s.utime = utime;
+      s.nq = 7;
+      s.nv = 6;
+      s.q = std::vector<double>{0, 0, 0.3, 0, 0, 0, 1};
+      s.v = std::vector<double>(6, 0.0);
+      s.ncontacts = 0;
+      write(log, "STRIDE_STATE", s, utime);
+    }
+    if (i < 100 || i >= 105) {
+      stride::mpc_status_t st{};
+      st.utime = utime;
+      st.tick = i + 1;
+      st.policy_status = 0;
+      st.gait = "stand";
+      write(log, "STRIDE_STATUS", st, utime);
+    }
+  }
+  return path;
+}
+}  // namespace
+
+TEST(LogSummary, LostMessagesAreCountedAndCanFailTheRun) {
+  const std::string log = writeLossySession();
+  const Summary plain = summarize(log, "");
+  EXPECT_EQ(plain.status, 0) << plain.output;
+  EXPECT_NE(plain.output.find("lost: 5 status messages (gaps in the tick counter), 10 state "
+                              "estimates (stamp gaps; period 10.000 ms)\n"),
+            std::string::npos)
+      << plain.output;
+  EXPECT_NE(plain.json.find("\"lost\": {\"statuses\": 5, \"states\": 10}"), std::string::npos)
+      << plain.json;
+  const Summary strict = summarize(log, "--max-lost 14");
+  EXPECT_EQ(strict.status, 5) << strict.output;
+  EXPECT_NE(strict.output.find("MORE THAN --max-lost"), std::string::npos) << strict.output;
+  EXPECT_EQ(summarize(log, "--max-lost 15").status, 0);
+}

@@ -188,6 +188,7 @@ int main(int argc, char** argv) {
   stride::logs::TrackingTolerance tolerance;
   stride::logs::SegmentOptions segment_options;
   bool check_tracking = false;
+  long max_lost = -1;
   app.add_option("log", log_path, "LCM log file")->required()->check(CLI::ExistingFile);
   app.add_option("--summary", summary_path, "write the summary as JSON here");
   app.add_option("--state-channel", state_channel);
@@ -201,10 +202,15 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 3600.0));
   app.add_flag("--check-tracking", check_tracking,
                "exit status 1 when a command segment missed its command");
+  app.add_option("--max-lost", max_lost,
+                 "exit status 5 when more messages than this were lost: status ticks missing from "
+                 "the controller's counter plus state estimates missing from their stamps' rate "
+                 "(-1: no limit)")
+      ->check(CLI::Range(-1L, 1000000000L));
   app.footer(
       "Exit status: 0 read, upright (and tracked, with --check-tracking); 1 a segment missed its "
       "command (--check-tracking) or the log or summary could not be read or written; 2 a usage "
-      "error; 4 the robot fell (as stride-sim's).");
+      "error; 4 the robot fell (as stride-sim's); 5 more messages lost than --max-lost.");
   app.add_option("--tolerance", tolerance.relative,
                  "tracking: allowed error as a fraction of the commanded value")
       ->check(CLI::Range(0.0, 10.0))
@@ -245,6 +251,12 @@ int main(int argc, char** argv) {
   std::int64_t state_utime0 = 0;
   std::vector<stride::logs::BaseSample> base_samples;  // t from the first state's stamp
   CommandReader command_reader;
+  // Lost messages: each status carries its tick number (+1 per tick; a restarted controller
+  // starts again from 1), and the estimator publishes at a fixed rate, so a missing tick or a
+  // stamp gap of several periods is a message the log does not have.
+  std::int64_t last_tick = -1, last_state_utime = -1;
+  long lost_statuses = 0;
+  std::vector<std::int64_t> state_gaps_us;
   for (const lcm::LogEvent* e = log.readNextEvent(); e != nullptr; e = log.readNextEvent()) {
     if (e->channel == state_channel) {
       stride::robot_state_t s;
@@ -253,6 +265,9 @@ int main(int argc, char** argv) {
         ++bad;
         continue;
       }
+      if (last_state_utime >= 0 && s.utime > last_state_utime)
+        state_gaps_us.push_back(s.utime - last_state_utime);
+      last_state_utime = s.utime;
       const double z = s.q[2];
       if (states == 0) {
         x0 = s.q[0];
@@ -287,6 +302,8 @@ int main(int argc, char** argv) {
         continue;
       }
       ++statuses;
+      if (last_tick >= 0 && st.tick > last_tick + 1) lost_statuses += st.tick - last_tick - 1;
+      last_tick = st.tick;
       if (window > 0.0) {
         if (status_t0 < 0) status_t0 = e->timestamp;
         const double t = 1e-6 * static_cast<double>(e->timestamp - status_t0);
@@ -332,6 +349,18 @@ int main(int argc, char** argv) {
                  state_channel.c_str(), status_channel.c_str(), log_path.c_str());
     return 1;
   }
+  // The estimator's period: the median interval between stamps; a gap of n periods lost n - 1.
+  long missing_states = 0;
+  double state_period_ms = 0.0;
+  if (!state_gaps_us.empty()) {
+    std::vector<std::int64_t> sorted = state_gaps_us;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    const double period = static_cast<double>(sorted[sorted.size() / 2]);
+    state_period_ms = period * 1e-3;
+    for (const std::int64_t gap : state_gaps_us)
+      if (gap > 1.5 * period) missing_states += std::lround(gap / period) - 1;
+  }
+  const long lost = lost_statuses + missing_states;
   // Segments on the robot's clock: commands played from a script carry the stamp of the state
   // they answered, so both share the first state's origin.
   std::vector<stride::logs::CommandSample>& commands = command_reader.commands;
@@ -368,6 +397,11 @@ int main(int argc, char** argv) {
       static_cast<long long>(last_status.deadline_misses),
       static_cast<long long>(last_status.late_ticks), static_cast<long long>(last_status.fallbacks),
       static_cast<long long>(last_status.rejected_messages));
+  std::printf(
+      "lost: %ld status messages (gaps in the tick counter), %ld state estimates (stamp gaps; "
+      "period %.3f ms)%s\n",
+      lost_statuses, missing_states, state_period_ms,
+      max_lost >= 0 && lost > max_lost ? ": MORE THAN --max-lost" : "");
   // The other half of each iteration (run after the policy went out) and how the line search
   // went: a tick's latency is one rollout per step length tried.
   const long solved = full_steps + short_steps + no_steps;
@@ -421,12 +455,15 @@ int main(int argc, char** argv) {
       << ",\n  \"commands\": " << commands.size()
       << ",\n  \"command_rejects\": " << command_reader.rejects << ",\n  \"segments\": ";
     writeSegmentsJson(f, segments);
-    f << ",\n  \"tracked\": " << (tracked ? "true" : "false") << "\n}\n";
+    f << ",\n  \"tracked\": " << (tracked ? "true" : "false")
+      << ",\n  \"lost\": {\"statuses\": " << lost_statuses << ", \"states\": " << missing_states
+      << "}\n}\n";
     if (!f) {
       std::fprintf(stderr, "stride-log-summary: cannot write '%s'\n", summary_path.c_str());
       return 1;
     }
   }
   if (fell) return 4;
+  if (max_lost >= 0 && lost > max_lost) return 5;
   return check_tracking && !tracked ? 1 : 0;
 }
