@@ -1,6 +1,10 @@
 #include "config/describe_model.hpp"
 
+#include "config/model_hash.hpp"
+
 #include <algorithm>
+#include <cstdio>
+#include <cstring>
 #include <iomanip>
 #include <sstream>
 
@@ -43,6 +47,14 @@ std::string describeModel(const Robot& robot) {
     out << "; base height " << std::setprecision(4) << robot.default_q[2]
         << " m in the default posture";
   out << (ff ? "" : "; fixed base") << "\n";
+  char hash[17];
+  std::uint64_t h;
+  const std::int64_t signed_hash = modelHash(robot);
+  std::memcpy(&h, &signed_hash, 8);
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(h));
+  out << "model hash " << hash << " (int64 " << signed_hash
+      << "; of the joint names, types and order, and the contact frames): every robot_state_t "
+         "and policy_t carries it in model_hash\n";
 
   auto row = [&](const std::string& index, const std::string& name, const std::string& what) {
     out << "  " << std::left << std::setw(8) << index << " ";

@@ -293,7 +293,8 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   gen.sample_dt = lo.dt;
 
   const YAML::Node lcm = root["lcm"];
-  r.onlyKeys(lcm, "lcm", {"input", "output", "state", "policy", "status", "plan", "command"});
+  r.onlyKeys(lcm, "lcm",
+             {"input", "output", "state", "policy", "status", "plan", "command", "model"});
   if (lcm) {
     r.get(lcm, "input", "lcm", c.input_url);
     r.get(lcm, "output", "lcm", c.output_url);
@@ -302,9 +303,10 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(lcm, "status", "lcm", c.status_channel);
     r.get(lcm, "plan", "lcm", c.plan_channel);
     r.get(lcm, "command", "lcm", c.command_channel);
+    r.get(lcm, "model", "lcm", c.model_channel);
   }
   for (const std::string* ch : {&c.state_channel, &c.policy_channel, &c.status_channel,
-                                &c.plan_channel, &c.command_channel})
+                                &c.plan_channel, &c.command_channel, &c.model_channel})
     if (ch->empty() || ch->size() > 63) r.fail("lcm", "channel names must have 1 to 63 characters");
 
   const YAML::Node safety = root["safety"];

@@ -53,7 +53,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1.0, 10.0));
   app.footer(
       "Exit status: 0 ran until stopped (or the log's end); 1 an error: configuration, robot, a "
-      "replay log that cannot be read or whose states were all rejected; 2 a usage error or an "
+      "replay log that cannot be read, or states that came and were all rejected (another "
+      "robot's: stderr says which); 2 a usage error or an "
       "LCM URL that cannot be opened.");
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
@@ -140,21 +141,22 @@ int main(int argc, char** argv) {
     stride::writeSummary(node, summary);
     if (publisher.failures() > 0)
       std::fprintf(stderr, "stride-mpc: %ld publishes failed\n", publisher.failures());
-    // A replay that accepted no state computed nothing: a log of another robot or of other
-    // channels must not look like a successful run.
-    if (replaying && node.acceptedStates() == 0) {
-      std::fprintf(stderr,
-                   "stride-mpc: the replay accepted none of the log's states on '%s' (%lld "
-                   "rejected:",
-                   config.state_channel.c_str(), static_cast<long long>(node.rejected()));
-      for (int r = 1; r <= static_cast<int>(stride::msg::Reject::Stale); ++r) {
+    // A run that accepted no state computed nothing: a log of another robot or of other
+    // channels, or another robot's estimator live, must not look like a successful run.
+    if (node.acceptedStates() == 0 && node.rejected() > 0) {
+      std::fprintf(stderr, "stride-mpc: %s accepted none of the %lld states on '%s':",
+                   replaying ? "the replay" : "the run", static_cast<long long>(node.rejected()),
+                   config.state_channel.c_str());
+      for (int r = 1; r < stride::msg::kRejectReasons; ++r) {
         const auto reason = static_cast<stride::msg::Reject>(r);
         if (node.rejected(reason) > 0)
-          std::fprintf(stderr, " %lld %s", static_cast<long long>(node.rejected(reason)),
+          std::fprintf(stderr, " %lld %s;", static_cast<long long>(node.rejected(reason)),
                        stride::msg::describe(reason));
       }
-      std::fprintf(stderr, "); the model expects nq %d, nv %d (%s)\n", node.mpc().robot().model.nq,
-                   node.mpc().robot().model.nv, node.mpc().robot().name.c_str());
+      char hash[17];
+      stride::msg::formatHash(node.wireModel().hash, hash);
+      std::fprintf(stderr, " the model expects nq %d, nv %d (%s, hash %s)\n", node.wireModel().nq,
+                   node.wireModel().nv, node.mpc().robot().name.c_str(), hash);
       return 1;
     }
   } catch (const std::exception& e) {

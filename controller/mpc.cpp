@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "config/model_hash.hpp"
 #include "controller/gait.hpp"
 #include "solver/contact/knot_dynamics.hpp"
 #include "solver/multibody/frames.hpp"
@@ -71,6 +72,7 @@ Mpc::Mpc(const ControllerConfig& config)
   x_ = Eigen::VectorXd::Zero(nq_ + nv_);
   msg::shape(policy_, config_.policy_knots, nq_, nv_, nu_);
   msg::shape(previous_, config_.policy_knots, nq_, nv_, nu_);
+  policy_.model_hash = previous_.model_hash = stride::modelHash(robot_);
   status_.policy_status = kPolicyNone;
   status_.solver_status = -1;
 }

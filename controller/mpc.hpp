@@ -77,6 +77,8 @@ class Mpc {
 
   const ControllerConfig& config() const { return config_; }
   const Robot& robot() const { return robot_; }
+  // The robot's identity on the wire (config/model_hash.hpp), carried by every policy.
+  std::int64_t modelHash() const { return policy_.model_hash; }
   int nu() const { return nu_; }
   bool started() const { return loco_ != nullptr; }
 

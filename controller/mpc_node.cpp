@@ -3,6 +3,9 @@
 #include <time.h>
 
 #include <algorithm>
+#include <cstdio>
+
+#include "config/model_hash.hpp"
 
 namespace stride {
 
@@ -30,6 +33,61 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
                           status.getEncodedSize()));
   latencies_.reserve(kLatencyCapacity);
   command_msg_.gait.reserve(msg::kMaxGaitName + 1);  // decoding a gait name then never allocates
+  wire_.hash = mpc_.modelHash();
+  wire_.nq = model.nq;
+  wire_.nv = model.nv;
+  wire_.nu = mpc_.nu();
+  wire_.robot = mpc_.robot().name.c_str();  // the Mpc owns the robot: stable
+  const robot_model_t m = robotModelMessage(mpc_.robot(), mpc_.nu());
+  model_buffer_.resize(m.getEncodedSize());
+  m.encode(model_buffer_.data(), 0, static_cast<int>(model_buffer_.size()));
+  mpc_.status().wrong_model_cause.reserve(sizeof(ModelMismatch::text));
+}
+
+robot_model_t robotModelMessage(const Robot& robot, int nu) {
+  robot_model_t m;
+  m.robot = robot.name;
+  m.model_hash = modelHash(robot);
+  m.nq = robot.model.nq;
+  m.nv = robot.model.nv;
+  m.nu = nu;
+  for (const WireJoint& j : wireJoints(robot.model)) {
+    m.joint_names.push_back(j.name);
+    m.joint_types.push_back(j.type);
+    m.joint_idx_q.push_back(j.idx_q);
+    m.joint_idx_v.push_back(j.idx_v);
+  }
+  m.njoints = static_cast<std::int32_t>(m.joint_names.size());
+  for (const ContactSpec& c : robot.contacts) m.contact_frames.push_back(c.frame);
+  m.ncontacts = static_cast<std::int32_t>(m.contact_frames.size());
+  return m;
+}
+
+void MpcNode::noteWrongModel(const void* buf, int size, const std::string& channel) {
+  msg::WireClaim claim;
+  if (!msg::readStateClaim(buf, size, claim)) return;
+  for (int i = 0; i < n_mismatches_; ++i)
+    if (mismatches_[i].claim == claim) {
+      ++mismatches_[i].count;
+      latest_mismatch_ = i;
+      return;
+    }
+  if (n_mismatches_ == kMaxMismatches) return;  // counted in rejected_; not described again
+  ModelMismatch& m = mismatches_[n_mismatches_];
+  m.claim = claim;
+  m.count = 1;
+  msg::describeMismatch(wire_, claim, m.text.data(), static_cast<int>(m.text.size()));
+  latest_mismatch_ = n_mismatches_++;
+  // Once per cause: a wiring error must be seen, and a flood of it must not flood the terminal.
+  std::fprintf(stderr, "stride-mpc: refused a state on '%s': %s\n", channel.c_str(), m.text.data());
+}
+
+void MpcNode::publishModelIfDue() {
+  const double t = now();
+  if (model_sent_ && t - model_sent_at_ < 1.0) return;
+  out_.publish(config_.model_channel, model_buffer_.data(), static_cast<int>(model_buffer_.size()));
+  model_sent_ = true;
+  model_sent_at_ = t;
 }
 
 double MpcNode::now() const {
@@ -54,10 +112,11 @@ void MpcNode::reject(msg::Reject reason) {
   ++rejected_[static_cast<int>(reason)];
 }
 
-void MpcNode::onState(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-  const Model& model = mpc_.robot().model;
-  msg::Reject why = msg::checkStateWire(rbuf->data, static_cast<int>(rbuf->data_size), model.nq,
-                                        model.nv, kMaxContactFlags);
+void MpcNode::onState(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  msg::Reject why =
+      msg::checkStateWire(rbuf->data, static_cast<int>(rbuf->data_size), wire_, kMaxContactFlags);
+  if (why == msg::Reject::WrongModel)
+    noteWrongModel(rbuf->data, static_cast<int>(rbuf->data_size), channel);
   if (why == msg::Reject::None &&
       !msg::decode(rbuf->data, static_cast<int>(rbuf->data_size), incoming_))
     why = msg::Reject::Undecodable;
@@ -145,6 +204,7 @@ bool MpcNode::tickDue() const {
 
 void MpcNode::tick(Clock::time_point deadline) {
   const Clock::time_point start = Clock::now();
+  publishModelIfDue();
   const robot_state_t* state = have_state_ ? &newest_ : nullptr;
   const double age = !have_state_ || time_ == TimeSource::Stamps
                          ? 0.0
@@ -180,6 +240,9 @@ void MpcNode::tick(Clock::time_point deadline) {
   }
   mpc_status_t& status = mpc_.status();
   status.rejected_messages = rejected_total_;
+  status.wrong_model = wrongModel();
+  if (latest_mismatch_ >= 0)  // within the capacity reserved at start: no allocation
+    status.wrong_model_cause.assign(mismatches_[latest_mismatch_].text.data());
   const CommandCounters& cc = commands_.counters();
   status.commands_accepted = cc.accepted;
   status.commands_rejected = cc.rejected + commands_malformed_;

@@ -9,6 +9,11 @@
 // state) are rejected; staleness is measured on the controller's side (the state's arrival time),
 // so it needs no clock shared with the robot. Commands go through a CommandFilter (limits, deadman,
 // smoothing) on the same clock: their arrival time, never the sender's stamp, feeds the deadman.
+// The wire contract: every state must carry this robot's model hash and sizes (config/
+// model_hash.hpp); another model's state is refused (Reject::WrongModel), each distinct cause is
+// written to stderr once ("expected nq 19, nv 18 (anymal_c, hash ...), got nq 29, ...") and the
+// latest is carried by the status. The robot_model_t goes out on the model channel at the first
+// tick and then at 1 Hz, so a robot, lcm-spy or a log can tell which layout the controller expects.
 // Two ways to run:
 //   real time  a fixed-rate loop on CLOCK_MONOTONIC (controller/main.cpp);
 //   stamps     time is the newest state's stamp: a tick is due whenever a state reaches the next
@@ -22,6 +27,7 @@
 
 #include "controller/mpc.hpp"
 #include "messages/publisher.hpp"
+#include "stride/robot_model_t.hpp"
 
 namespace stride {
 
@@ -64,9 +70,22 @@ class MpcNode {
   // the oldest are overwritten beyond it).
   const std::vector<float>& latencies() const { return latencies_; }
   long latencyCount() const { return latency_count_; }
+  const msg::WireModel& wireModel() const { return wire_; }
+  // States refused for another model, and the distinct causes (at most kMaxMismatches kept).
+  struct ModelMismatch {
+    msg::WireClaim claim;
+    std::int64_t count = 0;
+    std::array<char, 200> text{};
+  };
+  static constexpr int kMaxMismatches = 4;
+  std::int64_t wrongModel() const { return rejected(msg::Reject::WrongModel); }
+  int mismatchCount() const { return n_mismatches_; }
+  const ModelMismatch& mismatch(int i) const { return mismatches_[i]; }
 
  private:
   void reject(msg::Reject reason);
+  void noteWrongModel(const void* buf, int size, const std::string& channel);
+  void publishModelIfDue();
   static std::int64_t monotonicMicros();
   double now() const;  // the controller's clock [s]: monotonic, or the newest state's stamp
 
@@ -81,16 +100,25 @@ class MpcNode {
   std::int64_t next_tick_utime_ = 0;
   bool tick_grid_set_ = false;
   std::int64_t accepted_ = 0, rejected_total_ = 0, plan_updates_ = 0, policies_published_ = 0;
-  std::array<std::int64_t, 8> rejected_{};
+  std::array<std::int64_t, msg::kRejectReasons> rejected_{};
   contact_plan_t plan_msg_;
   bool plan_pending_ = false;
   command_t command_msg_;
   CommandFilter commands_;
   std::int64_t last_command_utime_ = -1, commands_malformed_ = 0;
   std::vector<unsigned char> buffer_;  // encoded policy / status
+  msg::WireModel wire_;
+  std::vector<unsigned char> model_buffer_;  // the encoded robot_model_t, sent as is
+  double model_sent_at_ = 0.0;
+  bool model_sent_ = false;
+  std::array<ModelMismatch, kMaxMismatches> mismatches_{};
+  int n_mismatches_ = 0, latest_mismatch_ = -1;
   std::vector<float> latencies_;
   long latency_count_ = 0;
 };
+
+// The robot_model_t of a robot (name, hash, sizes, joints in wire order, contact frames).
+robot_model_t robotModelMessage(const Robot& robot, int nu);
 
 // LCM over UDP multicast sends a message larger than one datagram (65507 bytes of payload) in
 // fragments, and one lost fragment loses the whole message. The warning stride-mpc prints at start

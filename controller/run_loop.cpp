@@ -203,12 +203,15 @@ void writeSummary(const MpcNode& node, const std::string& path) {
       static_cast<long long>(cc.clamped), static_cast<long long>(cc.timeouts));
   if (node.rejected() > 0) {
     std::printf("stride-mpc: rejected messages by reason:");
-    for (int r = 1; r <= static_cast<int>(msg::Reject::Stale); ++r)
+    for (int r = 1; r < msg::kRejectReasons; ++r)
       if (node.rejected(static_cast<msg::Reject>(r)) > 0)
         std::printf(" %s: %lld;", msg::describe(static_cast<msg::Reject>(r)),
                     static_cast<long long>(node.rejected(static_cast<msg::Reject>(r))));
     std::printf("\n");
   }
+  for (int i = 0; i < node.mismatchCount(); ++i)
+    std::printf("stride-mpc: %lld states of another model: %s\n",
+                static_cast<long long>(node.mismatch(i).count), node.mismatch(i).text.data());
   if (path.empty()) return;
   std::ofstream f(path);
   f << "{\n  \"ticks\": " << c.ticks << ",\n  \"policies\": " << node.policiesPublished()

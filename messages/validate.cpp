@@ -1,6 +1,7 @@
 #include "messages/validate.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 namespace stride::msg {
@@ -23,6 +24,8 @@ const char* describe(Reject reason) {
       return "stamp not newer than the last accepted";
     case Reject::Stale:
       return "stamp older than the allowed age";
+    case Reject::WrongModel:
+      return "another robot's model (hash or sizes)";
   }
   return "unknown";
 }
@@ -41,6 +44,19 @@ bool readInt32(const void* buf, int size, long at, std::int32_t& out) {
   return true;
 }
 
+bool readInt64(const void* buf, int size, long at, std::int64_t& out) {
+  std::int32_t hi, lo;
+  if (!readInt32(buf, size, at, hi) || !readInt32(buf, size, at + 4, lo)) return false;
+  const std::uint64_t u = (std::uint64_t(std::uint32_t(hi)) << 32) | std::uint32_t(lo);
+  std::memcpy(&out, &u, 8);
+  return true;
+}
+
+// Offsets after the type hash: robot_state_t is utime, model_hash, nq, nv, ...; policy_t is utime,
+// model_hash, knot0_utime, tick, t0, dt, then knots nq nv nu nx ndx nk.
+constexpr long kStateHashAt = kHash + 8, kStateNqAt = kHash + 16;
+constexpr long kPolicyHashAt = kHash + 8, kPolicyCountsAt = kHash + 48;
+
 template <typename Vec>
 bool allFinite(const Vec& v) {
   for (double x : v)
@@ -56,30 +72,79 @@ Reject checkQuaternion(const std::vector<double>& q) {
 }  // namespace
 
 int stateWireSize(int nq, int nv, int ncontacts) {
-  return kHash + 8 + 4 + 4 + 8 * (nq + nv) + 4 + ncontacts;
+  return kHash + 8 + 8 + 4 + 4 + 8 * (nq + nv) + 4 + ncontacts;
 }
 
 int policyWireSize(int knots, int nq, int nv, int nu) {
   const long per_knot = 8L * ((nq + nv) + nu + static_cast<long>(nu) * 2 * nv);
-  return static_cast<int>(kHash + 5 * 8 + 7 * 4 + knots * per_knot + 4 + 1);
+  return static_cast<int>(kHash + 6 * 8 + 7 * 4 + knots * per_knot + 4 + 1);
 }
 
-Reject checkStateWire(const void* buf, int size, int nq, int nv, int max_contacts) {
-  std::int32_t mq, mv, nc;
-  if (!readInt32(buf, size, kHash + 8, mq) || !readInt32(buf, size, kHash + 12, mv))
+bool readStateClaim(const void* buf, int size, WireClaim& claim) {
+  std::int32_t nq, nv;
+  if (!readInt64(buf, size, kStateHashAt, claim.hash) || !readInt32(buf, size, kStateNqAt, nq) ||
+      !readInt32(buf, size, kStateNqAt + 4, nv))
+    return false;
+  claim.nq = nq;
+  claim.nv = nv;
+  return true;
+}
+
+bool readPolicyClaim(const void* buf, int size, WireClaim& claim) {
+  std::int32_t nq, nv;
+  if (!readInt64(buf, size, kPolicyHashAt, claim.hash) ||
+      !readInt32(buf, size, kPolicyCountsAt + 4, nq) ||
+      !readInt32(buf, size, kPolicyCountsAt + 8, nv))
+    return false;
+  claim.nq = nq;
+  claim.nv = nv;
+  return true;
+}
+
+void formatHash(std::int64_t hash, char out[17]) {
+  std::uint64_t u;
+  std::memcpy(&u, &hash, 8);
+  std::snprintf(out, 17, "%016llx", static_cast<unsigned long long>(u));
+}
+
+const char* describeMismatch(const WireModel& expected, const WireClaim& got, char* out, int n) {
+  char ours[17], theirs[17];
+  formatHash(expected.hash, ours);
+  formatHash(got.hash, theirs);
+  if (got.nq != expected.nq || got.nv != expected.nv)
+    std::snprintf(out, n, "expected nq %d, nv %d (%s, hash %s), got nq %d, nv %d (hash %s)",
+                  expected.nq, expected.nv, expected.robot, ours, got.nq, got.nv, theirs);
+  else
+    std::snprintf(out, n,
+                  "expected hash %s (%s, nq %d, nv %d), got hash %s: the same sizes, another "
+                  "robot or joint order (compare stride-mpc --print-model)",
+                  ours, expected.robot, expected.nq, expected.nv, theirs);
+  return out;
+}
+
+Reject checkStateWire(const void* buf, int size, const WireModel& model, int max_contacts) {
+  WireClaim claim;
+  std::int32_t nc;
+  if (!readStateClaim(buf, size, claim)) return Reject::Undecodable;
+  if (claim.hash != model.hash || claim.nq != model.nq || claim.nv != model.nv)
+    return Reject::WrongModel;
+  if (!readInt32(buf, size, kStateNqAt + 8 + 8L * (model.nq + model.nv), nc))
     return Reject::Undecodable;
-  if (mq != nq || mv != nv) return Reject::WrongSize;
-  if (!readInt32(buf, size, kHash + 16 + 8L * (nq + nv), nc)) return Reject::Undecodable;
   if (nc < 0 || nc > max_contacts) return Reject::WrongSize;
-  return size == stateWireSize(nq, nv, nc) ? Reject::None : Reject::WrongSize;
+  return size == stateWireSize(model.nq, model.nv, nc) ? Reject::None : Reject::WrongSize;
 }
 
-Reject checkPolicyWire(const void* buf, int size, int nq, int nv, int nu, int max_knots) {
+Reject checkPolicyWire(const void* buf, int size, const WireModel& model, int max_knots) {
+  WireClaim claim;
+  if (!readPolicyClaim(buf, size, claim)) return Reject::Undecodable;
+  if (claim.hash != model.hash || claim.nq != model.nq || claim.nv != model.nv)
+    return Reject::WrongModel;
   std::int32_t f[7];  // knots nq nv nu nx ndx nk
   for (int i = 0; i < 7; ++i)
-    if (!readInt32(buf, size, kHash + 40 + 4 * i, f[i])) return Reject::Undecodable;
-  if (f[0] < 1 || f[0] > max_knots || f[1] != nq || f[2] != nv || f[3] != nu || f[4] != nq + nv ||
-      f[5] != 2 * nv || f[6] != nu * 2 * nv)
+    if (!readInt32(buf, size, kPolicyCountsAt + 4 * i, f[i])) return Reject::Undecodable;
+  const int nq = model.nq, nv = model.nv, nu = model.nu;
+  if (f[0] < 1 || f[0] > max_knots || f[3] != nu || f[4] != nq + nv || f[5] != 2 * nv ||
+      f[6] != nu * 2 * nv)
     return Reject::WrongSize;
   return size == policyWireSize(f[0], nq, nv, nu) ? Reject::None : Reject::WrongSize;
 }

@@ -28,16 +28,42 @@ enum class Reject : std::uint8_t {
   BadField,           // e.g. dt <= 0, inconsistent derived sizes, flags outside {0, 1}
   OutOfOrder,         // stamp not newer than the last accepted one
   Stale,              // stamp older than the allowed age
+  WrongModel,         // another robot's or model's message: model hash, nq or nv not ours
 };
+constexpr int kRejectReasons = static_cast<int>(Reject::WrongModel) + 1;
 const char* describe(Reject reason);
 
 // Quaternions within this distance of unit norm are accepted (and renormalized by the reader);
 // an estimator's float rounding stays orders of magnitude below it.
 constexpr double kQuaternionTolerance = 1e-4;
 
-// Size checks on encoded bytes, before decode(). max_contacts bounds the optional flags.
-Reject checkStateWire(const void* buf, int size, int nq, int nv, int max_contacts);
-Reject checkPolicyWire(const void* buf, int size, int nq, int nv, int nu, int max_knots);
+// The model a receiver runs, as the wire carries it (robot_model_t): what a state or policy must
+// claim to be accepted.
+struct WireModel {
+  std::int64_t hash = 0;  // config/model_hash.hpp
+  int nq = 0, nv = 0, nu = 0;
+  const char* robot = "";  // for messages only
+};
+// What a received state or policy claims to be, read from its raw bytes (no decode).
+struct WireClaim {
+  std::int64_t hash = 0;
+  int nq = 0, nv = 0;
+  bool operator==(const WireClaim& o) const { return hash == o.hash && nq == o.nq && nv == o.nv; }
+};
+bool readStateClaim(const void* buf, int size, WireClaim& claim);
+bool readPolicyClaim(const void* buf, int size, WireClaim& claim);
+// "expected nq 19, nv 18 (anymal_c, hash 8c1d...), got nq 29, nv 28 (hash 03a4...)", or for the
+// same sizes "expected hash 8c1d... (anymal_c, nq 19, nv 18), got hash 5e7f...: same sizes, another
+// joint layout". Into a caller's buffer (no allocation); returns `out`.
+const char* describeMismatch(const WireModel& expected, const WireClaim& got, char* out, int n);
+// A hash as the programs print it: 16 hex digits.
+void formatHash(std::int64_t hash, char out[17]);
+
+// Size and model checks on encoded bytes, before decode(): WrongModel when the hash, nq or nv is
+// not the model's, WrongSize when the buffer does not match its own counts. max_contacts bounds
+// the optional flags.
+Reject checkStateWire(const void* buf, int size, const WireModel& model, int max_contacts);
+Reject checkPolicyWire(const void* buf, int size, const WireModel& model, int max_knots);
 Reject checkPlanWire(const void* buf, int size, int max_contacts, int max_phases);
 // A command whose gait name has at most kMaxGaitName characters.
 constexpr int kMaxGaitName = 31;

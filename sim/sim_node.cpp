@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <fstream>
 
+#include "config/model_hash.hpp"
 #include "solver/contact/knot_dynamics.hpp"
 
 namespace stride::sim {
@@ -24,6 +25,8 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
   steps_per_state_ =
       std::max(1, static_cast<int>(std::lround(1.0 / (options.state_rate_hz * sim.dt))));
   msg::shape(state_msg_, model.nq, model.nv, static_cast<int>(robot.contacts.size()));
+  state_msg_.model_hash = modelHash(robot);
+  wire_ = {state_msg_.model_hash, model.nq, model.nv, sim_.nu(), robot_.name.c_str()};
   buffer_.resize(state_msg_.getEncodedSize());
   q_pub_ = Eigen::VectorXd::Zero(model.nq);
   v_pub_ = Eigen::VectorXd::Zero(model.nv);
@@ -50,12 +53,12 @@ void SimNode::reset(const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
   track();
 }
 
-void SimNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+void SimNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
   const Model& model = robot_.model;
   const int size = static_cast<int>(rbuf->data_size);
-  const bool ok = msg::checkPolicyWire(rbuf->data, size, model.nq, model.nv, sim_.nu(),
-                                       options_.max_policy_knots) == msg::Reject::None &&
-                  incoming_.decode(rbuf->data, 0, size) >= 0 &&
+  const msg::Reject wire = msg::checkPolicyWire(rbuf->data, size, wire_, options_.max_policy_knots);
+  if (wire == msg::Reject::WrongModel) noteWrongModel(rbuf->data, size, channel);
+  const bool ok = wire == msg::Reject::None && incoming_.decode(rbuf->data, 0, size) >= 0 &&
                   msg::checkPolicy(incoming_, model.hasFreeFlyer()) == msg::Reject::None;
   if (!ok) {
     ++stats_.policies_rejected;
@@ -73,6 +76,19 @@ void SimNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   have_policy_ = true;
   last_answer_ = std::max(last_answer_, incoming_.utime);
   ++stats_.policies;
+}
+
+void SimNode::noteWrongModel(const void* buf, int size, const std::string& channel) {
+  ++stats_.policies_wrong_model;
+  msg::WireClaim claim;
+  if (!msg::readPolicyClaim(buf, size, claim)) return;
+  for (int i = 0; i < n_mismatches_; ++i)
+    if (mismatches_[i] == claim) return;
+  if (n_mismatches_ == static_cast<int>(mismatches_.size())) return;
+  mismatches_[n_mismatches_++] = claim;
+  char text[200];
+  std::fprintf(stderr, "stride-sim: refused a policy on '%s': %s\n", channel.c_str(),
+               msg::describeMismatch(wire_, claim, text, sizeof text));
 }
 
 std::int64_t SimNode::publishState() {

@@ -2,12 +2,15 @@
 // stride-sim's LCM side: publishes the mock robot's state estimates (with the configured noise,
 // delay and drops) and applies the newest valid policy at every physics step (ARCHITECTURE.md §1,
 // §6). Until the first policy arrives, and whenever one runs out, a joint PD holds the default
-// posture (counted).
+// posture (counted). States carry the robot's model hash; a policy of another model (hash, nq or
+// nv: another robot's controller) is refused, counted, and each distinct cause written to stderr
+// once (controller/README.md, "Wire contract").
 //
 // Time: the robot's clock is utime = utime_base + sim time, in µs. In lock-step the base is fixed
 // (deterministic stamps); in real time it is CLOCK_MONOTONIC at start and the loop keeps sim time
 // on the wall clock. A policy's knot 0 sits at its utime on that clock.
 
+#include <array>
 #include <lcm/lcm-cpp.hpp>
 #include <string>
 
@@ -38,6 +41,7 @@ struct SimNodeOptions {
 struct SimNodeStats {
   std::int64_t states_published = 0, states_dropped = 0;
   std::int64_t policies = 0, policies_rejected = 0;
+  std::int64_t policies_wrong_model = 0;  // of policies_rejected: another model's
   // On the hold PD: before the first policy came (waiting, e.g. the controller's start-up solve
   // in real time), and after (a policy that did not apply: a fallback of the robot).
   std::int64_t waiting_steps = 0, hold_steps = 0, exhausted_steps = 0, steps = 0;
@@ -78,6 +82,7 @@ class SimNode {
 
  private:
   void track();
+  void noteWrongModel(const void* buf, int size, const std::string& channel);
 
   const Robot& robot_;
   SimNodeOptions options_;
@@ -94,6 +99,9 @@ class SimNode {
   bool have_policy_ = false;
   std::int64_t last_answer_ = -1;
   robot_state_t state_msg_;
+  msg::WireModel wire_;
+  std::array<msg::WireClaim, 4> mismatches_{};  // the causes already written to stderr
+  int n_mismatches_ = 0;
   std::vector<unsigned char> buffer_;
   Eigen::VectorXd q_pub_, v_pub_, tau_;
   SimNodeStats stats_;

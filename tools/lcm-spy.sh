@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# lcm-spy with Stride's message types on the CLASSPATH, so it decodes STRIDE_STATE, STRIDE_POLICY,
-# STRIDE_STATUS and STRIDE_PLAN. Arguments go to lcm-spy (e.g. --lcm-url='udpm://...?ttl=0').
+# lcm-spy with Stride's message types on the CLASSPATH, so it decodes every Stride channel (state,
+# policy, status, plan, command, model; tests/messages/lcm_spy_decodes.sh checks it). Arguments go
+# to lcm-spy (e.g. --lcm-url='udpm://...?ttl=0').
 # Inside the demo's private network namespace: tools/demo.sh --spy starts it there.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)

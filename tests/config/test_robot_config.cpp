@@ -5,11 +5,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
 #include "config/describe_model.hpp"
+#include "config/model_hash.hpp"
 #include "config/package_path.hpp"
 #include "config/robot_config.hpp"
 #include "solver/multibody/center_of_mass.hpp"
@@ -538,6 +541,54 @@ TEST(RobotConfig, BaseHeightWarning) {
 }
 
 // ---- the model in wire order ----
+
+// The wire contract's hash tells apart robots whose messages have the same sizes (an ANYmal
+// controller must refuse a Solo-12's states), and only what changes the meaning of an index
+// changes it.
+TEST(ModelHash, TellsRobotsOfTheSameSizesApart) {
+  const Robot quad = loadRobot(kQuad);
+  const Robot solo = loadRobot(robotYaml("solo12"), {kPackages});
+  const Robot anymal = loadRobot(robotYaml("anymal_c"), {kPackages});
+  ASSERT_EQ(quad.model.nq, solo.model.nq);
+  ASSERT_EQ(solo.model.nq, anymal.model.nq);
+  EXPECT_NE(modelHash(solo), modelHash(anymal));
+  EXPECT_NE(modelHash(quad), modelHash(anymal));
+  EXPECT_EQ(modelHash(anymal), modelHash(loadRobot(robotYaml("anymal_c"), {kPackages})));
+  EXPECT_NE(modelHash(loadRobot(kHumanoid)), modelHash(quad));
+
+  Robot changed = quad;  // the contacts in another order: the phase bits mean other feet
+  std::swap(changed.contacts[0], changed.contacts[1]);
+  EXPECT_NE(modelHash(changed), modelHash(quad));
+  changed = quad;  // a joint renamed
+  changed.model.joints[2].name += "_2";
+  EXPECT_NE(modelHash(changed), modelHash(quad));
+  changed = quad;  // a revolute joint made prismatic
+  changed.model.joints[2].type = JointType::Prismatic;
+  EXPECT_NE(modelHash(changed), modelHash(quad));
+  changed = quad;  // masses and limits retuned: the same wire
+  changed.model.effortLimit *= 2.0;
+  changed.name = "retuned";
+  EXPECT_EQ(modelHash(changed), modelHash(quad));
+
+  const std::vector<WireJoint> joints = wireJoints(quad.model);
+  ASSERT_EQ(joints.size(), 13u);
+  EXPECT_EQ(joints[0].type, "free-flyer");
+  EXPECT_EQ(joints[0].idx_q, 0);
+  EXPECT_EQ(joints[1].type, "revolute");
+  EXPECT_EQ(joints[1].idx_q, 7);
+  EXPECT_EQ(joints[1].idx_v, 6);
+  EXPECT_EQ(joints[12].idx_q, 18);
+  // --print-model shows it.
+  char hex[17];
+  std::uint64_t u;
+  const std::int64_t h = modelHash(quad);
+  std::memcpy(&u, &h, 8);
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(u));
+  EXPECT_NE(describeModel(quad).find("model hash " + std::string(hex) + " (int64 " +
+                                     std::to_string(h) + ";"),
+            std::string::npos)
+      << describeModel(quad);
+}
 
 TEST(RobotConfig, DescribeModel) {
   const Robot robot = loadRobot(kQuad);

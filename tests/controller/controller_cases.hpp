@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "config/model_hash.hpp"
 #include "controller/controller_config.hpp"
 #include "messages/validate.hpp"
 
@@ -17,6 +18,7 @@ inline robot_state_t standingState(const Robot& robot, std::int64_t utime) {
   robot_state_t m;
   msg::shape(m, robot.model.nq, robot.model.nv, 0);
   m.utime = utime;
+  m.model_hash = modelHash(robot);
   for (int i = 0; i < robot.model.nq; ++i) m.q[i] = robot.default_q[i];
   return m;
 }

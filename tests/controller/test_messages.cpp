@@ -43,11 +43,13 @@ TEST(Messages, MemqRoundTripOfEveryType) {
   robot_state_t s;
   msg::shape(s, 19, 18, 4);
   s.utime = 123456789;
+  s.model_hash = -7;
   for (int i = 0; i < 19; ++i) s.q[i] = 0.1 * i;
   for (int i = 0; i < 18; ++i) s.v[i] = -0.2 * i;
   s.contact = {1, 0, 1, 1};
   const robot_state_t s2 = roundTrip(lcm, "STATE", s);
   EXPECT_EQ(s2.utime, s.utime);
+  EXPECT_EQ(s2.model_hash, s.model_hash);
   EXPECT_EQ(s2.q, s.q);
   EXPECT_EQ(s2.v, s.v);
   EXPECT_EQ(s2.contact, s.contact);
@@ -55,6 +57,7 @@ TEST(Messages, MemqRoundTripOfEveryType) {
   policy_t p;
   msg::shape(p, 3, 19, 18, 12);
   p.utime = 42;
+  p.model_hash = 1234567890123;
   p.tick = 7;
   p.t0 = 1.25;
   p.dt = 0.01;
@@ -71,6 +74,7 @@ TEST(Messages, MemqRoundTripOfEveryType) {
   EXPECT_EQ(p2.K, p.K);
   EXPECT_EQ(p2.t0, p.t0);
   EXPECT_EQ(p2.status, p.status);
+  EXPECT_EQ(p2.model_hash, p.model_hash);
   EXPECT_EQ(msg::policyWireSize(3, 19, 18, 12), p.getEncodedSize());
   EXPECT_EQ(msg::stateWireSize(19, 18, 4), s.getEncodedSize());
 
@@ -111,10 +115,12 @@ TEST(Messages, MemqRoundTripOfEveryType) {
 
 // Records what the node publishes.
 struct Recorder : Publisher {
-  int policies = 0, statuses = 0;
-  void publish(const std::string& channel, const void*, int) override {
+  int policies = 0, statuses = 0, models = 0;
+  robot_model_t model;
+  void publish(const std::string& channel, const void* data, int size) override {
     if (channel == "STRIDE_POLICY") ++policies;
     if (channel == "STRIDE_STATUS") ++statuses;
+    if (channel == "STRIDE_MODEL") models += model.decode(data, 0, size) == size;
   }
 };
 
@@ -160,20 +166,44 @@ TEST_F(NodeInput, RejectsAndCountsMalformedStates) {
   feed(m);
   EXPECT_EQ(node_.rejected(Reject::NotUnitQuaternion), 1);
 
-  // Wrong sizes: another robot's state, and a count that does not match the bytes.
+  // Another model: another robot's sizes, or the same sizes with another model hash (another
+  // joint order or robot). Each cause is described once, with what was expected and what came.
   robot_state_t other;
   msg::shape(other, 29, 28, 0);
   other.q[6] = 1.0;
   other.utime = 2000;
+  other.model_hash = 42;
   feed(other);
-  EXPECT_EQ(node_.rejected(Reject::WrongSize), 1);
+  feed(other);
+  EXPECT_EQ(node_.rejected(Reject::WrongModel), 2);
+  ASSERT_EQ(node_.mismatchCount(), 1);
+  EXPECT_EQ(node_.mismatch(0).count, 2);
+  char ours[17];
+  msg::formatHash(node_.wireModel().hash, ours);
+  EXPECT_EQ(std::string(node_.mismatch(0).text.data()),
+            "expected nq 19, nv 18 (stride_quad, hash " + std::string(ours) +
+                "), got nq 29, nv 28 (hash 000000000000002a)");
+  m = good(2000);
+  m.model_hash ^= 1;  // same sizes, another layout
+  feed(m);
+  EXPECT_EQ(node_.rejected(Reject::WrongModel), 3);
+  ASSERT_EQ(node_.mismatchCount(), 2);
+  EXPECT_NE(std::string(node_.mismatch(1).text.data())
+                .find("expected hash " + std::string(ours) + " (stride_quad, nq 19, nv 18), got"),
+            std::string::npos);
+  // Counts that do not match the bytes.
   m = good(2000);
   std::vector<unsigned char> b(m.getEncodedSize());
   m.encode(b.data(), 0, static_cast<int>(b.size()));
   std::vector<unsigned char> huge = b;
-  huge[16] = 0x7f;  // nq = 2^31 - ...: must never reach the decoder
+  huge[24] = 0x7f;  // nq = 2^31 - ...: must never reach the decoder
   feed(huge.data(), static_cast<int>(huge.size()));
-  EXPECT_EQ(node_.rejected(Reject::WrongSize), 2);
+  EXPECT_EQ(node_.rejected(Reject::WrongModel), 4);
+  huge = b;
+  huge[b.size() - 4 - 1] = 0x7f;  // the contact count (4 bytes before the 0 flags) = 2^31 - ...
+  huge[b.size() - 4] = 0x7f;
+  feed(huge.data(), static_cast<int>(huge.size()));
+  EXPECT_EQ(node_.rejected(Reject::WrongSize), 1);
   feed(b.data(), static_cast<int>(b.size()) - 3);  // truncated inside the contact count
   EXPECT_EQ(node_.rejected(Reject::Undecodable), 1);
   feed(b.data(), 10);
@@ -185,7 +215,7 @@ TEST_F(NodeInput, RejectsAndCountsMalformedStates) {
   std::vector<unsigned char> longer = b;
   longer.push_back(0);  // a byte more than the counts imply
   feed(longer.data(), static_cast<int>(longer.size()));
-  EXPECT_EQ(node_.rejected(Reject::WrongSize), 3);
+  EXPECT_EQ(node_.rejected(Reject::WrongSize), 2);
 
   // Stamps: equal or older than the newest accepted state are out of order.
   feed(good(1000));
@@ -198,13 +228,15 @@ TEST_F(NodeInput, RejectsAndCountsMalformedStates) {
   EXPECT_EQ(node_.rejected(Reject::BadField), 1);
 
   EXPECT_EQ(node_.acceptedStates(), 1);
-  EXPECT_EQ(node_.rejected(), 12);
+  EXPECT_EQ(node_.rejected(), 15);
   feed(good(3000));
   EXPECT_EQ(node_.acceptedStates(), 2);
 
-  // The status message carries the count.
+  // The status message carries the counts and the latest model mismatch.
   node_.tick(Mpc::Clock::time_point::max());
-  EXPECT_EQ(node_.mpc().status().rejected_messages, 12);
+  EXPECT_EQ(node_.mpc().status().rejected_messages, 15);
+  EXPECT_EQ(node_.mpc().status().wrong_model, 4);
+  EXPECT_EQ(node_.mpc().status().wrong_model_cause, std::string(node_.mismatch(2).text.data()));
   EXPECT_EQ(out_.policies, 1);
   EXPECT_EQ(out_.statuses, 1);
 }
@@ -228,6 +260,34 @@ TEST(NodeRealTime, StampJumpingAheadIsRejected) {
   EXPECT_EQ(node.rejected(msg::Reject::BadField), 1);
   feed(1002000);
   EXPECT_EQ(node.acceptedStates(), 3);
+}
+
+// The wire contract goes out at the first tick and then once a second of the controller's clock.
+TEST_F(NodeInput, PublishesTheRobotModelAtStartAndAt1Hz) {
+  for (int i = 0; i <= 250; ++i) {  // 2.5 s of 100 Hz ticks on the states' stamps
+    feed(good(1000000 + 10000L * i));
+    node_.tick(Mpc::Clock::time_point::max());
+  }
+  EXPECT_EQ(out_.models, 3);
+  const robot_model_t& m = out_.model;
+  const Robot& robot = node_.mpc().robot();
+  EXPECT_EQ(m.robot, "stride_quad");
+  EXPECT_EQ(m.model_hash, modelHash(robot));
+  EXPECT_EQ(m.model_hash, node_.mpc().policy().model_hash);
+  EXPECT_EQ(m.nq, 19);
+  EXPECT_EQ(m.nv, 18);
+  EXPECT_EQ(m.nu, 12);
+  ASSERT_EQ(m.njoints, 13);
+  EXPECT_EQ(m.joint_types[0], "free-flyer");
+  for (int i = 1; i < m.njoints; ++i) {  // wire order is the model's joint order
+    const Joint& j = robot.model.joints[i + 1];
+    EXPECT_EQ(m.joint_names[i], j.name);
+    EXPECT_EQ(m.joint_types[i], "revolute");
+    EXPECT_EQ(m.joint_idx_q[i], j.idx_q);
+    EXPECT_EQ(m.joint_idx_v[i], j.idx_v);
+  }
+  ASSERT_EQ(m.ncontacts, 4);
+  for (int c = 0; c < 4; ++c) EXPECT_EQ(m.contact_frames[c], robot.contacts[c].frame);
 }
 
 TEST_F(NodeInput, NoStateNoPolicy) {

@@ -9,6 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
 
+#include "config/model_hash.hpp"
 #include "config/robot_config.hpp"
 #include "controller_cases.hpp"
 
@@ -17,8 +18,10 @@ namespace {
 
 // A 1 kHz session of the quadruped swaying on its feet, with the faults a real log has: a
 // repeated stamp and a NaN estimate (both must be rejected, not crash the replay). other_robot:
-// the states cut to a floating body alone (nq 7, nv 6), as another robot's log would have them.
-std::string writeSession(const std::string& path, int states, bool other_robot = false) {
+// the states cut to a floating body alone (nq 7, nv 6), as another robot's log would have them;
+// other_hash (when not 0): the states stamped with another model's hash (same sizes).
+std::string writeSession(const std::string& path, int states, bool other_robot = false,
+                         std::int64_t other_hash = 0) {
   const Robot robot =
       loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
   lcm::LogFile log(path, "w");
@@ -31,6 +34,7 @@ std::string writeSession(const std::string& path, int states, bool other_robot =
     s.q[7 + 1] += 0.05 * std::sin(4 * M_PI * t);
     if (i == 300) s.q[9] = std::numeric_limits<double>::quiet_NaN();
     if (i == 301) s.utime -= 2000;  // the stamp of state 299, the newest accepted
+    if (other_hash != 0) s.model_hash = other_hash;
     if (other_robot) {
       s.nq = 7;
       s.nv = 6;
@@ -112,8 +116,20 @@ TEST(Replay, TwoReplaysGiveBitIdenticalPolicies) {
   }
 }
 
-// A log of another robot (a floating body alone: nq 7, nv 6): every state is rejected, and the
-// replay says so and exits 1 instead of reporting an empty run as a success.
+std::string readText(const std::string& path) {
+  std::ifstream f(path);
+  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+std::string hashOf(const Robot& robot) {
+  char hex[17];
+  msg::formatHash(modelHash(robot), hex);
+  return hex;
+}
+
+// A log of another robot: every state is rejected, the cause is said once with what the model
+// expected and what came, and the replay exits 1 instead of reporting an empty run as a success.
+// Another robot's sizes (a floating body alone: nq 7, nv 6) ...
 TEST(Replay, ALogOfAnotherRobotIsAnError) {
   const std::string path = writeSession(testing::TempDir() + "/other_robot.lcmlog", 50, true);
   const std::string err = path + ".err";
@@ -123,11 +139,44 @@ TEST(Replay, ALogOfAnotherRobotIsAnError) {
   const int rc = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(rc));
   EXPECT_EQ(WEXITSTATUS(rc), 1);
-  std::ifstream f(err);
-  const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("the replay accepted none of the log's states on 'STRIDE_STATE' (50 "
-                      "rejected: 50 sizes do not match the model); the model expects nq 19, nv 18 "
-                      "(stride_quad)"),
+  const std::string text = readText(err);
+  const std::string hash =
+      hashOf(loadRobot(STRIDE_CONFIG_DIR "/robots/stride_quad/stride_quad.yaml"));
+  EXPECT_NE(text.find("stride-mpc: refused a state on 'STRIDE_STATE': expected nq 19, nv 18 "
+                      "(stride_quad, hash " +
+                      hash + "), got nq 7, nv 6 (hash " + hash + ")\n"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("refused a state", text.find("refused a state") + 1), std::string::npos)
+      << "one line per cause, not per state:\n"
+      << text;
+  EXPECT_NE(text.find("the replay accepted none of the 50 states on 'STRIDE_STATE': 50 another "
+                      "robot's model (hash or sizes); the model expects nq 19, nv 18 "
+                      "(stride_quad, hash " +
+                      hash + ")"),
+            std::string::npos)
+      << text;
+}
+
+// ... and another robot of the same sizes: solo12's log replayed into stride_quad's controller
+// (nq 19, nv 18 both) is refused by the model hash, not silently accepted.
+TEST(Replay, ALogOfAnotherRobotOfTheSameSizesIsAnError) {
+  const Robot solo =
+      loadRobot(STRIDE_CONFIG_DIR "/robots/solo12/solo12.yaml", {STRIDE_ROBOT_PACKAGES});
+  const std::string path =
+      writeSession(testing::TempDir() + "/solo12.lcmlog", 50, false, modelHash(solo));
+  const std::string err = path + ".err";
+  const int rc = std::system((std::string(STRIDE_MPC_BIN) + " --config " +
+                              controller_cases::configPath("stride_quad") + " --replay " + path +
+                              " > /dev/null 2> " + err)
+                                 .c_str());
+  ASSERT_TRUE(WIFEXITED(rc));
+  EXPECT_EQ(WEXITSTATUS(rc), 1);
+  const std::string text = readText(err);
+  const std::string ours =
+      hashOf(loadRobot(STRIDE_CONFIG_DIR "/robots/stride_quad/stride_quad.yaml"));
+  EXPECT_NE(text.find("expected hash " + ours + " (stride_quad, nq 19, nv 18), got hash " +
+                      hashOf(solo) + ": the same sizes, another robot or joint order"),
             std::string::npos)
       << text;
 }

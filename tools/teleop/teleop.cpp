@@ -159,9 +159,9 @@ std::string describeEntry(const stride::ScriptedCommand& c) {
   return line;
 }
 
-// State estimates in, commands out. The robot's dimensions are not known here, so the first
-// plausible state fixes them (read from its wire counts) and later ones must match; every state is
-// size-checked before decoding and content-checked after, as every Stride program does.
+// State estimates in, commands out. The robot's model is not known here, so the first plausible
+// state fixes it (its model hash and sizes, read from the wire) and later ones must match; every
+// state is size-checked before decoding and content-checked after, as every Stride program does.
 class ScriptInput {
  public:
   ScriptInput(stride::teleop::ScriptPlayer& player, CommandSender& sender, const char* until)
@@ -169,14 +169,14 @@ class ScriptInput {
 
   void handle(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     const int size = static_cast<int>(rbuf->data_size);
-    if (nq_ == 0 && !learnDimensions(rbuf->data, size)) {
+    if (model_.nq == 0 && !learnModel(rbuf->data, size)) {
       ++rejected_;
       return;
     }
-    if (stride::msg::checkStateWire(rbuf->data, size, nq_, nv_, kMaxContacts) !=
+    if (stride::msg::checkStateWire(rbuf->data, size, model_, kMaxContacts) !=
             stride::msg::Reject::None ||
         !stride::msg::decode(rbuf->data, size, state_) ||
-        stride::msg::checkState(state_, nq_ == nv_ + 1) != stride::msg::Reject::None) {
+        stride::msg::checkState(state_, model_.nq == model_.nv + 1) != stride::msg::Reject::None) {
       ++rejected_;
       return;
     }
@@ -187,22 +187,17 @@ class ScriptInput {
  private:
   static constexpr int kMaxContacts = 64, kMaxDofs = 1000;
 
-  bool learnDimensions(const void* buf, int size) {
-    const auto* b = static_cast<const unsigned char*>(buf);
-    const auto int32At = [&](int at) {
-      return static_cast<std::int32_t>((std::uint32_t(b[at]) << 24) |
-                                       (std::uint32_t(b[at + 1]) << 16) |
-                                       (std::uint32_t(b[at + 2]) << 8) | std::uint32_t(b[at + 3]));
-    };
-    if (size < 24) return false;  // type hash, utime, nq, nv
-    const int nq = int32At(16), nv = int32At(20);
+  bool learnModel(const void* buf, int size) {
+    stride::msg::WireClaim claim;
+    if (!stride::msg::readStateClaim(buf, size, claim)) return false;
+    const int nq = claim.nq, nv = claim.nv;
     // A floating base (q holds a quaternion: nq = nv + 1, at least 7) or a fixed one (nq = nv).
     const bool floating = nq == nv + 1 && nq >= 7;
     if (nv < 1 || nv > kMaxDofs || !(floating || nq == nv)) return false;
-    if (stride::msg::checkStateWire(buf, size, nq, nv, kMaxContacts) != stride::msg::Reject::None)
+    const stride::msg::WireModel model{claim.hash, nq, nv, 0, "the first state's"};
+    if (stride::msg::checkStateWire(buf, size, model, kMaxContacts) != stride::msg::Reject::None)
       return false;
-    nq_ = nq;
-    nv_ = nv;
+    model_ = model;
     return true;
   }
 
@@ -229,7 +224,7 @@ class ScriptInput {
   CommandSender& sender_;
   const char* until_;  // what ends the repetition
   stride::robot_state_t state_;
-  int nq_ = 0, nv_ = 0;
+  stride::msg::WireModel model_;  // nq 0 until the first plausible state
   int printed_ = -1;
   long rejected_ = 0;
 };

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# lcm-spy decodes every Stride channel (issue 17: the model message shows, state and policy stay
+# decodable): a short in-process drive writes a log of all channels, and LcmSpyDecodes.java looks
+# each message's class up by fingerprint the way lcm-spy does, from stride_lcm_types.jar.
+#   lcm_spy_decodes.sh STRIDE_DRIVE JAR CONFIG_DIR
+set -euo pipefail
+drive=$1 jar=$2 config=$3
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+lcm_jar=/usr/share/java/lcm.jar
+"$drive" --config "$config/controller/stride_quad.yaml" \
+  --commands "$config/commands/stride_quad.yaml" --duration 1.5 --log "$dir/session.lcmlog" > /dev/null
+javac -nowarn -cp "$lcm_jar" -d "$dir" "$(dirname "$0")/LcmSpyDecodes.java"
+# jchart2d: lcm-spy's charts, which the class scan loads with lcm.jar.
+java -cp "$jar:$lcm_jar:/usr/share/java/jchart2d.jar:$dir" LcmSpyDecodes "$dir/session.lcmlog" STRIDE_STATE=robot_state_t \
+  STRIDE_POLICY=policy_t STRIDE_STATUS=mpc_status_t STRIDE_MODEL=robot_model_t STRIDE_COMMAND=command_t
