@@ -294,7 +294,8 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
 
   const YAML::Node lcm = root["lcm"];
   r.onlyKeys(lcm, "lcm",
-             {"input", "output", "state", "policy", "status", "plan", "command", "model"});
+             {"input", "output", "state", "policy", "status", "plan", "command", "model", "horizon",
+              "horizon_rate_hz"});
   if (lcm) {
     r.get(lcm, "input", "lcm", c.input_url);
     r.get(lcm, "output", "lcm", c.output_url);
@@ -304,9 +305,14 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(lcm, "plan", "lcm", c.plan_channel);
     r.get(lcm, "command", "lcm", c.command_channel);
     r.get(lcm, "model", "lcm", c.model_channel);
+    r.get(lcm, "horizon", "lcm", c.horizon_channel);
+    r.get(lcm, "horizon_rate_hz", "lcm", c.horizon_rate_hz);
+    if (!(c.horizon_rate_hz >= 0.0 && c.horizon_rate_hz <= c.rate_hz))
+      r.fail("lcm.horizon_rate_hz", "must be in [0, rate_hz]");
   }
-  for (const std::string* ch : {&c.state_channel, &c.policy_channel, &c.status_channel,
-                                &c.plan_channel, &c.command_channel, &c.model_channel})
+  for (const std::string* ch :
+       {&c.state_channel, &c.policy_channel, &c.status_channel, &c.plan_channel, &c.command_channel,
+        &c.model_channel, &c.horizon_channel})
     if (ch->empty() || ch->size() > 63) r.fail("lcm", "channel names must have 1 to 63 characters");
 
   const YAML::Node safety = root["safety"];

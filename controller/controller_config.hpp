@@ -55,7 +55,10 @@ struct ControllerConfig {
 
   std::string state_channel = "STRIDE_STATE", policy_channel = "STRIDE_POLICY",
               status_channel = "STRIDE_STATUS", plan_channel = "STRIDE_PLAN",
-              command_channel = "STRIDE_COMMAND", model_channel = "STRIDE_MODEL";
+              command_channel = "STRIDE_COMMAND", model_channel = "STRIDE_MODEL",
+              horizon_channel = "STRIDE_HORIZON";
+  // horizon_t (the whole predicted horizon, for viewers) per second; 0: not published.
+  double horizon_rate_hz = 10.0;
   std::string input_url, output_url;  // empty: LCM_DEFAULT_URL
 
   double max_state_age = 0.05;  // s; an older state is stale

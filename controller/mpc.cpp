@@ -273,6 +273,7 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   status_.solver_status = -1;
   startup_tick_ = false;
   solved_ = false;
+  fresh_policy_ = false;
   tried_ = false;
   const bool late = late_;  // countLateTick() before this tick
   late_ = false;
@@ -363,6 +364,7 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
       // ended after it: then on time, not a miss).
       const bool cut = result == SolveStatus::Deadline;
       writePolicy(state->utime, t, cut ? kPolicyDeadline : kPolicySolved);
+      fresh_policy_ = true;
       previous_ticks_ = 0;
       countAnswer(deadline);
       finishStatus(tick_start, policy_.status);
@@ -379,6 +381,38 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   }
   countAnswer(deadline);
   finishStatus(tick_start, policy_.status);
+  return true;
+}
+
+bool Mpc::writeHorizon(horizon_t& h) const {
+  // The knots' forces are those of the solver's last computation, which may be a rejected trial's
+  // rollout: then nothing is written (Solver::dataAtSolution).
+  if (!fresh_policy_ || loco_ == nullptr || !solver_->dataAtSolution()) return false;
+  const ShootingProblem& problem = loco_->problem();
+  const int T = std::min(problem.horizon(), h.knots);
+  const std::vector<double>& times = loco_->knotTimes();
+  h.utime = policy_.utime;
+  h.model_hash = policy_.model_hash;
+  for (int k = 0; k < T; ++k) {
+    const auto& knot = static_cast<const KnotModel&>(problem.knot(k));
+    const auto& data = static_cast<const KnotActionData&>(problem.data(k));
+    const ContactSet& contacts = knot.contacts();
+    h.t[k] = times[k] - times[0];  // knot 0 is the state, as in the policy (knot0_utime = utime)
+    std::copy(solver_->xs()[k].data(), solver_->xs()[k].data() + nq_, h.q[k].begin());
+    h.impulse[k] = knot.mode() == KnotMode::Impulse ? 1 : 0;
+    h.contact_mask[k] = static_cast<std::int32_t>(knotMask(k));
+    // forces(): the active contacts stacked in the set's order, each its dim (force part first).
+    int row = 0;
+    for (int c = 0; c < contacts.size() && c < h.ncontacts; ++c) {
+      double* f = h.force[k].data() + 3 * c;
+      if (!contacts.isActive(c)) {
+        f[0] = f[1] = f[2] = 0.0;
+        continue;
+      }
+      for (int i = 0; i < 3; ++i) f[i] = row + i < data.nc() ? data.forces()[row + i] : 0.0;
+      row += contacts[c].dim;
+    }
+  }
   return true;
 }
 

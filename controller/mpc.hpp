@@ -127,6 +127,12 @@ class Mpc {
   // The last tick made the first solve of a (re)built problem, which runs without deadline.
   bool startupTick() const { return startup_tick_; }
 
+  // After a tick that solved (a fresh policy, not a fallback): the whole predicted horizon into a
+  // horizon_t shaped by msg::shape(h, horizonKnots(), nq, contacts). Allocation-free. False when
+  // the last tick did not solve.
+  bool writeHorizon(horizon_t& h) const;
+  int horizonKnots() const { return config_.locomotion.knots; }
+
   // After a tick: the solver and the problem, for tests and tools.
   const Solver* solver() const { return solver_.get(); }
   Solver* solver() { return solver_.get(); }  // tools/bench times the solver's parts
@@ -179,7 +185,8 @@ class Mpc {
   bool need_restart_ = false;  // the last solve failed: start again from standing
   bool have_solved_ = false;   // a solve of this problem succeeded (else the next is the first)
   bool startup_tick_ = false;
-  bool solved_ = false;      // the last tick solved (prepare() may follow)
+  bool solved_ = false;        // the last tick solved (prepare() may follow)
+  bool fresh_policy_ = false;  // the last tick's policy came from its solve
   bool tried_ = false;       // the last tick had a fresh state to solve for (a restart may follow)
   double t_last_ = 0.0;      // plan time of the last tick's state (x_ holds it)
   double prepare_ms_ = 0.0;  // its duration

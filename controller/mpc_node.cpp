@@ -42,6 +42,9 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
   model_buffer_.resize(m.getEncodedSize());
   m.encode(model_buffer_.data(), 0, static_cast<int>(model_buffer_.size()));
   mpc_.status().wrong_model_cause.reserve(sizeof(ModelMismatch::text));
+  msg::shape(horizon_, mpc_.horizonKnots(), model.nq,
+             static_cast<int>(mpc_.robot().contacts.size()));
+  horizon_buffer_.resize(horizon_.getEncodedSize());
 }
 
 robot_model_t robotModelMessage(const Robot& robot, int nu) {
@@ -80,6 +83,17 @@ void MpcNode::noteWrongModel(const void* buf, int size, const std::string& chann
   latest_mismatch_ = n_mismatches_++;
   // Once per cause: a wiring error must be seen, and a flood of it must not flood the terminal.
   std::fprintf(stderr, "stride-mpc: refused a state on '%s': %s\n", channel.c_str(), m.text.data());
+}
+
+void MpcNode::publishHorizonIfDue() {
+  if (config_.horizon_rate_hz <= 0.0) return;
+  const double t = now();
+  if (t - horizon_sent_at_ < 1.0 / config_.horizon_rate_hz - 1e-9) return;
+  if (!mpc_.writeHorizon(horizon_)) return;  // not solved this tick: the next one
+  const int n =
+      horizon_.encode(horizon_buffer_.data(), 0, static_cast<int>(horizon_buffer_.size()));
+  if (n > 0) out_.publish(config_.horizon_channel, horizon_buffer_.data(), n);
+  horizon_sent_at_ = t;
 }
 
 void MpcNode::publishModelIfDue() {
@@ -238,6 +252,7 @@ void MpcNode::tick(Clock::time_point deadline) {
       latencies_[latency_count_ % kLatencyCapacity] = ms;
     ++latency_count_;
   }
+  if (publish) publishHorizonIfDue();  // after the policy and its latency: never delays it
   mpc_status_t& status = mpc_.status();
   status.rejected_messages = rejected_total_;
   status.wrong_model = wrongModel();

@@ -14,6 +14,8 @@
 // written to stderr once ("expected nq 19, nv 18 (anymal_c, hash ...), got nq 29, ...") and the
 // latest is carried by the status. The robot_model_t goes out on the model channel at the first
 // tick and then at 1 Hz, so a robot, lcm-spy or a log can tell which layout the controller expects.
+// For viewers, the whole predicted horizon (horizon_t) goes out at lcm.horizon_rate_hz after ticks
+// that solved.
 // Two ways to run:
 //   real time  a fixed-rate loop on CLOCK_MONOTONIC (controller/main.cpp);
 //   stamps     time is the newest state's stamp: a tick is due whenever a state reaches the next
@@ -86,6 +88,7 @@ class MpcNode {
   void reject(msg::Reject reason);
   void noteWrongModel(const void* buf, int size, const std::string& channel);
   void publishModelIfDue();
+  void publishHorizonIfDue();
   static std::int64_t monotonicMicros();
   double now() const;  // the controller's clock [s]: monotonic, or the newest state's stamp
 
@@ -111,6 +114,9 @@ class MpcNode {
   std::vector<unsigned char> model_buffer_;  // the encoded robot_model_t, sent as is
   double model_sent_at_ = 0.0;
   bool model_sent_ = false;
+  horizon_t horizon_;  // shaped at start: writing it allocates nothing
+  std::vector<unsigned char> horizon_buffer_;
+  double horizon_sent_at_ = -1e300;
   std::array<ModelMismatch, kMaxMismatches> mismatches_{};
   int n_mismatches_ = 0, latest_mismatch_ = -1;
   std::vector<float> latencies_;

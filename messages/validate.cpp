@@ -252,4 +252,16 @@ void shape(policy_t& m, int knots, int nq, int nv, int nu) {
   m.K.assign(knots, std::vector<double>(m.nk, 0.0));
 }
 
+void shape(horizon_t& m, int knots, int nq, int ncontacts) {
+  m.knots = knots;
+  m.nq = nq;
+  m.ncontacts = ncontacts;
+  m.nf = 3 * ncontacts;
+  m.t.assign(knots, 0.0);
+  m.q.assign(knots, std::vector<double>(nq, 0.0));
+  m.contact_mask.assign(knots, 0);
+  m.impulse.assign(knots, 0);
+  m.force.assign(knots, std::vector<double>(m.nf, 0.0));
+}
+
 }  // namespace stride::msg

@@ -13,6 +13,7 @@
 
 #include "stride/command_t.hpp"
 #include "stride/contact_plan_t.hpp"
+#include "stride/horizon_t.hpp"
 #include "stride/mpc_status_t.hpp"
 #include "stride/policy_t.hpp"
 #include "stride/robot_state_t.hpp"
@@ -90,5 +91,6 @@ bool decode(const void* buf, int size, robot_state_t& m);
 // so that later decodes and encodes of the same dimensions allocate nothing.
 void shape(robot_state_t& m, int nq, int nv, int ncontacts);
 void shape(policy_t& m, int knots, int nq, int nv, int nu);
+void shape(horizon_t& m, int knots, int nq, int ncontacts);
 
 }  // namespace stride::msg

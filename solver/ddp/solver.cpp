@@ -251,6 +251,7 @@ bool Solver::rollout() {
   if (dT.status != KnotStatus::Ok || !std::isfinite(cost + dT.cost)) return false;
   xs_.swap(xs_try_);
   us_.swap(us_try_);
+  data_at_solution_ = true;
   cost_ = cost + dT.cost;
   for (auto& f : fs_) f.setZero();
   gap_ = tail_gap_ = 0.0;
@@ -298,6 +299,7 @@ bool Solver::derivatives(Clock::time_point deadline) {
       return false;
     }
   }
+  data_at_solution_ = true;  // every knot derived at xs_
   const SlowHostGuard slow{*this};
   const double gap = computeGaps();
   if (!std::isfinite(cost) || !std::isfinite(gap)) return false;
@@ -548,6 +550,7 @@ void Solver::predictChange() {
 double Solver::forwardPass(double alpha) {
   const SlowHostGuard slow{*this};
   ++forward_passes_;
+  data_at_solution_ = false;  // the knots' data become the trial's (true again if accepted)
   const StateSpace& state = problem_.state();
   const bool box = kind_ == SolverKind::BoxFddp && has_bounds_;
   // x̂_0 = x_0 ⊕ α f_0, û = u + α k + K (x̂ ⊖ x), x̂⁺ = f(x̂, û) ⊕ (α - 1) f: the gaps shrink to
@@ -676,6 +679,7 @@ SolveStatus Solver::solve(int max_iterations, Clock::time_point deadline) {
         accepted = true;
         xs_.swap(xs_try_);
         us_.swap(us_try_);
+        data_at_solution_ = true;
         s.expected = expected;
         s.actual = actual;
         cost_ = cost_try;

@@ -126,11 +126,17 @@ class Solver {
   // or solve(), unless discarded before (controller/README.md, "Overload").
   bool prepare(Clock::time_point deadline, SolveStatus& status);
   bool prepared() const { return prepared_; }
+  // The problem's knot data (costs, contact forces) were last computed at xs()/us(), for the
+  // problem as it is: after a rollout, complete derivatives or an accepted trial; not after a
+  // rejected trial (whose rollout they then hold) nor after a change that discarded the
+  // preparation. Viewers read the planned forces then (controller: horizon_t).
+  bool dataAtSolution() const { return data_at_solution_; }
   bool preparing() const { return preparing_; }         // a preparation was cut and may resume
   double prepareMillis() const { return prepare_ms_; }  // of the last one, its resumed parts summed
   void discardPreparation() {
     prepared_ = false;
     preparing_ = false;
+    data_at_solution_ = false;
   }
 
   const std::vector<Eigen::VectorXd>& xs() const { return xs_; }
@@ -221,6 +227,7 @@ class Solver {
   int derive_next_ = 0, backward_next_ = -1;
   bool feasible_ = false;
   bool prepared_ = false;  // derivatives and backward pass done for the next iteration
+  bool data_at_solution_ = false;
   // Busy for (emulated_slowdown - 1) times the time since `since`: the work since then as on a
   // host that many times slower.
   void emulateSlowHost(Clock::time_point since) const;

@@ -115,9 +115,11 @@ TEST(Messages, MemqRoundTripOfEveryType) {
 
 // Records what the node publishes.
 struct Recorder : Publisher {
-  int policies = 0, statuses = 0, models = 0;
+  int policies = 0, statuses = 0, models = 0, horizons = 0;
   robot_model_t model;
+  horizon_t horizon;
   void publish(const std::string& channel, const void* data, int size) override {
+    if (channel == "STRIDE_HORIZON") horizons += horizon.decode(data, 0, size) == size;
     if (channel == "STRIDE_POLICY") ++policies;
     if (channel == "STRIDE_STATUS") ++statuses;
     if (channel == "STRIDE_MODEL") models += model.decode(data, 0, size) == size;
@@ -288,6 +290,35 @@ TEST_F(NodeInput, PublishesTheRobotModelAtStartAndAt1Hz) {
   }
   ASSERT_EQ(m.ncontacts, 4);
   for (int c = 0; c < 4; ++c) EXPECT_EQ(m.contact_frames[c], robot.contacts[c].frame);
+}
+
+// For viewers: the whole predicted horizon at lcm.horizon_rate_hz (10 Hz), after ticks that
+// solved; standing, every foot carries its share of the weight at knot 0.
+TEST_F(NodeInput, PublishesTheHorizonAt10Hz) {
+  ASSERT_EQ(config_.horizon_rate_hz, 10.0);
+  for (int i = 0; i < 100; ++i) {  // 1 s of 100 Hz ticks
+    feed(good(1000000 + 10000L * i));
+    node_.tick(Mpc::Clock::time_point::max());
+    node_.prepare(Mpc::Clock::time_point::max());
+  }
+  EXPECT_GE(out_.horizons, 8);  // a tick whose step was rejected skips its turn
+  EXPECT_LE(out_.horizons, 10);
+  const horizon_t& h = out_.horizon;
+  const Robot& robot = node_.mpc().robot();
+  EXPECT_EQ(h.model_hash, modelHash(robot));
+  ASSERT_EQ(h.knots, node_.mpc().horizonKnots());
+  ASSERT_EQ(h.ncontacts, 4);
+  EXPECT_EQ(h.t[0], 0.0);  // knot 0 is the state
+  EXPECT_NEAR(h.t[h.knots - 1], 1.0 - config_.locomotion.grid.back().dt, 0.02);  // a 1 s horizon
+  for (int k = 1; k < h.knots; ++k) EXPECT_GE(h.t[k], h.t[k - 1]) << k;
+  EXPECT_NEAR(h.q[0][2], robot.default_q[2], 0.02);
+  EXPECT_EQ(h.contact_mask[0], 0xf);
+  double fz = 0.0;
+  for (int c = 0; c < 4; ++c) {
+    EXPECT_GT(h.force[0][3 * c + 2], 0.0) << c;
+    fz += h.force[0][3 * c + 2];
+  }
+  EXPECT_NEAR(fz, robot.model.totalMass() * 9.81, 0.1 * robot.model.totalMass() * 9.81);
 }
 
 TEST_F(NodeInput, NoStateNoPolicy) {
