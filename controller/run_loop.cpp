@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 namespace stride {
 
@@ -160,25 +161,30 @@ void runOnStamps(MpcNode& node, lcm::LCM& in, const RunOptions& options) {
   }
 }
 
-LatencySummary summarizeLatencies(const MpcNode& node) {
-  std::vector<float> v = node.latencies();
-  LatencySummary s;
-  s.count = static_cast<long>(v.size());
-  if (v.empty()) return s;
-  std::sort(v.begin(), v.end());
-  auto at = [&](double p) {
-    const auto i = static_cast<size_t>(std::ceil(p * static_cast<double>(v.size())) - 1);
-    return static_cast<double>(v[std::min(i, v.size() - 1)]);
-  };
-  s.p50 = at(0.50);
-  s.p99 = at(0.99);
-  s.max = v.back();
-  return s;
+Percentiles summarizeLatencies(const MpcNode& node) {
+  const std::vector<float>& v = node.latencies();
+  return percentiles(std::vector<double>(v.begin(), v.end()));
 }
+
+namespace {
+// A timing in ms as the summaries write it: to the nanosecond, below the clock's resolution (a
+// float latency's binary tail is noise, not precision), and null where there is no data.
+nlohmann::ordered_json msOrNull(const std::optional<double>& ms) {
+  if (!ms) return nullptr;
+  return std::round(*ms * 1e6) / 1e6;
+}
+// The shape of every timing distribution in the summaries (stride-log-summary's too).
+nlohmann::ordered_json timingJson(const Percentiles& p) {
+  return {{"p50_ms", msOrNull(p.p50)},
+          {"p99_ms", msOrNull(p.p99)},
+          {"max_ms", msOrNull(p.max)},
+          {"count", p.count}};
+}
+}  // namespace
 
 void writeSummary(const MpcNode& node, const std::string& path) {
   const MpcCounters& c = node.mpc().counters();
-  const LatencySummary lat = summarizeLatencies(node);
+  const Percentiles lat = summarizeLatencies(node);
   std::printf(
       "stride-mpc: %lld ticks, %lld states accepted, %lld rejected, tick latency p50 %.3f ms "
       "p99 %.3f ms max %.3f ms (%ld ticks), %lld deadline misses, %lld late ticks, %lld fallbacks, "
@@ -187,12 +193,13 @@ void writeSummary(const MpcNode& node, const std::string& path) {
       "previous policy, at most %lld misses in a row (%lld without a host stall; %lld periods "
       "stalled by the host); %lld stalled-solve restarts\n",
       static_cast<long long>(c.ticks), static_cast<long long>(node.acceptedStates()),
-      static_cast<long long>(node.rejected()), lat.p50, lat.p99, lat.max, lat.count,
-      static_cast<long long>(c.deadline_misses), static_cast<long long>(c.late_ticks),
-      static_cast<long long>(c.fallbacks), static_cast<long long>(c.stale_states),
-      static_cast<long long>(c.failed_solves), static_cast<long long>(c.unprepared_solves),
-      static_cast<long long>(node.planUpdates()), static_cast<long long>(c.shed_line_searches),
-      static_cast<long long>(c.shed_ticks), static_cast<long long>(c.max_misses_in_a_row),
+      static_cast<long long>(node.rejected()), lat.p50.value_or(0.0), lat.p99.value_or(0.0),
+      lat.max.value_or(0.0), lat.count, static_cast<long long>(c.deadline_misses),
+      static_cast<long long>(c.late_ticks), static_cast<long long>(c.fallbacks),
+      static_cast<long long>(c.stale_states), static_cast<long long>(c.failed_solves),
+      static_cast<long long>(c.unprepared_solves), static_cast<long long>(node.planUpdates()),
+      static_cast<long long>(c.shed_line_searches), static_cast<long long>(c.shed_ticks),
+      static_cast<long long>(c.max_misses_in_a_row),
       static_cast<long long>(c.max_own_misses_in_a_row), static_cast<long long>(c.host_stalls),
       static_cast<long long>(c.stall_restarts));
   const CommandCounters& cc = node.commands().counters();
@@ -213,26 +220,31 @@ void writeSummary(const MpcNode& node, const std::string& path) {
     std::printf("stride-mpc: %lld states of another model: %s\n",
                 static_cast<long long>(node.mismatch(i).count), node.mismatch(i).text.data());
   if (path.empty()) return;
+  nlohmann::ordered_json j;
+  j["ticks"] = c.ticks;
+  j["policies"] = node.policiesPublished();
+  j["states_accepted"] = node.acceptedStates();
+  j["rejected_messages"] = node.rejected();
+  j["tick_latency"] = timingJson(lat);
+  j["deadline_misses"] = c.deadline_misses;
+  j["late_ticks"] = c.late_ticks;
+  j["fallbacks"] = c.fallbacks;
+  j["stale_states"] = c.stale_states;
+  j["failed_solves"] = c.failed_solves;
+  j["unprepared_solves"] = c.unprepared_solves;
+  j["ticks_without_state"] = c.ticks_without_state;
+  j["stall_restarts"] = c.stall_restarts;
+  j["overload"] = {{"full_step_only", c.shed_line_searches},
+                   {"previous_policy_ticks", c.shed_ticks},
+                   {"max_misses_in_a_row", c.max_misses_in_a_row},
+                   {"max_own_misses_in_a_row", c.max_own_misses_in_a_row},
+                   {"host_stalls", c.host_stalls}};
+  j["commands"] = {{"accepted", cc.accepted},
+                   {"rejected", cc.rejected + node.commandsMalformed()},
+                   {"clamped", cc.clamped},
+                   {"deadman_timeouts", cc.timeouts}};
   std::ofstream f(path);
-  f << "{\n  \"ticks\": " << c.ticks << ",\n  \"policies\": " << node.policiesPublished()
-    << ",\n  \"states_accepted\": " << node.acceptedStates()
-    << ",\n  \"rejected_messages\": " << node.rejected()
-    << ",\n  \"tick_latency_ms\": {\"p50\": " << lat.p50 << ", \"p99\": " << lat.p99
-    << ", \"max\": " << lat.max << ", \"count\": " << lat.count
-    << "},\n  \"deadline_misses\": " << c.deadline_misses << ",\n  \"late_ticks\": " << c.late_ticks
-    << ",\n  \"fallbacks\": " << c.fallbacks << ",\n  \"stale_states\": " << c.stale_states
-    << ",\n  \"failed_solves\": " << c.failed_solves
-    << ",\n  \"unprepared_solves\": " << c.unprepared_solves
-    << ",\n  \"ticks_without_state\": " << c.ticks_without_state
-    << ",\n  \"stall_restarts\": " << c.stall_restarts
-    << ",\n  \"overload\": {\"full_step_only\": " << c.shed_line_searches
-    << ", \"previous_policy_ticks\": " << c.shed_ticks
-    << ", \"max_misses_in_a_row\": " << c.max_misses_in_a_row
-    << ", \"max_own_misses_in_a_row\": " << c.max_own_misses_in_a_row
-    << ", \"host_stalls\": " << c.host_stalls << "}"
-    << ",\n  \"commands\": {\"accepted\": " << cc.accepted
-    << ", \"rejected\": " << cc.rejected + node.commandsMalformed()
-    << ", \"clamped\": " << cc.clamped << ", \"deadman_timeouts\": " << cc.timeouts << "}\n}\n";
+  f << j.dump(2) << "\n";
   if (!f) std::fprintf(stderr, "stride-mpc: cannot write the summary to '%s'\n", path.c_str());
 }
 

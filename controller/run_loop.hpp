@@ -5,6 +5,7 @@
 #include <string>
 
 #include "controller/mpc_node.hpp"
+#include "controller/statistics.hpp"
 
 namespace stride {
 
@@ -23,11 +24,8 @@ void runOnStamps(MpcNode& node, lcm::LCM& in, const RunOptions& options);
 // Tries CPU pinning and SCHED_FIFO; prints a clear warning for each that is not permitted.
 void applyRealTimeSettings(int cpu, int fifo_priority);
 
-struct LatencySummary {
-  double p50 = 0.0, p99 = 0.0, max = 0.0;  // ms
-  long count = 0;
-};
-LatencySummary summarizeLatencies(const MpcNode& node);
+// The node's tick latencies [ms] (the last ones it kept, MpcNode::latencies).
+Percentiles summarizeLatencies(const MpcNode& node);
 
 // A human summary on stdout and, when path is not empty, the same as JSON.
 void writeSummary(const MpcNode& node, const std::string& path);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "config/model_hash.hpp"
 #include "solver/contact/knot_dynamics.hpp"
@@ -169,18 +170,25 @@ void SimNode::writeSummary(const std::string& path) const {
       static_cast<long long>(s.waiting_steps), static_cast<long long>(s.hold_steps),
       static_cast<long long>(s.exhausted_steps), static_cast<long long>(s.lockstep_timeouts));
   if (path.empty()) return;
+  nlohmann::ordered_json j;
+  j["sim_time_s"] = sim_.time();
+  j["distance_m"] = distance;
+  j["base_height_min_m"] = s.z_min;
+  j["base_height_max_m"] = s.z_max;
+  j["max_tilt_deg"] = s.max_tilt_deg;
+  j["fell"] = s.fell || s.diverged;
+  j["diverged"] = s.diverged;
+  j["peak_normal_force_N"] = s.peak_normal_force;
+  j["states_published"] = s.states_published;
+  j["policies"] = s.policies;
+  j["policies_rejected"] = s.policies_rejected;
+  j["waiting_steps"] = s.waiting_steps;
+  j["hold_steps"] = s.hold_steps;
+  j["exhausted_steps"] = s.exhausted_steps;
+  j["lockstep_timeouts"] = s.lockstep_timeouts;
   std::ofstream f(path);
-  f << "{\n  \"sim_time_s\": " << sim_.time() << ",\n  \"distance_m\": " << distance
-    << ",\n  \"base_height_min_m\": " << s.z_min << ",\n  \"base_height_max_m\": " << s.z_max
-    << ",\n  \"max_tilt_deg\": " << s.max_tilt_deg
-    << ",\n  \"fell\": " << (s.fell || s.diverged ? "true" : "false")
-    << ",\n  \"diverged\": " << (s.diverged ? "true" : "false")
-    << ",\n  \"peak_normal_force_N\": " << s.peak_normal_force
-    << ",\n  \"states_published\": " << s.states_published << ",\n  \"policies\": " << s.policies
-    << ",\n  \"policies_rejected\": " << s.policies_rejected
-    << ",\n  \"waiting_steps\": " << s.waiting_steps << ",\n  \"hold_steps\": " << s.hold_steps
-    << ",\n  \"exhausted_steps\": " << s.exhausted_steps
-    << ",\n  \"lockstep_timeouts\": " << s.lockstep_timeouts << "\n}\n";
+  f << j.dump(2) << "\n";
+  if (!f) std::fprintf(stderr, "stride-sim: cannot write the summary to '%s'\n", path.c_str());
 }
 
 }  // namespace stride::sim

@@ -10,6 +10,7 @@ packages=(
   libtinyxml-dev           # SRDF parsing (urdfdom's own XML library)
   libyaml-cpp-dev          # configuration files
   libcli11-dev             # command lines
+  nlohmann-json3-dev       # JSON the programs write (run summaries, experiment results)
   libgtest-dev libgmock-dev  # tests
   libbenchmark-dev         # tools/bench
   libomp-dev               # OpenMP (per-knot parallelism)

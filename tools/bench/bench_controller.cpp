@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <string>
@@ -21,6 +22,7 @@
 #include <vector>
 
 #include "controller/mpc_node.hpp"
+#include "controller/statistics.hpp"
 #include "sim/sim_node.hpp"
 #include "solver/ocp/knot.hpp"
 
@@ -132,15 +134,11 @@ void controllerTick(benchmark::State& state, const char* robot, double warmup) {
   state.counters["prepare_ms"] = 1e3 * per_tick(prepare_total);
   state.counters["unprepared"] = static_cast<double>(loop.mpc.mpc().counters().unprepared_solves);
   // The period's work against the period: what real time needs (ARCHITECTURE.md, real-time rules).
+  // Nearest-rank percentiles, as stride-mpc's and stride-log-summary's summaries (NaN: no period).
   const double period = 1.0 / loop.config.rate_hz;
-  std::sort(work.begin(), work.end());
-  const auto share = [&](double p) {
-    if (work.empty()) return 0.0;
-    const auto i = static_cast<std::size_t>(p * static_cast<double>(work.size() - 1) + 0.5);
-    return work[i] / period;
-  };
-  state.counters["period_share"] = share(0.5);
-  state.counters["period_share_p99"] = share(0.99);
+  const Percentiles share = percentiles(work);
+  state.counters["period_share"] = share.p50.value_or(NAN) / period;
+  state.counters["period_share_p99"] = share.p99.value_or(NAN) / period;
 }
 
 // The parts of one tick's FDDP iteration on the problem the controller has 3 s into the gait

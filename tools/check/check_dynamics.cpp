@@ -5,19 +5,19 @@
 // samples, max|x - ref| / max(1, max|ref|). Exits 1 when any computed quantity is above its
 // tolerance, 2 when the file or the robot cannot be loaded. Quantities the file holds that Stride
 // does not compute yet are listed as "not yet computed"; keys it does not know are listed too.
-// JSON is read with yaml-cpp (JSON is a subset of YAML 1.2), so no extra dependency is needed.
-
-#include <yaml-cpp/yaml.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <iostream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -42,10 +42,14 @@ namespace {
 constexpr double kTolerance = 1e-8;
 constexpr double kDerivativeTolerance = 1e-7;
 
-Eigen::VectorXd toVector(const YAML::Node& node) {
+using json = nlohmann::json;
+
+// A JSON array of numbers; throws on anything else (the caller reports the quantity as failed).
+Eigen::VectorXd toVector(const json& node) {
+  if (!node.is_array()) throw std::runtime_error("expected an array of numbers");
   Eigen::VectorXd v(static_cast<Eigen::Index>(node.size()));
   for (std::size_t k = 0; k < node.size(); ++k)
-    v[static_cast<Eigen::Index>(k)] = node[k].as<double>();
+    v[static_cast<Eigen::Index>(k)] = node[k].get<double>();
   return v;
 }
 
@@ -68,7 +72,7 @@ struct Sample {
 };
 
 // A quantity Stride computes: the error of one sample, or nullopt when the sample lacks it.
-using Check = std::function<std::optional<double>(const YAML::Node& sample, const Sample& s)>;
+using Check = std::function<std::optional<double>(const json& sample, const Sample& s)>;
 
 struct Quantity {
   std::string name;
@@ -88,24 +92,29 @@ int main(int argc, char** argv) {
                  "else the robots/ folder beside the reference's folder)");
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
-  YAML::Node ref;
+  json parsed;
   try {
-    ref = YAML::LoadFile(ref_path);
+    std::ifstream file(ref_path);
+    if (!file) throw std::runtime_error("cannot open it");
+    parsed = json::parse(file);
+    if (!parsed.is_object()) throw std::runtime_error("not a JSON object");
   } catch (const std::exception& e) {
     std::cerr << "error: cannot read reference '" << ref_path << "': " << e.what() << "\n";
     return 2;
   }
   for (const char* key : {"robot", "urdf", "root_joint", "nq", "nv", "samples"})
-    if (!ref[key]) {
+    if (!parsed.contains(key)) {
       std::cerr << "error: reference '" << ref_path << "' has no '" << key << "' entry\n";
       return 2;
     }
+  // Read-only from here: at() throws on a missing key where operator[] would add it.
+  const json& ref = parsed;
 
   fs::path dir = robots_dir;
-  if (!app.count("--robots-dir") && !fs::exists(dir / ref["urdf"].as<std::string>()))
+  if (!app.count("--robots-dir") && !fs::exists(dir / ref.at("urdf").get<std::string>()))
     dir = fs::path(ref_path).parent_path() / ".." / "robots";
-  const fs::path urdf = dir / ref["urdf"].as<std::string>();
-  const std::string root = ref["root_joint"].as<std::string>();
+  const fs::path urdf = dir / ref.at("urdf").get<std::string>();
+  const std::string root = ref.at("root_joint").get<std::string>();
   if (root != "free-flyer" && root != "fixed") {
     std::cerr << "error: unknown root_joint '" << root << "' (free-flyer or fixed)\n";
     return 2;
@@ -119,14 +128,14 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;
   }
-  if (ref["gravity"]) model.gravity = toVector(ref["gravity"]);
+  if (ref.contains("gravity")) model.gravity = toVector(ref.at("gravity"));
   Data data(model);
   // The reference closes all listed contacts at once, forces in each contact frame (LOCAL).
   ContactSet contacts;
   try {
-    if (ref["contacts"])
-      for (const auto& c : ref["contacts"])
-        contacts.add(model, c["frame"].as<std::string>(), c["dim"].as<int>());
+    if (ref.contains("contacts"))
+      for (const auto& c : ref.at("contacts"))
+        contacts.add(model, c.at("frame").get<std::string>(), c.at("dim").get<int>());
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;
@@ -134,16 +143,16 @@ int main(int argc, char** argv) {
   ContactData cdata(model, contacts);
 
   std::printf("robot %s (%s): nq %d, nv %d, %d joints, %d frames, %zu samples\n",
-              ref["robot"].as<std::string>().c_str(), urdf.string().c_str(), model.nq, model.nv,
-              model.njoints() - 1, model.nframes(), ref["samples"].size());
+              ref.at("robot").get<std::string>().c_str(), urdf.string().c_str(), model.nq, model.nv,
+              model.njoints() - 1, model.nframes(), ref.at("samples").size());
 
   // Structure first: a different joint order would make every comparison meaningless.
-  bool structure_ok = model.nq == ref["nq"].as<int>() && model.nv == ref["nv"].as<int>();
-  if (ref["joint_names"]) {
+  bool structure_ok = model.nq == ref.at("nq").get<int>() && model.nv == ref.at("nv").get<int>();
+  if (ref.contains("joint_names")) {
     std::vector<std::string> ours;
     for (int i = 1; i < model.njoints(); ++i)
       if (model.joints[i].type != JointType::FreeFlyer) ours.push_back(model.joints[i].name);
-    const auto theirs = ref["joint_names"].as<std::vector<std::string>>();
+    const auto theirs = ref.at("joint_names").get<std::vector<std::string>>();
     if (ours != theirs) {
       std::printf("%-22s FAIL (joint order differs from the reference)\n", "joint_names");
       structure_ok = false;
@@ -156,111 +165,111 @@ int main(int argc, char** argv) {
     return 1;
   }
   bool all_ok = true;
-  if (ref["total_mass"]) {
+  if (ref.contains("total_mass")) {
     // The reference sums every body, including those fixed to the world (a fixed base).
     const double m = model.totalMass() + model.fixedMass();
-    const double err = std::abs(m - ref["total_mass"].as<double>()) / std::max(1.0, m);
+    const double err = std::abs(m - ref.at("total_mass").get<double>()) / std::max(1.0, m);
     const bool ok = err <= kTolerance;
     all_ok &= ok;
     std::printf("%-22s %.3e  %s\n", "total_mass", err, ok ? "ok" : "FAIL");
   }
 
-  auto vec = [](const YAML::Node& s, const char* key) { return toVector(s[key]); };
+  auto vec = [](const json& s, const char* key) { return toVector(s.at(key)); };
   std::vector<Quantity> quantities = {
       {"rnea", kTolerance,
-       [&](const YAML::Node& n, const Sample& s) {
+       [&](const json& n, const Sample& s) {
          return relativeError(rnea(model, data, s.q, s.v, s.a), vec(n, "rnea"));
        }},
       {"mass_matrix", kTolerance,
-       [&](const YAML::Node& n, const Sample& s) {
+       [&](const json& n, const Sample& s) {
          return relativeError(rowMajor(crba(model, data, s.q)), vec(n, "mass_matrix"));
        }},
       {"nonlinear_effects", kTolerance,
-       [&](const YAML::Node& n, const Sample& s) {
+       [&](const json& n, const Sample& s) {
          return relativeError(nonLinearEffects(model, data, s.q, s.v), vec(n, "nonlinear_effects"));
        }},
       {"gravity_torque", kTolerance,
-       [&](const YAML::Node& n, const Sample& s) {
+       [&](const json& n, const Sample& s) {
          return relativeError(computeGeneralizedGravity(model, data, s.q),
                               vec(n, "gravity_torque"));
        }},
       {"aba", kTolerance,
-       [&](const YAML::Node& n, const Sample& s) {
+       [&](const json& n, const Sample& s) {
          return relativeError(aba(model, data, s.q, s.v, s.tau), vec(n, "aba"));
        }},
       {"com", kTolerance,
-       [&](const YAML::Node& n, const Sample& s) {
+       [&](const json& n, const Sample& s) {
          return relativeError(centerOfMass(model, data, s.q), vec(n, "com"));
        }},
       {"centroidal_momentum", kTolerance,
-       [&](const YAML::Node& n, const Sample& s) {
+       [&](const json& n, const Sample& s) {
          return relativeError(computeCentroidalMomentum(model, data, s.q, s.v),
                               vec(n, "centroidal_momentum"));
        }},
       {"frames", kTolerance,
-       [&](const YAML::Node& n, const Sample& s) -> std::optional<double> {
+       [&](const json& n, const Sample& s) -> std::optional<double> {
          computeJointJacobians(model, data, s.q);
          updateFramePlacements(model, data);
          Matrix6Xd J(6, model.nv);
          double worst = 0;
-         for (const auto& entry : n["frames"]) {
-           const std::string name = entry.first.as<std::string>();
+         for (const auto& entry : n.at("frames").items()) {
+           const std::string& name = entry.key();
            if (!model.existFrame(name)) {
              std::printf("  frame '%s' does not exist in the model\n", name.c_str());
              return std::numeric_limits<double>::infinity();
            }
            const int id = model.getFrameId(name);
-           const YAML::Node& f = entry.second;
-           worst = std::max(worst, relativeError(data.oMf[id].p, toVector(f["translation"])));
+           const json& f = entry.value();
+           worst = std::max(worst, relativeError(data.oMf[id].p, toVector(f.at("translation"))));
            worst =
-               std::max(worst, relativeError(rowMajor(data.oMf[id].R), toVector(f["rotation"])));
+               std::max(worst, relativeError(rowMajor(data.oMf[id].R), toVector(f.at("rotation"))));
            getFrameJacobian(model, data, id, ReferenceFrame::LocalWorldAligned, J);
            worst = std::max(
-               worst, relativeError(rowMajor(J), toVector(f["jacobian_local_world_aligned"])));
+               worst, relativeError(rowMajor(J), toVector(f.at("jacobian_local_world_aligned"))));
          }
          return worst;
        }},
       // Provided by the derivatives and contact dynamics issue.
       {"drnea_dq", kDerivativeTolerance,
-       [&](const YAML::Node& n, const Sample& s) {
+       [&](const json& n, const Sample& s) {
          computeRNEADerivatives(model, data, s.q, s.v, s.a);
          return relativeError(rowMajor(data.dtau_dq), vec(n, "drnea_dq"));
        }},
       {"drnea_dv", kDerivativeTolerance,
-       [&](const YAML::Node& n, const Sample& s) {
+       [&](const json& n, const Sample& s) {
          computeRNEADerivatives(model, data, s.q, s.v, s.a);
          return relativeError(rowMajor(data.dtau_dv), vec(n, "drnea_dv"));
        }},
       {"daba_dq", kDerivativeTolerance,
-       [&](const YAML::Node& n, const Sample& s) {
+       [&](const json& n, const Sample& s) {
          computeABADerivatives(model, data, s.q, s.v, s.tau);
          return relativeError(rowMajor(data.ddq_dq), vec(n, "daba_dq"));
        }},
       {"daba_dv", kDerivativeTolerance,
-       [&](const YAML::Node& n, const Sample& s) {
+       [&](const json& n, const Sample& s) {
          computeABADerivatives(model, data, s.q, s.v, s.tau);
          return relativeError(rowMajor(data.ddq_dv), vec(n, "daba_dv"));
        }},
       {"contact_dynamics", kTolerance,
-       [&](const YAML::Node& n, const Sample& s) -> std::optional<double> {
-         const YAML::Node& cd = n["contact_dynamics"];
-         const Eigen::VectorXd tau = toVector(cd["tau"]);
+       [&](const json& n, const Sample& s) -> std::optional<double> {
+         const json& cd = n.at("contact_dynamics");
+         const Eigen::VectorXd tau = toVector(cd.at("tau"));
          if (contactDynamics(model, data, contacts, cdata, s.q, s.v, tau) != ContactStatus::Ok)
            return std::numeric_limits<double>::infinity();
          return std::max(
-             {relativeError(cdata.gamma.head(cdata.nc), toVector(cd["constraint_drift"])),
-              relativeError(cdata.ddq, toVector(cd["ddq"])),
-              relativeError(cdata.lambda.head(cdata.nc), toVector(cd["forces"]))});
+             {relativeError(cdata.gamma.head(cdata.nc), toVector(cd.at("constraint_drift"))),
+              relativeError(cdata.ddq, toVector(cd.at("ddq"))),
+              relativeError(cdata.lambda.head(cdata.nc), toVector(cd.at("forces")))});
        }},
       {"impulse_dynamics", kTolerance,
-       [&](const YAML::Node& n, const Sample& s) -> std::optional<double> {
-         const YAML::Node& id = n["impulse_dynamics"];
-         const double r = id["restitution"] ? id["restitution"].as<double>() : 0.0;
-         if (impulseDynamics(model, data, contacts, cdata, s.q, toVector(id["v_before"]), r) !=
+       [&](const json& n, const Sample& s) -> std::optional<double> {
+         const json& id = n.at("impulse_dynamics");
+         const double r = id.contains("restitution") ? id.at("restitution").get<double>() : 0.0;
+         if (impulseDynamics(model, data, contacts, cdata, s.q, toVector(id.at("v_before")), r) !=
              ContactStatus::Ok)
            return std::numeric_limits<double>::infinity();
-         return std::max(relativeError(cdata.v_after, toVector(id["v_after"])),
-                         relativeError(cdata.impulses.head(cdata.nc), toVector(id["impulses"])));
+         return std::max(relativeError(cdata.v_after, toVector(id.at("v_after"))),
+                         relativeError(cdata.impulses.head(cdata.nc), toVector(id.at("impulses"))));
        }},
   };
 
@@ -271,13 +280,12 @@ int main(int argc, char** argv) {
 
   std::map<std::string, double> worst;
   std::map<std::string, int> seen;
-  for (const auto& sample : ref["samples"]) {
-    for (const auto& entry : sample)
-      if (!known.count(entry.first.as<std::string>()))
-        unknown.insert(entry.first.as<std::string>());
+  for (const auto& sample : ref.at("samples")) {
+    for (const auto& entry : sample.items())
+      if (!known.count(entry.key())) unknown.insert(entry.key());
     Sample s{vec(sample, "q"), vec(sample, "v"), vec(sample, "a"), vec(sample, "tau")};
     for (const auto& qd : quantities) {
-      if (!sample[qd.name]) continue;
+      if (!sample.contains(qd.name)) continue;
       ++seen[qd.name];
       if (!qd.check) continue;
       double err;

@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "config/command_line.hpp"
 #include "tools/drive/closed_loop.hpp"
@@ -18,29 +19,28 @@ namespace {
 
 void writeJson(const std::string& path, const stride::drive::Run& run,
                const std::vector<stride::logs::Segment>& segments, bool tracked) {
-  std::ofstream f(path);
-  f << "{\n  \"fell\": " << (run.fell() ? "true" : "false")
-    << ",\n  \"duration_s\": " << (run.samples.empty() ? 0.0 : run.samples.back().t)
-    << ",\n  \"tracked\": " << (tracked ? "true" : "false")
-    << ",\n  \"fallbacks\": " << run.mpc.fallbacks
-    << ",\n  \"failed_solves\": " << run.mpc.failed_solves << ",\n  \"segments\": [";
-  for (std::size_t i = 0; i < segments.size(); ++i) {
-    const stride::logs::Segment& s = segments[i];
-    std::string gait;  // a script's gait may be any string: escaped for JSON
-    for (char c : s.gait) {
-      if (c == '"' || c == '\\') gait += '\\';
-      if (static_cast<unsigned char>(c) >= 0x20) gait += c;
-    }
-    f << (i ? "," : "") << "\n    {\"t0\": " << s.t0 << ", \"t1\": " << s.t1 << ", \"gait\": \""
-      << gait << "\", \"command\": [" << s.command[0] << ", " << s.command[1] << ", "
-      << s.command[2] << "], \"achieved\": ";
-    if (s.samples > 0)
-      f << "[" << s.achieved[0] << ", " << s.achieved[1] << ", " << s.achieved[2] << "]";
-    else
-      f << "null";
-    f << ", \"fell\": " << (s.fell ? "true" : "false") << "}";
+  nlohmann::ordered_json j;
+  j["fell"] = run.fell();
+  j["duration_s"] = run.samples.empty() ? 0.0 : run.samples.back().t;
+  j["tracked"] = tracked;
+  j["fallbacks"] = run.mpc.fallbacks;
+  j["failed_solves"] = run.mpc.failed_solves;
+  j["segments"] = nlohmann::ordered_json::array();
+  for (const stride::logs::Segment& s : segments) {
+    nlohmann::ordered_json segment;
+    segment["t0"] = s.t0;
+    segment["t1"] = s.t1;
+    // A script's gait may be any string: as UTF-8 replaced where invalid, not an error.
+    segment["gait"] = s.gait;
+    segment["command"] = s.command;
+    // No state to average over: no velocity, not zero.
+    segment["achieved"] = s.samples > 0 ? nlohmann::ordered_json(s.achieved) : nullptr;
+    segment["fell"] = s.fell;
+    j["segments"].push_back(segment);
   }
-  f << "\n  ]\n}\n";
+  std::ofstream f(path);
+  f << j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
+  if (!f) std::fprintf(stderr, "stride-drive: cannot write '%s'\n", path.c_str());
 }
 
 }  // namespace

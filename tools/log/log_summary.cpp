@@ -12,10 +12,13 @@
 #include <cstdio>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "config/command_line.hpp"
+#include "controller/statistics.hpp"
 #include "messages/validate.hpp"
 #include "stride/mpc_status_t.hpp"
 #include "stride/robot_state_t.hpp"
@@ -23,11 +26,27 @@
 
 namespace {
 
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const auto i = static_cast<size_t>(std::ceil(p * static_cast<double>(v.size())) - 1);
-  return v[std::min(i, v.size() - 1)];
+using json = nlohmann::ordered_json;
+
+// Milliseconds as microseconds for the printed lines (0 without data: the counts say so).
+double us(const std::optional<double>& ms) {
+  return ms.value_or(0.0) * 1e3;
+}
+double us(const std::vector<double>& ms, double p) {
+  return us(stride::percentile(ms, p));
+}
+
+// A timing in ms as the summaries write it: to the nanosecond (finer is noise), null without data.
+json msOrNull(const std::optional<double>& ms) {
+  if (!ms) return nullptr;
+  return std::round(*ms * 1e6) / 1e6;
+}
+// The shape of every timing distribution in the summaries (stride-mpc's too, run_loop.cpp).
+json timingJson(const stride::Percentiles& p) {
+  return {{"p50_ms", msOrNull(p.p50)},
+          {"p99_ms", msOrNull(p.p99)},
+          {"max_ms", msOrNull(p.max)},
+          {"count", p.count}};
 }
 
 // A stretch of the session (--windows): how the controller kept up in it. Misses come in stretches
@@ -53,9 +72,8 @@ void printWindows(const std::vector<Window>& windows, double width, long long mi
     const long long m1 = i + 1 < windows.size() ? windows[i + 1].misses : misses_end;
     const long long l1 = i + 1 < windows.size() ? windows[i + 1].late : late_end;
     std::printf("  %6.1f %6ld %6lld %6lld %7.0f %7.0f / %5.0f %7.0f\n", w.start, w.ticks,
-                m1 - w.misses, l1 - w.late, percentile(w.latency_ms, 0.5) * 1e3,
-                percentile(w.prepare_ms, 0.5) * 1e3, percentile(w.prepare_ms, 0.99) * 1e3,
-                percentile(w.work_ms, 0.5) * 1e3);
+                m1 - w.misses, l1 - w.late, us(w.latency_ms, 0.5), us(w.prepare_ms, 0.5),
+                us(w.prepare_ms, 0.99), us(w.work_ms, 0.5));
   }
 }
 
@@ -85,25 +103,6 @@ struct CommandReader {
     commands.push_back(c);
   }
 };
-
-// A gait name from a message, as a JSON string (it may hold any byte).
-std::string jsonString(const std::string& text) {
-  std::string out = "\"";
-  for (const char ch : text) {
-    const auto u = static_cast<unsigned char>(ch);
-    if (ch == '"' || ch == '\\') {
-      out += '\\';
-      out += ch;
-    } else if (u < 0x20 || u >= 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", u);
-      out += buf;
-    } else {
-      out += ch;
-    }
-  }
-  return out + "\"";
-}
 
 void printSegments(const std::vector<stride::logs::Segment>& segments, double settle) {
   std::printf(
@@ -156,22 +155,23 @@ bool reportTracking(const std::vector<stride::logs::Segment>& segments,
   return misses.empty();
 }
 
-void writeSegmentsJson(std::ostream& f, const std::vector<stride::logs::Segment>& segments) {
-  f << "[";
-  for (std::size_t k = 0; k < segments.size(); ++k) {
-    const stride::logs::Segment& s = segments[k];
-    f << (k ? ",\n    " : "\n    ") << "{\"t0\": " << s.t0 << ", \"t1\": " << s.t1
-      << ", \"command\": [" << s.command[0] << ", " << s.command[1] << ", " << s.command[2]
-      << "], \"gait\": " << jsonString(s.gait) << ", \"body_height\": " << s.body_height
-      << ", \"achieved\": ";
-    if (s.samples > 0)
-      f << "[" << s.achieved[0] << ", " << s.achieved[1] << ", " << s.achieved[2] << "]";
-    else
-      f << "null";
-    f << ", \"samples\": " << s.samples << ", \"commands\": " << s.commands
-      << ", \"fell\": " << (s.fell ? "true" : "false") << "}";
+json segmentsJson(const std::vector<stride::logs::Segment>& segments) {
+  json out = json::array();
+  for (const stride::logs::Segment& s : segments) {
+    json segment;
+    segment["t0"] = s.t0;
+    segment["t1"] = s.t1;
+    segment["command"] = s.command;
+    segment["gait"] = s.gait;  // from a message: any bytes (dump replaces invalid UTF-8)
+    segment["body_height"] = s.body_height;
+    // No state to average over: no velocity, not zero.
+    segment["achieved"] = s.samples > 0 ? json(s.achieved) : json(nullptr);
+    segment["samples"] = s.samples;
+    segment["commands"] = s.commands;
+    segment["fell"] = s.fell;
+    out.push_back(segment);
   }
-  f << (segments.empty() ? "]" : "\n  ]");
+  return out;
 }
 
 }  // namespace
@@ -380,9 +380,9 @@ int main(int argc, char** argv) {
     std::printf("no state estimates in this log (a replay output?): controller side only\n");
   }
   const double distance = std::hypot(x1 - x0, y1 - y0);
-  const double p50 = percentile(latency_ms, 0.5) * 1e3, p99 = percentile(latency_ms, 0.99) * 1e3;
-  const double lmax =
-      latency_ms.empty() ? 0.0 : *std::max_element(latency_ms.begin(), latency_ms.end()) * 1e3;
+  const stride::Percentiles latency = stride::percentiles(latency_ms),
+                            solve = stride::percentiles(solve_ms),
+                            prepare = stride::percentiles(prepare_ms);
   if (states > 0)
     std::printf(
         "session %.1f s: walked %.3f m (x %+.3f, y %+.3f), base height %.3f .. %.3f m, "
@@ -393,7 +393,7 @@ int main(int argc, char** argv) {
       "controller: %ld ticks, tick latency p50 %.0f us, p99 %.0f us, max %.0f us, "
       "solve p50 %.0f us, %lld deadline misses (%lld late starts), %lld fallbacks, %lld rejected "
       "messages\n",
-      statuses, p50, p99, lmax, percentile(solve_ms, 0.5) * 1e3,
+      statuses, us(latency.p50), us(latency.p99), us(latency.max), us(solve.p50),
       static_cast<long long>(last_status.deadline_misses),
       static_cast<long long>(last_status.late_ticks), static_cast<long long>(last_status.fallbacks),
       static_cast<long long>(last_status.rejected_messages));
@@ -409,8 +409,8 @@ int main(int argc, char** argv) {
   std::printf(
       "solver: %ld of %zu ticks answered a prepared iteration (preparation p50 %.0f us, p99 %.0f "
       "us); steps: full %.0f%%, shorter %.0f%%, none %.0f%%\n",
-      prepared, latency_ms.size(), percentile(prepare_ms, 0.5) * 1e3,
-      percentile(prepare_ms, 0.99) * 1e3, pct(full_steps), pct(short_steps), pct(no_steps));
+      prepared, latency_ms.size(), us(prepare.p50), us(prepare.p99), pct(full_steps),
+      pct(short_steps), pct(no_steps));
   if (!windows.empty())
     printWindows(windows, window, last_status.deadline_misses, last_status.late_ticks);
   if (bad > 0) std::printf("log: %ld undecodable events skipped\n", bad);
@@ -437,27 +437,36 @@ int main(int argc, char** argv) {
     std::printf("commands: %ld rejected (wrong size, non-finite or stamps not increasing)\n",
                 command_reader.rejects);
   if (!summary_path.empty()) {
+    // Without a state estimate (a replay's output) the robot's side has no data: null; without a
+    // status, the controller's counters.
+    const auto robot = [&](double value) { return states > 0 ? json(value) : json(nullptr); };
+    const auto controller = [&](std::int64_t value) {
+      return statuses > 0 ? json(value) : json(nullptr);
+    };
+    json j;
+    j["duration_s"] = robot(t_last - t_first);
+    j["distance_m"] = robot(distance);
+    j["base_height_min_m"] = robot(z_min);
+    j["base_height_max_m"] = robot(z_max);
+    j["max_tilt_deg"] = robot(max_tilt);
+    j["fell"] = fell;
+    j["tick_latency"] = timingJson(latency);
+    j["solve_time"] = timingJson(solve);
+    j["deadline_misses"] = controller(last_status.deadline_misses);
+    j["late_ticks"] = controller(last_status.late_ticks);
+    j["fallbacks"] = controller(last_status.fallbacks);
+    j["ticks"] = statuses;
+    j["rejected_messages"] = controller(last_status.rejected_messages);
+    j["prepared_ticks"] = prepared;
+    j["prepare_time"] = timingJson(prepare);
+    j["line_search"] = {{"full", full_steps}, {"shorter", short_steps}, {"none", no_steps}};
+    j["commands"] = commands.size();
+    j["command_rejects"] = command_reader.rejects;
+    j["segments"] = segmentsJson(segments);
+    j["tracked"] = tracked;
+    j["lost"] = {{"statuses", lost_statuses}, {"states", missing_states}};
     std::ofstream f(summary_path);
-    f << "{\n  \"duration_s\": " << t_last - t_first << ",\n  \"distance_m\": " << distance
-      << ",\n  \"base_height_min_m\": " << z_min << ",\n  \"base_height_max_m\": " << z_max
-      << ",\n  \"max_tilt_deg\": " << max_tilt << ",\n  \"fell\": " << (fell ? "true" : "false")
-      << ",\n  \"tick_latency_us\": {\"p50\": " << p50 << ", \"p99\": " << p99
-      << ", \"max\": " << lmax << "},\n  \"solve_time_us_p50\": " << percentile(solve_ms, 0.5) * 1e3
-      << ",\n  \"deadline_misses\": " << last_status.deadline_misses
-      << ",\n  \"late_ticks\": " << last_status.late_ticks
-      << ",\n  \"fallbacks\": " << last_status.fallbacks << ",\n  \"ticks\": " << statuses
-      << ",\n  \"rejected_messages\": " << last_status.rejected_messages
-      << ",\n  \"prepared_ticks\": " << prepared
-      << ",\n  \"prepare_time_us\": {\"p50\": " << percentile(prepare_ms, 0.5) * 1e3
-      << ", \"p99\": " << percentile(prepare_ms, 0.99) * 1e3 << "}"
-      << ",\n  \"line_search\": {\"full\": " << full_steps << ", \"shorter\": " << short_steps
-      << ", \"none\": " << no_steps << "}"
-      << ",\n  \"commands\": " << commands.size()
-      << ",\n  \"command_rejects\": " << command_reader.rejects << ",\n  \"segments\": ";
-    writeSegmentsJson(f, segments);
-    f << ",\n  \"tracked\": " << (tracked ? "true" : "false")
-      << ",\n  \"lost\": {\"statuses\": " << lost_statuses << ", \"states\": " << missing_states
-      << "}\n}\n";
+    f << j.dump(2, ' ', false, json::error_handler_t::replace) << "\n";
     if (!f) {
       std::fprintf(stderr, "stride-log-summary: cannot write '%s'\n", summary_path.c_str());
       return 1;

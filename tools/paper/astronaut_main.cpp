@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <nlohmann/json.hpp>
 
 #include "config/command_line.hpp"
 #include "solver/multibody/frames.hpp"
@@ -233,62 +234,54 @@ int main(int argc, char** argv) {
           << s.regularization << ',' << s.time_ms << "\n";
   }
 
-  std::ofstream skel(out + "/skeleton.json");
-  skel << "{\"segments\": [";
-  for (std::size_t i = 0; i < kFigureSegments.size(); ++i)
-    skel << (i ? ", " : "") << "[\"" << kFigureSegments[i].first << "\", \""
-         << kFigureSegments[i].second << "\"]";
-  skel << "]}\n";
+  using json = nlohmann::ordered_json;
+  std::ofstream(out + "/skeleton.json") << json{{"segments", kFigureSegments}}.dump(2) << "\n";
 
-  std::ofstream sum(out + "/summary.json");
-  sum.precision(9);
-  sum << "{\n"
-      << "  \"base_pitch_deg\": " << m.pitch_axis.back() * kDeg << ",\n"
-      << "  \"base_pitch_sum_deg\": " << m.pitch.back() * kDeg << ",\n"
-      << "  \"max_tilt_deg\": " << m.max_tilt * kDeg << ",\n"
-      << "  \"max_roll_deg\": " << m.max_roll * kDeg << ",\n"
-      << "  \"max_yaw_deg\": " << m.max_yaw * kDeg << ",\n"
-      << "  \"max_base_pitch_deg\": " << max_pitch * kDeg << ",\n"
-      << "  \"max_angular_momentum_norm\": " << m.max_h << ",\n"
-      << "  \"max_leg_angular_momentum_norm\": " << m.max_h_leg << ",\n"
-      << "  \"iterations\": " << sol.iterations << ",\n"
-
-      << "  \"solve_time_s\": " << solve_s << ",\n"
-      << "  \"wall_time_s\": " << sol.wall_s << ",\n"
-      << "  \"window_segments\": " << o.window << ",\n"
-      << "  \"window_iterations\": " << o.window_iterations << ",\n"
-      << "  \"last_window_iterations\": " << o.final_iterations << ",\n"
-      << "  \"last_window_status\": \"" << toString(sol.windows.back().status) << "\",\n"
-      << "  \"plan_cost\": " << sol.cost << ",\n"
-      << "  \"off_axis_deg\": " << m.off_axis.back() * kDeg << ",\n"
-      << "  \"max_com_drift_m\": " << m.max_com_drift << ",\n"
-      << "  \"max_torque_nm\": " << max_tau << ",\n"
-      << "  \"min_joint_limit_margin_rad\": " << min_limit_margin << ",\n"
-      << "  \"max_joint_velocity_ratio\": " << max_velocity_ratio << ",\n"
-      << "  \"replay_substeps\": " << substeps << ",\n"
-      << "  \"fine_base_pitch_deg\": " << fine.pitch_axis * kDeg << ",\n"
-      << "  \"fine_base_pitch_sum_deg\": " << fine.pitch * kDeg << ",\n"
-      << "  \"max_knot_momentum_change_plan\": " << fine.max_dh_plan << ",\n"
-      << "  \"max_knot_momentum_change_fine\": " << fine.max_dh_fine << ",\n"
-      << "  \"final_orientation_error_deg\": " << final_err * kDeg << ",\n"
-      << "  \"knots\": " << T << ",\n"
-      << "  \"dt\": " << o.dt << ",\n"
-      << "  \"waypoints\": [";
-  for (std::size_t i = 0; i < astro.waypoints().size(); ++i) {
-    const auto& [k, goal] = astro.waypoints()[i];
-    sum << (i ? ", " : "") << "{\"t\": " << k * o.dt << ", \"goal_deg\": " << goal * kDeg
-        << ", \"pitch_deg\": " << m.pitch_axis[k] * kDeg << "}";
-  }
-  sum << "],\n  \"windows\": [";
-  for (std::size_t i = 0; i < sol.windows.size(); ++i) {
-    const AstronautWindow& w = sol.windows[i];
-    sum << (i ? ", " : "") << "{\"first\": " << w.first << ", \"last\": " << w.last
-        << ", \"committed\": " << w.committed << ", \"goal_deg\": " << w.goal * kDeg
-        << ", \"pitch_deg\": " << w.pitch * kDeg << ", \"iterations\": " << w.iterations
-        << ", \"solve_time_s\": " << w.solve_s
-        << ", \"restarted\": " << (w.restarted ? "true" : "false") << "}";
-  }
-  sum << "]\n}\n";
+  json sum;
+  sum["base_pitch_deg"] = m.pitch_axis.back() * kDeg;
+  sum["base_pitch_sum_deg"] = m.pitch.back() * kDeg;
+  sum["max_tilt_deg"] = m.max_tilt * kDeg;
+  sum["max_roll_deg"] = m.max_roll * kDeg;
+  sum["max_yaw_deg"] = m.max_yaw * kDeg;
+  sum["max_base_pitch_deg"] = max_pitch * kDeg;
+  sum["max_angular_momentum_norm"] = m.max_h;
+  sum["max_leg_angular_momentum_norm"] = m.max_h_leg;
+  sum["iterations"] = sol.iterations;
+  sum["solve_time_s"] = solve_s;
+  sum["wall_time_s"] = sol.wall_s;
+  sum["window_segments"] = o.window;
+  sum["window_iterations"] = o.window_iterations;
+  sum["last_window_iterations"] = o.final_iterations;
+  sum["last_window_status"] = toString(sol.windows.back().status);
+  sum["plan_cost"] = sol.cost;
+  sum["off_axis_deg"] = m.off_axis.back() * kDeg;
+  sum["max_com_drift_m"] = m.max_com_drift;
+  sum["max_torque_nm"] = max_tau;
+  sum["min_joint_limit_margin_rad"] = min_limit_margin;
+  sum["max_joint_velocity_ratio"] = max_velocity_ratio;
+  sum["replay_substeps"] = substeps;
+  sum["fine_base_pitch_deg"] = fine.pitch_axis * kDeg;
+  sum["fine_base_pitch_sum_deg"] = fine.pitch * kDeg;
+  sum["max_knot_momentum_change_plan"] = fine.max_dh_plan;
+  sum["max_knot_momentum_change_fine"] = fine.max_dh_fine;
+  sum["final_orientation_error_deg"] = final_err * kDeg;
+  sum["knots"] = T;
+  sum["dt"] = o.dt;
+  sum["waypoints"] = json::array();
+  for (const auto& [k, goal] : astro.waypoints())
+    sum["waypoints"].push_back(
+        {{"t", k * o.dt}, {"goal_deg", goal * kDeg}, {"pitch_deg", m.pitch_axis[k] * kDeg}});
+  sum["windows"] = json::array();
+  for (const AstronautWindow& w : sol.windows)
+    sum["windows"].push_back({{"first", w.first},
+                              {"last", w.last},
+                              {"committed", w.committed},
+                              {"goal_deg", w.goal * kDeg},
+                              {"pitch_deg", w.pitch * kDeg},
+                              {"iterations", w.iterations},
+                              {"solve_time_s", w.solve_s},
+                              {"restarted", w.restarted}});
+  std::ofstream(out + "/summary.json") << sum.dump(2) << "\n";
   std::printf("  wrote %s/{summary.json,trajectory.csv,frames.csv,iterations.csv,skeleton.json}\n",
               out.c_str());
   return sol.finite ? 0 : 1;

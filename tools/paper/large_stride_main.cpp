@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <sstream>
+#include <nlohmann/json.hpp>
 
 #include "config/command_line.hpp"
 #include "solver/multibody/frames.hpp"
@@ -30,14 +30,14 @@ const std::vector<std::pair<int, int>> kFigureSegments = {{0, 1},  {1, 2},   {3,
                                                           {2, 6},  {6, 7},   {7, 8},   {8, 9},
                                                           {2, 10}, {10, 11}, {11, 12}, {12, 13}};
 
-std::string json(const StrideMetrics& m) {
-  std::ostringstream s;
-  s << "{\"peak_normal_force_N\": " << m.peak_normal_force_N
-    << ", \"peak_normal_force_left_N\": " << m.peak_normal_force[0]
-    << ", \"peak_normal_force_right_N\": " << m.peak_normal_force[1]
-    << ", \"peak_knee_torque_Nm\": " << m.peak_knee_torque_Nm
-    << ", \"torque_cost\": " << m.torque_cost << "}";
-  return s.str();
+using json = nlohmann::ordered_json;
+
+json metricsJson(const StrideMetrics& m) {
+  return {{"peak_normal_force_N", m.peak_normal_force_N},
+          {"peak_normal_force_left_N", m.peak_normal_force[0]},
+          {"peak_normal_force_right_N", m.peak_normal_force[1]},
+          {"peak_knee_torque_Nm", m.peak_knee_torque_Nm},
+          {"torque_cost", m.torque_cost}};
 }
 
 void writeFrames(const Model& model, const std::string& path, const std::vector<double>& t,
@@ -133,9 +133,11 @@ int main(int argc, char** argv) {
   const std::array<std::string, 2> feet = {robot.contacts[0].frame, robot.contacts[1].frame};
   if (!out.empty()) std::filesystem::create_directories(out);
 
-  std::ostringstream summary;
-  summary << "{\n  \"robot\": \"" << robot.name << "\",\n  \"dt\": " << po.dt
-          << ",\n  \"iterations\": " << iterations << ",\n  \"strides\": [";
+  json summary;
+  summary["robot"] = robot.name;
+  summary["dt"] = po.dt;
+  summary["iterations"] = iterations;
+  summary["strides"] = json::array();
   struct Row {
     double length;
     StrideMetrics ik, ddp;
@@ -291,50 +293,48 @@ int main(int argc, char** argv) {
     std::printf("%5.0f cm | %10.0f %10.0f | %10.1f %10.1f | %11.4g %11.4g | %s\n", 100 * r.length,
                 r.ik.peak_normal_force_N, r.ddp.peak_normal_force_N, r.ik.peak_knee_torque_Nm,
                 r.ddp.peak_knee_torque_Nm, r.ik.torque_cost, r.ddp.torque_cost, sim.c_str());
-    summary << (i ? "," : "") << "\n    {\"length_m\": " << r.length
-            << ", \"weight_N\": " << r.weight << ", \"ik\": " << json(r.ik)
-            << ", \"ddp\": " << json(r.ddp);
-    if (r.sim_run)
-      summary << ", \"sim\": {\"playback\": \"" << (sim_options.tvlqr ? "tvlqr" : "offline_gains")
-              << "\", \"lockstep_state_rate_hz\": " << sim_options.state_rate_hz
-              << ", \"completed\": " << (r.sim.completed ? "true" : "false")
-              << ", \"fell\": " << (r.sim.fell ? "true" : "false")
-              << ", \"fall_time_s\": " << r.sim.fall_time << ", \"peak_normal_force_N\": "
-              << std::max(r.sim.peak_normal_force[0], r.sim.peak_normal_force[1])
-              << ", \"peak_normal_force_knot_mean_N\": "
-              << std::max(r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1])
-              << ", \"planned_peak_normal_force_N\": " << r.ddp.peak_normal_force_N
-              << ", \"peak_normal_force_left_N\": " << r.sim.peak_normal_force[0]
-              << ", \"peak_normal_force_right_N\": " << r.sim.peak_normal_force[1]
-              << ", \"peak_normal_force_knot_mean_left_N\": " << r.sim.peak_normal_force_knot[0]
-              << ", \"peak_normal_force_knot_mean_right_N\": " << r.sim.peak_normal_force_knot[1]
-              << ", \"planned_peak_normal_force_left_N\": " << r.ddp.peak_normal_force[0]
-              << ", \"planned_peak_normal_force_right_N\": " << r.ddp.peak_normal_force[1]
-              << ", \"max_base_error_m\": " << r.sim.max_base_error
-              << ", \"final_base_error_m\": " << r.sim.final_base_error
-              << ", \"max_tilt_deg\": " << r.sim.max_tilt_deg
-              << ", \"clamped_steps\": " << r.sim.clamped_steps
-              << ", \"policies\": " << r.sim.policies
-              << ", \"unanswered_states\": " << r.sim.unanswered
-              << ", \"policies_rejected\": " << r.sim.policies_rejected
-              << ", \"hold_pd_steps\": " << r.sim.hold_steps
-              << ", \"exhausted_steps\": " << r.sim.exhausted_steps
-              << ", \"stop_gap\": " << r.sim.stop_gap << ", \"lqr_time_s\": " << r.sim.lqr_time_s
-              << "}";
-    summary << "}";
+    json entry;
+    entry["length_m"] = r.length;
+    entry["weight_N"] = r.weight;
+    entry["ik"] = metricsJson(r.ik);
+    entry["ddp"] = metricsJson(r.ddp);
+    if (r.sim_run) {
+      json played;
+      played["playback"] = sim_options.tvlqr ? "tvlqr" : "offline_gains";
+      played["lockstep_state_rate_hz"] = sim_options.state_rate_hz;
+      played["completed"] = r.sim.completed;
+      played["fell"] = r.sim.fell;
+      played["fall_time_s"] = r.sim.fell ? json(r.sim.fall_time) : json(nullptr);  // null: no fall
+      played["peak_normal_force_N"] =
+          std::max(r.sim.peak_normal_force[0], r.sim.peak_normal_force[1]);
+      played["peak_normal_force_knot_mean_N"] =
+          std::max(r.sim.peak_normal_force_knot[0], r.sim.peak_normal_force_knot[1]);
+      played["planned_peak_normal_force_N"] = r.ddp.peak_normal_force_N;
+      played["peak_normal_force_left_N"] = r.sim.peak_normal_force[0];
+      played["peak_normal_force_right_N"] = r.sim.peak_normal_force[1];
+      played["peak_normal_force_knot_mean_left_N"] = r.sim.peak_normal_force_knot[0];
+      played["peak_normal_force_knot_mean_right_N"] = r.sim.peak_normal_force_knot[1];
+      played["planned_peak_normal_force_left_N"] = r.ddp.peak_normal_force[0];
+      played["planned_peak_normal_force_right_N"] = r.ddp.peak_normal_force[1];
+      played["max_base_error_m"] = r.sim.max_base_error;
+      played["final_base_error_m"] = r.sim.final_base_error;
+      played["max_tilt_deg"] = r.sim.max_tilt_deg;
+      played["clamped_steps"] = r.sim.clamped_steps;
+      played["policies"] = r.sim.policies;
+      played["unanswered_states"] = r.sim.unanswered;
+      played["policies_rejected"] = r.sim.policies_rejected;
+      played["hold_pd_steps"] = r.sim.hold_steps;
+      played["exhausted_steps"] = r.sim.exhausted_steps;
+      played["stop_gap"] = r.sim.stop_gap;
+      played["lqr_time_s"] = r.sim.lqr_time_s;
+      entry["sim"] = played;
+    }
+    summary["strides"].push_back(entry);
   }
-  summary << "\n  ]\n}\n";
   if (!out.empty()) {
-    std::ofstream(out + "/summary.json") << summary.str();
-    std::ofstream sk(out + "/skeleton.json");
-    sk << "{\"frames\": [";
-    for (size_t i = 0; i < kFigureFrames.size(); ++i)
-      sk << (i ? ", " : "") << "\"" << kFigureFrames[i] << "\"";
-    sk << "], \"segments\": [";
-    for (size_t i = 0; i < kFigureSegments.size(); ++i)
-      sk << (i ? ", " : "") << "[" << kFigureSegments[i].first << ", " << kFigureSegments[i].second
-         << "]";
-    sk << "]}\n";
+    std::ofstream(out + "/summary.json") << summary.dump(2) << "\n";
+    std::ofstream(out + "/skeleton.json")
+        << json{{"frames", kFigureFrames}, {"segments", kFigureSegments}}.dump(2) << "\n";
   }
   return 0;
 }
