@@ -225,6 +225,7 @@ void writeSummary(const MpcNode& node, const std::string& path) {
   j["policies"] = node.policiesPublished();
   j["states_accepted"] = node.acceptedStates();
   j["rejected_messages"] = node.rejected();
+  j["wrong_model"] = node.wrongModel();  // of rejected_messages: another model's states
   j["tick_latency"] = timingJson(lat);
   j["deadline_misses"] = c.deadline_misses;
   j["late_ticks"] = c.late_ticks;

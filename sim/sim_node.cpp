@@ -160,15 +160,17 @@ void SimNode::writeSummary(const std::string& path) const {
   const double distance = std::hypot(q[0] - s.x0, q[1] - s.y0);
   std::printf(
       "stride-sim: %.2f s simulated, walked %.3f m (x %+.3f), base height %.3f .. %.3f m, max "
-      "tilt %.1f deg, %s; %lld states published (%lld dropped), %lld policies (%lld rejected), "
-      "%lld steps on the hold PD before the first policy and %lld after, %lld past a policy's end, "
+      "tilt %.1f deg, %s; %lld states published (%lld dropped), %lld policies (%lld rejected, "
+      "%lld of another model), %lld steps on the hold PD before the first policy and %lld after, "
+      "%lld past a policy's end, "
       "%lld lock-step timeouts\n",
       sim_.time(), distance, q[0] - s.x0, s.z_min, s.z_max, s.max_tilt_deg,
       s.diverged ? "DIVERGED" : (s.fell ? "FELL" : "did not fall"),
       static_cast<long long>(s.states_published), static_cast<long long>(s.states_dropped),
       static_cast<long long>(s.policies), static_cast<long long>(s.policies_rejected),
-      static_cast<long long>(s.waiting_steps), static_cast<long long>(s.hold_steps),
-      static_cast<long long>(s.exhausted_steps), static_cast<long long>(s.lockstep_timeouts));
+      static_cast<long long>(s.policies_wrong_model), static_cast<long long>(s.waiting_steps),
+      static_cast<long long>(s.hold_steps), static_cast<long long>(s.exhausted_steps),
+      static_cast<long long>(s.lockstep_timeouts));
   if (path.empty()) return;
   nlohmann::ordered_json j;
   j["sim_time_s"] = sim_.time();
@@ -182,6 +184,7 @@ void SimNode::writeSummary(const std::string& path) const {
   j["states_published"] = s.states_published;
   j["policies"] = s.policies;
   j["policies_rejected"] = s.policies_rejected;
+  j["policies_wrong_model"] = s.policies_wrong_model;
   j["waiting_steps"] = s.waiting_steps;
   j["hold_steps"] = s.hold_steps;
   j["exhausted_steps"] = s.exhausted_steps;
