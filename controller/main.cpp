@@ -115,7 +115,10 @@ int main(int argc, char** argv) {
     const bool on_stamps = replaying || lockstep;
     stride::MpcNode node(config, publisher,
                          on_stamps ? stride::TimeSource::Stamps : stride::TimeSource::RealTime);
-    node.subscribe(in);
+    node.subscribe(in, /*watch_policies=*/!replaying);  // a log holds the recorded controller's
+    // A replay's output is a file, never a bus a robot follows: a fixed source id keeps two
+    // replays of one log bit-identical.
+    if (replaying) node.setSourceId(node.wireModel().hash);
     std::printf(
         "stride-mpc: %s, %s, %s, %d iteration(s) per tick at %.0f Hz, "
         "%s mode, in '%s', out '%s'\n",

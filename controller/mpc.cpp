@@ -73,6 +73,7 @@ Mpc::Mpc(const ControllerConfig& config)
   msg::shape(policy_, config_.policy_knots, nq_, nv_, nu_);
   msg::shape(previous_, config_.policy_knots, nq_, nv_, nu_);
   policy_.model_hash = previous_.model_hash = stride::modelHash(robot_);
+  policy_.source_id = previous_.source_id = 0;
   status_.policy_status = kPolicyNone;
   status_.solver_status = -1;
 }

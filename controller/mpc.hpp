@@ -79,6 +79,8 @@ class Mpc {
   const Robot& robot() const { return robot_; }
   // The robot's identity on the wire (config/model_hash.hpp), carried by every policy.
   std::int64_t modelHash() const { return policy_.model_hash; }
+  // The controller's identity on the policy channel (policy_t.source_id; MpcNode draws it).
+  void setSourceId(std::int64_t id) { policy_.source_id = previous_.source_id = id; }
   int nu() const { return nu_; }
   bool started() const { return loco_ != nullptr; }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <random>
 
 #include "config/model_hash.hpp"
 
@@ -33,6 +34,12 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
                           status.getEncodedSize()));
   latencies_.reserve(kLatencyCapacity);
   command_msg_.gait.reserve(msg::kMaxGaitName + 1);  // decoding a gait name then never allocates
+  // A source id per start: the robot follows one controller and tells a rival (or this one
+  // restarted) apart. Never 0, which a test or a tool may use.
+  std::random_device entropy;
+  std::int64_t id = 0;
+  while (id == 0) id = static_cast<std::int64_t>((std::uint64_t(entropy()) << 32) | entropy());
+  setSourceId(id);
   wire_.hash = mpc_.modelHash();
   wire_.nq = model.nq;
   wire_.nv = model.nv;
@@ -115,8 +122,16 @@ std::int64_t MpcNode::monotonicMicros() {
   return static_cast<std::int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
 }
 
-void MpcNode::subscribe(lcm::LCM& in) {
+void MpcNode::setSourceId(std::int64_t id) {
+  source_id_ = id;
+  mpc_.setSourceId(id);
+  mpc_.status().source_id = id;
+}
+
+void MpcNode::subscribe(lcm::LCM& in, bool watch_policies) {
   in.subscribe(config_.state_channel, &MpcNode::onState, this)->setQueueCapacity(kQueueCapacity);
+  if (watch_policies)
+    in.subscribe(config_.policy_channel, &MpcNode::onPolicy, this)->setQueueCapacity(100);
   in.subscribe(config_.plan_channel, &MpcNode::onPlan, this)->setQueueCapacity(10);
   in.subscribe(config_.command_channel, &MpcNode::onCommand, this)->setQueueCapacity(100);
 }
@@ -152,6 +167,25 @@ void MpcNode::onState(const lcm::ReceiveBuffer* rbuf, const std::string& channel
   have_state_ = true;
   new_state_ = true;
   ++accepted_;
+}
+
+void MpcNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  std::int64_t source = 0;
+  if (!msg::readPolicySource(rbuf->data, static_cast<int>(rbuf->data_size), source) ||
+      source == source_id_)
+    return;  // our own, or too short to say whose
+  ++rival_policies_;
+  for (int i = 0; i < n_rivals_; ++i)
+    if (rivals_[i] == source) return;
+  if (n_rivals_ == static_cast<int>(rivals_.size())) return;
+  rivals_[n_rivals_++] = source;
+  char theirs[17], ours[17];
+  msg::formatHash(source, theirs);
+  msg::formatHash(source_id_, ours);
+  std::fprintf(stderr,
+               "stride-mpc: warning: another controller (source %s) publishes policies on '%s', "
+               "as this one (source %s) does: a robot follows one of them; stop the other\n",
+               theirs, channel.c_str(), ours);
 }
 
 void MpcNode::onPlan(const lcm::ReceiveBuffer* rbuf, const std::string&) {
@@ -256,6 +290,7 @@ void MpcNode::tick(Clock::time_point deadline) {
   mpc_status_t& status = mpc_.status();
   status.rejected_messages = rejected_total_;
   status.wrong_model = wrongModel();
+  status.rival_policies = rival_policies_;
   if (latest_mismatch_ >= 0)  // within the capacity reserved at start: no allocation
     status.wrong_model_cause.assign(mismatches_[latest_mismatch_].text.data());
   const CommandCounters& cc = commands_.counters();

@@ -40,12 +40,16 @@ class MpcNode {
   using Clock = Mpc::Clock;
   MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time);
 
-  // Subscribes the raw handlers on `in`, with queues deep enough for a 1 kHz estimator.
-  void subscribe(lcm::LCM& in);
+  // Subscribes the raw handlers on `in`, with queues deep enough for a 1 kHz estimator. With
+  // watch_policies (on a live bus, not a log) also the policy channel, to see a rival controller.
+  void subscribe(lcm::LCM& in, bool watch_policies = true);
   // The raw handlers (public for tests, which feed them bytes directly).
   void onState(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void onPlan(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void onCommand(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  // Policies on the policy channel: this controller's own come back (LCM delivers to the sender);
+  // another source is a rival controller, counted and written to stderr once per source.
+  void onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
 
   // Stamps mode: a state has reached the next tick time.
   bool tickDue() const;
@@ -73,6 +77,11 @@ class MpcNode {
   const std::vector<float>& latencies() const { return latencies_; }
   long latencyCount() const { return latency_count_; }
   const msg::WireModel& wireModel() const { return wire_; }
+  const ControllerConfig& config() const { return config_; }
+  std::int64_t sourceId() const { return source_id_; }
+  // Replaces the random source id (a replay: its output is then the same bits on every run).
+  void setSourceId(std::int64_t id);
+  std::int64_t rivalPolicies() const { return rival_policies_; }
   // States refused for another model, and the distinct causes (at most kMaxMismatches kept).
   struct ModelMismatch {
     msg::WireClaim claim;
@@ -118,6 +127,9 @@ class MpcNode {
   std::vector<unsigned char> horizon_buffer_;
   double horizon_sent_at_ = -1e300;
   std::array<ModelMismatch, kMaxMismatches> mismatches_{};
+  std::int64_t source_id_ = 0, rival_policies_ = 0;
+  std::array<std::int64_t, 4> rivals_{};  // the rival sources already reported
+  int n_rivals_ = 0;
   int n_mismatches_ = 0, latest_mismatch_ = -1;
   std::vector<float> latencies_;
   long latency_count_ = 0;

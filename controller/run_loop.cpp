@@ -219,13 +219,17 @@ void writeSummary(const MpcNode& node, const std::string& path) {
   for (int i = 0; i < node.mismatchCount(); ++i)
     std::printf("stride-mpc: %lld states of another model: %s\n",
                 static_cast<long long>(node.mismatch(i).count), node.mismatch(i).text.data());
+  if (node.rivalPolicies() > 0)
+    std::printf("stride-mpc: %lld policies of another controller on '%s' (a robot follows one)\n",
+                static_cast<long long>(node.rivalPolicies()), node.config().policy_channel.c_str());
   if (path.empty()) return;
   nlohmann::ordered_json j;
   j["ticks"] = c.ticks;
   j["policies"] = node.policiesPublished();
   j["states_accepted"] = node.acceptedStates();
   j["rejected_messages"] = node.rejected();
-  j["wrong_model"] = node.wrongModel();  // of rejected_messages: another model's states
+  j["wrong_model"] = node.wrongModel();        // of rejected_messages: another model's states
+  j["rival_policies"] = node.rivalPolicies();  // another controller's, on this one's channel
   j["tick_latency"] = timingJson(lat);
   j["deadline_misses"] = c.deadline_misses;
   j["late_ticks"] = c.late_ticks;

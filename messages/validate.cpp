@@ -53,9 +53,10 @@ bool readInt64(const void* buf, int size, long at, std::int64_t& out) {
 }
 
 // Offsets after the type hash: robot_state_t is utime, model_hash, nq, nv, ...; policy_t is utime,
-// model_hash, knot0_utime, tick, t0, dt, then knots nq nv nu nx ndx nk.
+// model_hash, source_id, knot0_utime, tick, t0, dt, then knots nq nv nu nx ndx nk.
 constexpr long kStateHashAt = kHash + 8, kStateNqAt = kHash + 16;
-constexpr long kPolicyHashAt = kHash + 8, kPolicyCountsAt = kHash + 48;
+constexpr long kPolicyHashAt = kHash + 8, kPolicySourceAt = kHash + 16,
+               kPolicyCountsAt = kHash + 56;
 
 template <typename Vec>
 bool allFinite(const Vec& v) {
@@ -77,7 +78,7 @@ int stateWireSize(int nq, int nv, int ncontacts) {
 
 int policyWireSize(int knots, int nq, int nv, int nu) {
   const long per_knot = 8L * ((nq + nv) + nu + static_cast<long>(nu) * 2 * nv);
-  return static_cast<int>(kHash + 6 * 8 + 7 * 4 + knots * per_knot + 4 + 1);
+  return static_cast<int>(kHash + 7 * 8 + 7 * 4 + knots * per_knot + 4 + 1);
 }
 
 bool readStateClaim(const void* buf, int size, WireClaim& claim) {
@@ -88,6 +89,10 @@ bool readStateClaim(const void* buf, int size, WireClaim& claim) {
   claim.nq = nq;
   claim.nv = nv;
   return true;
+}
+
+bool readPolicySource(const void* buf, int size, std::int64_t& source_id) {
+  return readInt64(buf, size, kPolicySourceAt, source_id);
 }
 
 bool readPolicyClaim(const void* buf, int size, WireClaim& claim) {

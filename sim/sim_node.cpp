@@ -47,6 +47,8 @@ void SimNode::reset(const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
   delay_.clear();
   have_policy_ = false;
   last_answer_ = -1;
+  have_source_ = false;
+  n_rivals_ = 0;
   stats_ = SimNodeStats{};
   stats_.x0 = q[0];
   stats_.y0 = q[1];
@@ -57,14 +59,25 @@ void SimNode::reset(const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
 void SimNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
   const Model& model = robot_.model;
   const int size = static_cast<int>(rbuf->data_size);
+  // Cheap checks on the raw bytes first (model, sizes, source): a flood of foreign policies costs
+  // no decoding.
   const msg::Reject wire = msg::checkPolicyWire(rbuf->data, size, wire_, options_.max_policy_knots);
   if (wire == msg::Reject::WrongModel) noteWrongModel(rbuf->data, size, channel);
+  std::int64_t source = 0;
+  if (wire == msg::Reject::None && msg::readPolicySource(rbuf->data, size, source) &&
+      !followSource(source, channel)) {
+    ++stats_.policies_rejected;
+    return;
+  }
   const bool ok = wire == msg::Reject::None && incoming_.decode(rbuf->data, 0, size) >= 0 &&
                   msg::checkPolicy(incoming_, model.hasFreeFlyer()) == msg::Reject::None;
   if (!ok) {
     ++stats_.policies_rejected;
     return;
   }
+  source_ = source;
+  have_source_ = true;
+  source_seen_ = sim_.time();
   if (policy_.knots != incoming_.knots)
     policy_.resize(incoming_.knots, model.nq, model.nv, sim_.nu());
   policy_.t0 = static_cast<double>(incoming_.knot0_utime - options_.utime_base) * 1e-6;
@@ -77,6 +90,34 @@ void SimNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channe
   have_policy_ = true;
   last_answer_ = std::max(last_answer_, incoming_.utime);
   ++stats_.policies;
+}
+
+bool SimNode::followSource(std::int64_t source, const std::string& channel) {
+  if (!have_source_ || source == source_) return true;
+  const double silent = sim_.time() - source_seen_;
+  char theirs[17], ours[17];
+  msg::formatHash(source, theirs);
+  msg::formatHash(source_, ours);
+  if (silent >= options_.source_timeout) {  // the followed controller stopped: a restart, say
+    // Said for the first switches (a restart or two); a run that switches all the time says so
+    // in its summary's count.
+    if (++stats_.source_switches <= 4)
+      std::fprintf(stderr,
+                   "stride-sim: following the controller %s on '%s' (%s silent for %.3f s)\n",
+                   theirs, channel.c_str(), ours, silent);
+    return true;
+  }
+  ++stats_.policies_rival;
+  for (int i = 0; i < n_rivals_; ++i)
+    if (rivals_[i] == source) return false;
+  if (n_rivals_ < static_cast<int>(rivals_.size())) {
+    rivals_[n_rivals_++] = source;
+    std::fprintf(stderr,
+                 "stride-sim: refused the policies of a rival controller %s on '%s': following "
+                 "%s, which is alive\n",
+                 theirs, channel.c_str(), ours);
+  }
+  return false;
 }
 
 void SimNode::noteWrongModel(const void* buf, int size, const std::string& channel) {
@@ -161,14 +202,16 @@ void SimNode::writeSummary(const std::string& path) const {
   std::printf(
       "stride-sim: %.2f s simulated, walked %.3f m (x %+.3f), base height %.3f .. %.3f m, max "
       "tilt %.1f deg, %s; %lld states published (%lld dropped), %lld policies (%lld rejected, "
-      "%lld of another model), %lld steps on the hold PD before the first policy and %lld after, "
+      "%lld of another model, %lld of a rival controller; %lld controller switches), %lld steps on "
+      "the hold PD before the first policy and %lld after, "
       "%lld past a policy's end, "
       "%lld lock-step timeouts\n",
       sim_.time(), distance, q[0] - s.x0, s.z_min, s.z_max, s.max_tilt_deg,
       s.diverged ? "DIVERGED" : (s.fell ? "FELL" : "did not fall"),
       static_cast<long long>(s.states_published), static_cast<long long>(s.states_dropped),
       static_cast<long long>(s.policies), static_cast<long long>(s.policies_rejected),
-      static_cast<long long>(s.policies_wrong_model), static_cast<long long>(s.waiting_steps),
+      static_cast<long long>(s.policies_wrong_model), static_cast<long long>(s.policies_rival),
+      static_cast<long long>(s.source_switches), static_cast<long long>(s.waiting_steps),
       static_cast<long long>(s.hold_steps), static_cast<long long>(s.exhausted_steps),
       static_cast<long long>(s.lockstep_timeouts));
   if (path.empty()) return;
@@ -185,6 +228,8 @@ void SimNode::writeSummary(const std::string& path) const {
   j["policies"] = s.policies;
   j["policies_rejected"] = s.policies_rejected;
   j["policies_wrong_model"] = s.policies_wrong_model;
+  j["policies_rival"] = s.policies_rival;
+  j["source_switches"] = s.source_switches;
   j["waiting_steps"] = s.waiting_steps;
   j["hold_steps"] = s.hold_steps;
   j["exhausted_steps"] = s.exhausted_steps;

@@ -34,6 +34,10 @@ struct SimNodeOptions {
   std::string state_channel = "STRIDE_STATE", policy_channel = "STRIDE_POLICY";
   std::int64_t utime_base = 1000000;
   int max_policy_knots = 64;
+  // The robot follows one controller (policy_t.source_id): another source is refused as a rival
+  // while the followed one has published within this many seconds of robot time; after such a
+  // silence (a controller restarted) the new source is followed.
+  double source_timeout = 0.2;
   // Fallen: base below this fraction of its start height, or tilted more than this.
   double fall_height = 0.5, fall_tilt_deg = 60.0;
 };
@@ -42,6 +46,8 @@ struct SimNodeStats {
   std::int64_t states_published = 0, states_dropped = 0;
   std::int64_t policies = 0, policies_rejected = 0;
   std::int64_t policies_wrong_model = 0;  // of policies_rejected: another model's
+  std::int64_t policies_rival = 0;        // of policies_rejected: a rival controller's
+  std::int64_t source_switches = 0;       // a new controller followed after a silence
   // On the hold PD: before the first policy came (waiting, e.g. the controller's start-up solve
   // in real time), and after (a policy that did not apply: a fallback of the robot).
   std::int64_t waiting_steps = 0, hold_steps = 0, exhausted_steps = 0, steps = 0;
@@ -83,6 +89,8 @@ class SimNode {
  private:
   void track();
   void noteWrongModel(const void* buf, int size, const std::string& channel);
+  // False (and counted) for a rival controller's policy; follows a new source after a silence.
+  bool followSource(std::int64_t source, const std::string& channel);
 
   const Robot& robot_;
   SimNodeOptions options_;
@@ -102,6 +110,11 @@ class SimNode {
   msg::WireModel wire_;
   std::array<msg::WireClaim, 4> mismatches_{};  // the causes already written to stderr
   int n_mismatches_ = 0;
+  std::int64_t source_ = 0;  // the controller followed (policy_t.source_id)
+  bool have_source_ = false;
+  double source_seen_ = 0.0;                // sim time of its newest policy
+  std::array<std::int64_t, 4> rivals_{};    // the rival sources already reported
+  int n_rivals_ = 0;
   std::vector<unsigned char> buffer_;
   Eigen::VectorXd q_pub_, v_pub_, tau_;
   SimNodeStats stats_;

@@ -132,5 +132,37 @@ TEST(ClosedLoop, HumanoidStandsAndSteps) {
   EXPECT_EQ(r.mpc.fallbacks, 0);
 }
 
+// One controller per robot (issue 19): a rival controller on the same policy channel, planning a
+// trot while the robot's own keeps it standing, changes nothing on the robot: the run is bit for
+// bit the run without it, and both sides notice. Following the newest policy instead (a source
+// timeout of 0) lets the rival take the robot over: its feet lift.
+TEST(ClosedLoop, ARivalControllerChangesNothingOnTheRobot) {
+  const ControllerConfig config = loadControllerConfig(controller_cases::configPath("stride_quad"));
+  ControllerConfig trotting = config;
+  trotting.gait.plan_file = std::string(STRIDE_CONFIG_DIR) + "/plans/quad_trot_then_stand.yaml";
+  drive::Options o;
+  o.duration = 2.5;
+  const drive::Run alone = drive::run(config, o);
+  o.rival = &trotting;
+  const drive::Run rivalled = drive::run(config, o);
+  ASSERT_EQ(rivalled.samples.size(), alone.samples.size());
+  for (std::size_t i = 0; i < alone.samples.size(); ++i)
+    ASSERT_EQ(rivalled.samples[i].q, alone.samples[i].q) << "t " << alone.samples[i].t;
+  EXPECT_FALSE(rivalled.fell());
+  EXPECT_GT(rivalled.sim.policies_rival, 200);  // ~ one per tick, refused
+  EXPECT_EQ(rivalled.sim.policies_rejected, rivalled.sim.policies_rival);
+  EXPECT_EQ(rivalled.sim.source_switches, 0);
+  EXPECT_GT(rivalled.rival_policies, 200);  // the robot's controller saw the rival's policies
+  int lifted = 0;  // after the first instants (the feet settle onto the ground)
+  for (const drive::Sample& s : alone.samples) lifted += s.t > 0.2 && s.feet_down < 4;
+  EXPECT_EQ(lifted, 0) << "the robot's controller keeps it standing";
+
+  o.sim.source_timeout = 0.0;  // the newest policy wins: the rival's trot reaches the robot
+  const drive::Run taken = drive::run(config, o);
+  lifted = 0;
+  for (const drive::Sample& s : taken.samples) lifted += s.t > 0.2 && s.feet_down < 4;
+  EXPECT_GT(lifted, 20) << "without the rule the rival's plan moves the feet";
+}
+
 }  // namespace
 }  // namespace stride

@@ -31,6 +31,7 @@ policy_t holdPolicy(const Robot& robot, int nq, int nv, std::int64_t hash) {
   policy_t p;
   msg::shape(p, 2, nq, nv, nv - 6);
   p.model_hash = hash;
+  p.source_id = 1;
   p.utime = p.knot0_utime = 1000000;
   p.dt = 0.01;
   p.status = 0;

@@ -57,6 +57,11 @@ Run run(const ControllerConfig& config, const Options& options) {
   sim.subscribe(lcm);
   sim.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
   std::int64_t clock = sim.utime();
+  std::unique_ptr<MpcNode> rival;
+  if (options.rival != nullptr) {
+    rival = std::make_unique<MpcNode>(*options.rival, publisher, TimeSource::Stamps);
+    rival->subscribe(lcm);
+  }
   std::unique_ptr<Recorder> recorder;
   if (!options.log.empty()) recorder = std::make_unique<Recorder>(lcm, options.log, &clock);
 
@@ -82,6 +87,10 @@ Run run(const ControllerConfig& config, const Options& options) {
     if (mpc.tickDue()) {
       mpc.tick(Mpc::Clock::time_point::max());
       mpc.prepare(Mpc::Clock::time_point::max());
+    }
+    if (rival && rival->tickDue()) {  // after the robot's own: its first policy comes second
+      rival->tick(Mpc::Clock::time_point::max());
+      rival->prepare(Mpc::Clock::time_point::max());
     }
     drain(lcm);
     if (stamp >= 0 && !sim.answered(stamp)) sim.countLockstepTimeout();
@@ -124,6 +133,7 @@ Run run(const ControllerConfig& config, const Options& options) {
   r.mpc = mpc.mpc().counters();
   r.command_counters = mpc.commands().counters();
   r.rejected = mpc.rejected();
+  r.rival_policies = mpc.rivalPolicies();
   r.q_end = sim.simulator().q();
   return r;
 }

@@ -37,6 +37,9 @@ struct Options {
   double commands_until = std::numeric_limits<double>::infinity();
   std::string log;  // an LCM log of every message on the bus (lcm-logger's format), if not empty
   std::function<void(const Sample&)> each;  // called every period
+  // A rival: a second controller on the same bus, ticking on the same states and publishing on
+  // the same policy channel (the robot must keep following the first; sim/README.md).
+  const ControllerConfig* rival = nullptr;
 };
 
 struct Run {
@@ -46,6 +49,7 @@ struct Run {
   MpcCounters mpc;
   CommandCounters command_counters;
   std::int64_t rejected = 0;
+  std::int64_t rival_policies = 0;  // seen by the controller on its policy channel
   Eigen::VectorXd q_end;
   bool fell() const { return sim.fell; }
   // The base states for segments (t: sim time).
