@@ -8,7 +8,8 @@
 #
 #   tools/demo.sh [--robot NAME | --humanoid] [--commands FILE | --teleop] [--duration S]
 #                 [--realtime | --lockstep] [--robots-dir DIR]... [--check-tracking]
-#                 [--host-network] [--out DIR] [--summary FILE] [--spy] [--slow-host F]
+#                 [--host-network] [--out DIR] [--summary FILE] [--spy] [--viz [--viz-port P]]
+#                 [--slow-host F]
 #
 #   --robot NAME      stride_quad (default), solo12, anymal_c, stride_humanoid, talos_reduced:
 #                     config/controller/NAME.yaml; solo12, anymal_c and talos_reduced need
@@ -35,6 +36,11 @@
 #   --out DIR         where the log and summaries go (default build/demo)
 #   --summary FILE    the summary as JSON (default DIR/summary.json)
 #   --spy             also start lcm-spy (tools/lcm-spy.sh) on the demo's bus; needs a display
+#   --viz             also start the browser viewer (stride-viz) on the demo's bus and print its
+#                     address, http://127.0.0.1:P/ on this machine (from the private namespace, a
+#                     socat pair forwards it through a Unix socket in DIR); afterwards
+#                     tools/viz.sh DIR/session.lcmlog replays the session in the same page
+#   --viz-port P      the viewer's port on the host's loopback (default 8765)
 #   --slow-host F     the controller's solver takes F times its time (busy), as on a host F times
 #                     slower: shows how it sheds work when a period overruns (controller/README.md,
 #                     "Overload")
@@ -43,7 +49,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
-spy=0 check=0 slow_host=""
+spy=0 check=0 slow_host="" viz=0 viz_port=8765
 robots_dirs=()
 args=("$@")
 need_value() { [ $# -ge 2 ] || { echo "demo.sh: $1 needs a value (--help)" >&2; exit 2; }; }
@@ -62,6 +68,8 @@ while [ $# -gt 0 ]; do
     --out) need_value "$@"; out="$2"; shift 2 ;;
     --summary) need_value "$@"; summary="$2"; shift 2 ;;
     --spy) spy=1; shift ;;
+    --viz) viz=1; shift ;;
+    --viz-port) need_value "$@"; viz_port="$2"; shift 2 ;;
     --slow-host) need_value "$@"; slow_host="$2"; shift 2 ;;
     -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown option '$1' (--help)" >&2; exit 2 ;;
@@ -143,6 +151,16 @@ if [ -z "${STRIDE_DEMO_INSIDE:-}" ] && [ "$host_network" = 0 ]; then
     echo "demo.sh: cannot create a network namespace here; rerun with --host-network" >&2
     exit 1
   fi
+  if [ "$viz" = 1 ]; then
+    # The viewer serves inside the namespace, whose loopback the host cannot reach; a Unix socket
+    # in the output folder can be reached from both sides: the host's end listens here, on the
+    # host's loopback only, and the namespace's end (below) connects the socket to stride-viz.
+    command -v socat > /dev/null || { echo "demo.sh: --viz needs socat (tools/install-deps.sh)" >&2; exit 1; }
+    rm -f "$out/viz.sock"
+    socat "TCP-LISTEN:$viz_port,bind=127.0.0.1,reuseaddr,fork" "UNIX-CONNECT:$out/viz.sock" \
+      2> "$out/viz-forward.txt" &
+    export STRIDE_DEMO_VIZ_FORWARD=$!
+  fi
   STRIDE_DEMO_INSIDE=1 exec "${ns[@]}" "$0" "${args[@]}"
 fi
 
@@ -169,6 +187,9 @@ rm -f "$log" "$out/teleop.txt"
 pids=()
 cleanup() {
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
+  # The host's end of the viewer's forward (started before the namespace: same user, so ours to
+  # stop).
+  [ -n "${STRIDE_DEMO_VIZ_FORWARD:-}" ] && kill "$STRIDE_DEMO_VIZ_FORWARD" 2>/dev/null || true
   wait 2>/dev/null || true
 }
 trap cleanup EXIT
@@ -213,6 +234,23 @@ if [ "$spy" = 1 ]; then
   timeout "$limit" "$root/tools/lcm-spy.sh" --lcm-url="$LCM_DEFAULT_URL" > "$out/lcm-spy.txt" 2>&1 &
   pids+=($!)
   sleep 3  # the JVM starts slowly
+fi
+if [ "$viz" = 1 ]; then
+  # Another LCM subscriber, on the side core: it never slows the controller (a slow browser drops
+  # frames in stride-viz, never in the loop). Inside the namespace it listens on the namespace's
+  # loopback, joined to the host's by the forward above.
+  timeout "$limit" "${side[@]}" "$build/viz/stride-viz" --url "$LCM_DEFAULT_URL" \
+    --robot "$robot_yaml" "${dirs_args[@]}" --port "$viz_port" > "$out/viz.txt" 2>&1 &
+  viz_pid=$!
+  pids+=($viz_pid)
+  started "$out/viz.txt" "^stride-viz: http" "$viz_pid" stride-viz
+  if [ -n "${STRIDE_DEMO_INSIDE:-}" ]; then
+    timeout "$limit" socat "UNIX-LISTEN:$out/viz.sock,fork,unlink-early" "TCP:127.0.0.1:$viz_port" \
+      2> "$out/viz-forward-inside.txt" &
+    pids+=($!)
+  fi
+  echo "demo: the viewer is at http://127.0.0.1:$viz_port/ (open it in a browser on this machine;"
+  echo "  after the demo: tools/viz.sh $log)"
 fi
 mpc_args=(--config "$config" "${dirs_args[@]}" --summary "$out/mpc.json")
 [ -n "$slow_host" ] && mpc_args+=(--emulate-slow-host "$slow_host")

@@ -18,6 +18,7 @@ packages=(
   liblcm-java libjchart2d-java  # lcm-spy, and lcm.jar to compile our types for it
   openjdk-17-jdk-headless  # javac: the jar of our message types that lcm-spy decodes with
   iproute2 util-linux      # ip, unshare, taskset: the demo's private network namespace, pinning
+  socat                    # demo.sh --viz: the viewer's port from the demo's namespace to the host
   python3-matplotlib       # tools/paper: the experiments' plots
 )
 
