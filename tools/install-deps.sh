@@ -10,11 +10,13 @@ packages=(
   libtinyxml-dev           # SRDF parsing (urdfdom's own XML library)
   libyaml-cpp-dev          # configuration files
   libcli11-dev             # command lines
+  nlohmann-json3-dev       # JSON the programs write (run summaries, experiment results)
   libgtest-dev libgmock-dev  # tests
   libbenchmark-dev         # tools/bench
   libomp-dev               # OpenMP (per-knot parallelism)
   liblcm-dev liblcm-bin    # LCM 1.3: messages, lcm-gen, lcm-logger, lcm-logplayer
   liblcm-java libjchart2d-java  # lcm-spy, and lcm.jar to compile our types for it
+  libboost-dev             # stride-viz: Boost.Beast (HTTP, WebSocket) and Asio, header-only
   openjdk-17-jdk-headless  # javac: the jar of our message types that lcm-spy decodes with
   iproute2 util-linux      # ip, unshare, taskset: the demo's private network namespace, pinning
   python3-matplotlib       # tools/paper: the experiments' plots
