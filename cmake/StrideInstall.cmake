@@ -55,8 +55,11 @@ endforeach()
 # The programs (stride-bench and the tests' helpers stay in the build tree).
 install(TARGETS stride-mpc stride-sim stride-drive stride-teleop stride-log-summary
                 stride-check-dynamics stride-dynamics-demo stride-paper-astronaut
-                stride-paper-large-stride
+                stride-paper-large-stride stride-viz
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# stride-viz's page (viz/web's bundle), when it was built; stride-viz finds it there from bin/.
+install(DIRECTORY ${STRIDE_VIZ_WEB_DIR}/
+  DESTINATION ${CMAKE_INSTALL_DATADIR}/stride/viz/web OPTIONAL)
 # What the programs read: robots (YAML + URDF), controller configurations, drives, plans. A
 # controller YAML names its robot by a relative path (../robots/...), so the tree is kept as is.
 install(DIRECTORY ${STRIDE_ROOT}/config/robots ${STRIDE_ROOT}/config/controller

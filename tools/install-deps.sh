@@ -16,6 +16,7 @@ packages=(
   libomp-dev               # OpenMP (per-knot parallelism)
   liblcm-dev liblcm-bin    # LCM 1.3: messages, lcm-gen, lcm-logger, lcm-logplayer
   liblcm-java libjchart2d-java  # lcm-spy, and lcm.jar to compile our types for it
+  libboost-dev             # stride-viz: Boost.Beast (HTTP, WebSocket) and Asio, header-only
   openjdk-17-jdk-headless  # javac: the jar of our message types that lcm-spy decodes with
   iproute2 util-linux      # ip, unshare, taskset: the demo's private network namespace, pinning
   socat                    # demo.sh --viz: the viewer's port from the demo's namespace to the host

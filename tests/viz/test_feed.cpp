@@ -1,0 +1,227 @@
+// What stride-viz makes of messages (viz/server/feed.hpp, frames.hpp, wire.hpp, robot_files.hpp):
+// malformed bytes on every channel are counted by reason and change nothing; the frames of a real
+// session hold what the page draws; estimated forces carry the robot's weight; the URDF the page
+// gets names no file outside the server.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <lcm/lcm-cpp.hpp>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "viz/server/feed.hpp"
+#include "viz/server/log_document.hpp"
+#include "viz/server/robot_files.hpp"
+#include "viz_cases.hpp"
+
+namespace stride::viz {
+namespace {
+
+using namespace stride::viz::test;
+
+RobotSource quadSource() {
+  RobotSource s;
+  s.yaml = quadYaml();
+  return s;
+}
+
+void take(Feed& feed, const std::string& channel, const std::vector<unsigned char>& bytes) {
+  feed.take(channel, bytes.data(), static_cast<int>(bytes.size()));
+}
+
+// Big-endian int32 written at `at` (a count field of an encoded message).
+void poke32(std::vector<unsigned char>& buf, std::size_t at, std::int32_t value) {
+  std::uint32_t u;
+  std::memcpy(&u, &value, 4);
+  for (int i = 0; i < 4; ++i) buf[at + i] = static_cast<unsigned char>(u >> (24 - 8 * i));
+}
+
+TEST(Feed, MalformedMessagesOnEveryChannelAreCountedAndDropped) {
+  Feed feed(Channels{}, quadSource());
+  const Channels ch;
+  const std::vector<unsigned char> garbage = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13};
+  for (const std::string& c : ch.all()) {
+    take(feed, c, garbage);
+    take(feed, c, {});
+  }
+  // A state of another robot (hash), a NaN, a broken quaternion, too many contact flags.
+  robot_state_t s = standingState(1000);
+  s.model_hash ^= 1;
+  take(feed, ch.state, encode(s));
+  s = standingState(1000);
+  s.q[8] = std::numeric_limits<double>::quiet_NaN();
+  take(feed, ch.state, encode(s));
+  s = standingState(1000);
+  s.q[6] = 0.5;
+  take(feed, ch.state, encode(s));
+  s = standingState(1000);
+  s.ncontacts = 9;
+  s.contact.resize(9, 1);
+  take(feed, ch.state, encode(s));
+  // A model whose joint count claims 2^31 (its decoder would size a vector by it).
+  std::vector<unsigned char> model = encode(quadModel());
+  const std::size_t njoints_at = 8 + 4 + quad().name.size() + 1 + 8 + 12;
+  poke32(model, njoints_at, std::numeric_limits<std::int32_t>::max());
+  take(feed, ch.model, model);
+  // A model string whose length is 0 or negative.
+  model = encode(quadModel());
+  poke32(model, 8, 0);
+  take(feed, ch.model, model);
+  poke32(model, 8, -5);
+  take(feed, ch.model, model);
+  // A horizon claiming 2^31 knots, one with a NaN force, one with a mask of a fifth contact.
+  std::vector<unsigned char> h = encode(standingHorizon(1000, 20));
+  poke32(h, 8 + 16, std::numeric_limits<std::int32_t>::max());
+  take(feed, ch.horizon, h);
+  horizon_t bad = standingHorizon(1000, 20);
+  bad.force[3][2] = std::numeric_limits<double>::infinity();
+  take(feed, ch.horizon, encode(bad));
+  bad = standingHorizon(1000, 20);
+  bad.contact_mask[5] = 0b10000;
+  take(feed, ch.horizon, encode(bad));
+  // A status whose last string's length runs past the end, and one stamped negative.
+  mpc_status_t st{};
+  st.gait = "trot";
+  std::vector<unsigned char> status = encode(st);
+  poke32(status, status.size() - 32 - 5 - 4, 1000);  // gait: length, "trot\0", then 4 int64
+  take(feed, ch.status, status);
+  st.utime = -1;
+  take(feed, ch.status, encode(st));
+  // A command with a NaN.
+  command_t cmd{};
+  cmd.vx = std::numeric_limits<double>::quiet_NaN();
+  take(feed, ch.command, encode(cmd));
+
+  for (const std::string& c : ch.all()) EXPECT_EQ(feed.accepted(c), 0) << c;
+  EXPECT_EQ(feed.rejected(ch.state), 2 + 4);
+  EXPECT_EQ(feed.rejected(ch.model), 2 + 3);
+  EXPECT_EQ(feed.rejected(ch.horizon), 2 + 3);
+  EXPECT_EQ(feed.rejected(ch.status), 2 + 2);
+  EXPECT_EQ(feed.rejected(ch.command), 2 + 1);
+  const Json counters = feed.counters()["channels"];
+  EXPECT_EQ(counters[ch.state]["rejected"]["another robot's model (hash or sizes)"], 1);
+  EXPECT_EQ(counters[ch.state]["rejected"]["base quaternion not unit"], 1);
+  EXPECT_EQ(counters[ch.horizon]["rejected"]["non-finite value"], 1);
+  EXPECT_TRUE(feed.frame(FrameKind::State).is_null());
+  EXPECT_TRUE(feed.frame(FrameKind::Plan).is_null());
+  EXPECT_TRUE(feed.frame(FrameKind::Status).is_null());
+
+  // Good messages still go through after all that.
+  take(feed, ch.model, encode(quadModel()));
+  take(feed, ch.state, encode(standingState(2000)));
+  take(feed, ch.horizon, encode(standingHorizon(2000, 20)));
+  EXPECT_EQ(feed.accepted(ch.model), 1);
+  EXPECT_EQ(feed.accepted(ch.state), 1);
+  EXPECT_EQ(feed.accepted(ch.horizon), 1);
+  const Json state = feed.frame(FrameKind::State);
+  ASSERT_FALSE(state.is_null());
+  EXPECT_EQ(state["q"].size(), 19u);
+  EXPECT_EQ(state["forces"], Json::array());  // no policy yet
+}
+
+TEST(Feed, StatesBeforeTheRobotIsKnownAreDropped) {
+  RobotSource none;
+  none.config_dirs = {"/nonexistent"};
+  Feed feed(Channels{}, none);
+  take(feed, Channels{}.state, encode(standingState(1000)));
+  EXPECT_EQ(feed.rejected(Channels{}.state), 1);
+  EXPECT_TRUE(feed.modelFrame().is_null());
+  // The model names a robot that is not in the config folders: said, counted, nothing loaded.
+  take(feed, Channels{}.model, encode(quadModel()));
+  EXPECT_EQ(feed.rejected(Channels{}.model), 1);
+  ASSERT_EQ(feed.warnings().size(), 1u);
+  EXPECT_NE(feed.warnings()[0].find("stride_quad"), std::string::npos);
+}
+
+TEST(Feed, TheRobotIsFoundByTheNameOnTheWire) {
+  RobotSource by_name;
+  by_name.config_dirs = {"/nonexistent", STRIDE_CONFIG_DIR};
+  Feed feed(Channels{}, by_name);
+  take(feed, Channels{}.model, encode(quadModel()));
+  ASSERT_NE(feed.robot(), nullptr);
+  EXPECT_EQ(feed.robot()->name, "stride_quad");
+  const Json model = feed.modelFrame();
+  EXPECT_EQ(model["nq"], 19);
+  EXPECT_EQ(model["joints"].size(), 13u);
+  EXPECT_EQ(model["contacts"].size(), 4u);
+  EXPECT_EQ(model["floating"], true);
+  EXPECT_FALSE(model.contains("warning"));
+  EXPECT_TRUE(feed.warnings().empty());
+}
+
+TEST(Feed, AHorizonGivesFeetFootholdsAndPlannedForces) {
+  Feed feed(Channels{}, quadSource());
+  take(feed, Channels{}.horizon, encode(standingHorizon(5000000, 30)));
+  const Json plan = feed.frame(FrameKind::Plan);
+  ASSERT_FALSE(plan.is_null());
+  EXPECT_DOUBLE_EQ(plan["t"].get<double>(), 5.0);
+  ASSERT_EQ(plan["base"].size(), 30u);
+  EXPECT_NEAR(plan["base"][29][0].get<double>(), 0.029, 1e-9);
+  ASSERT_EQ(plan["feet"].size(), 30u);
+  ASSERT_EQ(plan["feet"][0].size(), 4u);
+  for (const Json& foot : plan["feet"][0]) EXPECT_NEAR(foot[2].get<double>(), 0.0, 1e-6);
+  // Stances start at knot 0 (all four) and at knot 20 (the two that lifted at knot 10).
+  ASSERT_EQ(plan["footholds"].size(), 6u);
+  EXPECT_EQ(plan["footholds"][4][3], 1);
+  EXPECT_EQ(plan["footholds"][5][3], 2);
+  EXPECT_NEAR(plan["footholds"][4][0].get<double>(), plan["feet"][20][1][0].get<double>(), 1e-9);
+  ASSERT_EQ(plan["forces"].size(), 4u);
+  EXPECT_DOUBLE_EQ(plan["forces"][0][2].get<double>(), 6.0);
+  EXPECT_TRUE(feed.frame(FrameKind::Plan).is_null());  // framed once
+}
+
+// The session log (stride-drive: the quadruped stands, then trots): the state frames of the
+// standing second carry forces whose vertical sum is the robot's weight, within what its
+// accelerations allow.
+TEST(Feed, EstimatedForcesOfAStandingRobotCarryItsWeight) {
+  const std::string log = sessionLog();
+  ASSERT_FALSE(log.empty());
+  Feed feed(Channels{}, quadSource());
+  const LogDocument doc = readLog(log, feed, {}, Json::object());
+  const double weight = quad().model.totalMass() * 9.81;
+  int standing = 0;
+  double t0 = -1;
+  for (const Json& f : doc.document["frames"]) {
+    if (f["type"] != "state") continue;
+    if (t0 < 0) t0 = f["t"].get<double>();
+    if (f["forces"].empty() || f["t"].get<double>() - t0 > 0.9) continue;
+    double fz = 0;
+    for (const Json& force : f["forces"]) fz += force[2].get<double>();
+    EXPECT_NEAR(fz, weight, 0.25 * weight) << "t " << f["t"];
+    ++standing;
+  }
+  EXPECT_GE(standing, 50);
+  EXPECT_GT(feed.counters()["forces"]["estimated"].get<long>(), 0);
+}
+
+TEST(RobotFiles, TheUrdfNamesOnlyTheServersUrls) {
+  Robot solo = loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/solo12/solo12.yaml",
+                         {STRIDE_ROBOT_PACKAGES});
+  const RobotFiles files = rewriteUrdf(solo.urdf_path, {STRIDE_ROBOT_PACKAGES});
+  EXPECT_EQ(files.urdf.find("package://"), std::string::npos);
+  ASSERT_FALSE(files.files.empty());
+  for (std::size_t i = 0; i < files.files.size(); ++i) {
+    const std::string url = robotFileUrl(static_cast<int>(i), files.files[i]);
+    EXPECT_NE(files.urdf.find("filename=\"" + url + "\""), std::string::npos) << url;
+    EXPECT_EQ(files.files[i].url_name.find('/'), std::string::npos);
+  }
+  // Every file named once, whatever the number of links using it.
+  for (std::size_t i = 0; i < files.files.size(); ++i)
+    for (std::size_t j = i + 1; j < files.files.size(); ++j)
+      EXPECT_NE(files.files[i].name, files.files[j].name);
+  // The URDF is still one urdfdom reads: the same robot.
+  EXPECT_NE(files.urdf.find("<robot"), std::string::npos);
+}
+
+TEST(RobotFiles, ANameFromTheWireNeverLeavesTheConfigFolders) {
+  const std::vector<std::string> dirs = {STRIDE_CONFIG_DIR};
+  EXPECT_EQ(findRobotYaml("stride_quad", dirs), quadYaml());
+  std::vector<std::string> tried;
+  for (const char* name : {"../stride_quad", "stride_quad/../stride_quad", "", ".", "a b"}) {
+    EXPECT_EQ(findRobotYaml(name, dirs, &tried), "") << name;
+  }
+  EXPECT_TRUE(tried.empty());  // refused before looking anywhere
+}
+
+}  // namespace
+}  // namespace stride::viz

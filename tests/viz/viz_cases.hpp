@@ -1,0 +1,89 @@
+#pragma once
+// What the viewer's tests share: the robot, its wire model, messages of each kind encoded as they
+// travel, and the session log (made by the ctest fixture viz_session_log with stride-drive, or here
+// when a test binary runs alone).
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "config/model_hash.hpp"
+#include "config/robot_config.hpp"
+#include "controller/mpc_node.hpp"
+#include "messages/validate.hpp"
+#include "stride/horizon_t.hpp"
+#include "stride/mpc_status_t.hpp"
+#include "stride/robot_model_t.hpp"
+
+namespace stride::viz::test {
+
+inline std::string quadYaml() {
+  return std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml";
+}
+
+inline const Robot& quad() {
+  static const Robot robot = loadRobot(quadYaml());
+  return robot;
+}
+
+template <typename Message>
+std::vector<unsigned char> encode(const Message& m) {
+  std::vector<unsigned char> buf(static_cast<std::size_t>(m.getEncodedSize()));
+  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  return buf;
+}
+
+inline robot_model_t quadModel() {
+  return robotModelMessage(quad(), quad().model.nv - 6);
+}
+
+inline robot_state_t standingState(std::int64_t utime) {
+  const Robot& r = quad();
+  robot_state_t s;
+  msg::shape(s, r.model.nq, r.model.nv, static_cast<int>(r.contacts.size()));
+  s.utime = utime;
+  s.model_hash = modelHash(r);
+  for (int i = 0; i < r.model.nq; ++i) s.q[i] = r.default_q[i];
+  for (auto& c : s.contact) c = 1;
+  return s;
+}
+
+// A horizon of `knots` knots standing still, feet alternating in pairs every 10 knots.
+inline horizon_t standingHorizon(std::int64_t utime, int knots) {
+  const Robot& r = quad();
+  const int nc = static_cast<int>(r.contacts.size());
+  horizon_t h;
+  h.utime = utime;
+  h.model_hash = modelHash(r);
+  h.knots = knots;
+  h.nq = r.model.nq;
+  h.ncontacts = nc;
+  h.nf = 3 * nc;
+  for (int k = 0; k < knots; ++k) {
+    h.t.push_back(0.01 * k);
+    h.q.emplace_back(r.default_q.data(), r.default_q.data() + r.model.nq);
+    h.q.back()[0] = 0.001 * k;
+    h.contact_mask.push_back((k / 10) % 2 ? 0b1001 : 0b1111);
+    std::vector<double> f(3 * nc, 0.0);
+    for (int c = 0; c < nc; ++c) f[3 * c + 2] = 6.0 + k;
+    h.force.push_back(f);
+  }
+  return h;
+}
+
+inline std::string sessionLog() {
+  const std::string log = STRIDE_VIZ_LOG;
+  if (!std::filesystem::exists(log)) {
+    std::filesystem::create_directories(std::filesystem::path(log).parent_path());
+    const std::string config = STRIDE_CONFIG_DIR;
+    const std::string cmd = std::string(STRIDE_DRIVE_BIN) + " --config " + config +
+                            "/controller/stride_quad.yaml --commands " + config +
+                            "/commands/stride_quad.yaml --duration 2 --log " + log + " > /dev/null";
+    if (std::system(cmd.c_str()) != 0) return "";
+  }
+  return log;
+}
+
+}  // namespace stride::viz::test

@@ -1,0 +1,272 @@
+#include "viz/server/frames.hpp"
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <type_traits>
+#include <utility>
+
+#include "config/model_hash.hpp"
+#include "messages/validate.hpp"
+#include "solver/contact/knot_dynamics.hpp"
+#include "solver/multibody/frames.hpp"
+#include "solver/multibody/kinematics.hpp"
+
+namespace stride::viz {
+
+namespace {
+
+// Micrometres, microradians, micronewtons and microseconds are far below what the page can show;
+// rounding there keeps the frames short (the JSON writer prints the shortest exact decimal).
+double r6(double x) {
+  return std::abs(x) < 1e9 ? std::round(x * 1e6) / 1e6 : x;
+}
+
+Json vec3(const Eigen::Vector3d& p) {
+  return Json::array({r6(p.x()), r6(p.y()), r6(p.z())});
+}
+
+Json numbers(const double* x, int n) {
+  Json a = Json::array();
+  for (int i = 0; i < n; ++i) a.push_back(r6(x[i]));
+  return a;
+}
+
+std::string hashText(std::int64_t hash) {
+  char text[17];
+  msg::formatHash(hash, text);
+  return text;
+}
+
+// A configuration from the wire with its base quaternion renormalized: the checks accept 1e-4
+// off unit, forward kinematics wants a rotation.
+void configuration(const Model& model, const std::vector<double>& in, Eigen::VectorXd& q) {
+  q = Eigen::Map<const Eigen::VectorXd>(in.data(), model.nq);
+  if (model.hasFreeFlyer()) q.segment<4>(3).normalize();
+}
+
+// horizon_t is gaining impulse[knots] (touch-down knots, whose `force` holds an impulse [N s]):
+// read it when the generated type has it, so that planned forces never show an impulse as a force.
+template <typename H, typename = void>
+struct HasImpulse : std::false_type {};
+template <typename H>
+struct HasImpulse<H, std::void_t<decltype(std::declval<const H&>().impulse)>> : std::true_type {};
+
+template <typename H>
+bool isImpulseKnot([[maybe_unused]] const H& horizon, [[maybe_unused]] int k) {
+  if constexpr (HasImpulse<H>::value)
+    return k < static_cast<int>(horizon.impulse.size()) && horizon.impulse[k] != 0;
+  else
+    return false;
+}
+
+// Every contact of the robot, forces in world axes (LOCAL_WORLD_ALIGNED), without Baumgarte terms:
+// a measured state is not integrated, so the rigid constraint itself (no contact acceleration) is
+// the estimate.
+ContactSet worldAlignedContacts(const Robot& robot) {
+  ContactSet contacts;
+  for (const ContactSpec& c : robot.contacts)
+    contacts.add(robot.model, c.frame, c.dim, ReferenceFrame::LocalWorldAligned);
+  return contacts;
+}
+
+}  // namespace
+
+FrameBuilder::FrameBuilder(const Robot& robot)
+    : robot_(robot),
+      nu_(actuatedDimension(robot.model)),
+      data_(robot.model),
+      contacts_(worldAlignedContacts(robot)),
+      contact_data_(robot.model, contacts_),
+      evaluator_(robot.model, nu_) {
+  q_ = robot.default_q;
+  v_.setZero(robot.model.nv);
+  u_.setZero(nu_);
+  tau_.setZero(robot.model.nv);
+  feet_.resize(robot.contacts.size(), Eigen::Vector3d::Zero());
+}
+
+FrameBuilder::~FrameBuilder() = default;
+
+Json FrameBuilder::model(const robot_model_t* wire) const {
+  Json frame = {{"type", "model"}, {"urdf", "/robot.urdf"}};
+  Json joints = Json::array(), contacts = Json::array();
+  if (wire != nullptr) {
+    for (int j = 0; j < wire->njoints; ++j)
+      joints.push_back({{"name", wire->joint_names[j]},
+                        {"type", wire->joint_types[j]},
+                        {"idx_q", wire->joint_idx_q[j]},
+                        {"idx_v", wire->joint_idx_v[j]}});
+    for (const std::string& c : wire->contact_frames) contacts.push_back(c);
+    frame.update({{"robot", wire->robot},
+                  {"model_hash", hashText(wire->model_hash)},
+                  {"nq", wire->nq},
+                  {"nv", wire->nv},
+                  {"nu", wire->nu},
+                  {"floating", wire->njoints > 0 && wire->joint_types[0] == "free-flyer"}});
+  } else {
+    for (const WireJoint& j : wireJoints(robot_.model))
+      joints.push_back(
+          {{"name", j.name}, {"type", j.type}, {"idx_q", j.idx_q}, {"idx_v", j.idx_v}});
+    for (const ContactSpec& c : robot_.contacts) contacts.push_back(c.frame);
+    frame.update({{"robot", robot_.name},
+                  {"model_hash", hashText(modelHash(robot_))},
+                  {"nq", robot_.model.nq},
+                  {"nv", robot_.model.nv},
+                  {"nu", nu_},
+                  {"floating", robot_.model.hasFreeFlyer()}});
+  }
+  frame["joints"] = std::move(joints);
+  frame["contacts"] = std::move(contacts);
+  return frame;
+}
+
+void FrameBuilder::setPolicy(const policy_t& p) {
+  const Model& model = robot_.model;
+  if (policy_.knots != p.knots) policy_.resize(p.knots, model.nq, model.nv, nu_);
+  // Times relative to knot 0: wall-clock stamps (~1.7e15 us) would cost the interpolation its
+  // sub-microsecond resolution in double seconds.
+  policy_.t0 = 0.0;
+  policy_.dt = p.dt;
+  for (int k = 0; k < p.knots; ++k) {
+    std::copy(p.x_ref[k].begin(), p.x_ref[k].end(), policy_.xRef(k));
+    std::copy(p.u_ff[k].begin(), p.u_ff[k].end(), policy_.uFf(k));
+    std::copy(p.K[k].begin(), p.K[k].end(), policy_.gain(k));
+  }
+  policy_knot0_utime_ = p.knot0_utime;
+  have_policy_ = true;
+}
+
+bool FrameBuilder::estimateForces(const robot_state_t& state, Json& forces) {
+  const Model& model = robot_.model;
+  const int nc = contacts_.size();
+  if (!have_policy_) {
+    ++force_counts_.no_policy;
+    return false;
+  }
+  if (state.ncontacts != nc) {
+    ++force_counts_.no_contact_flags;
+    return false;
+  }
+  const double t = static_cast<double>(state.utime - policy_knot0_utime_) * 1e-6;
+  if (evaluator_.evaluate(policy_, t, q_, v_, u_) == sim::PolicyStatus::Invalid) {
+    ++force_counts_.failed;
+    return false;
+  }
+  // τ = [0_6; u] for a floating base, u for a fixed one (solver/contact/knot_dynamics.hpp).
+  tau_.setZero();
+  tau_.tail(nu_) = u_;
+  for (int c = 0; c < nc; ++c) contacts_.setActive(c, state.contact[c] != 0);
+  if (contactDynamics(model, data_, contacts_, contact_data_, q_, v_, tau_) != ContactStatus::Ok) {
+    ++force_counts_.failed;
+    return false;
+  }
+  int row = 0;  // λ stacks the active contacts in order, each `dim` rows, force part first
+  for (int c = 0; c < nc; ++c) {
+    Eigen::Vector3d f = Eigen::Vector3d::Zero();
+    if (contacts_.isActive(c)) {
+      f = contact_data_.lambda.segment<3>(row);
+      row += contacts_[c].dim;
+    }
+    forces.push_back(vec3(f));
+  }
+  ++force_counts_.estimated;
+  return true;
+}
+
+Json FrameBuilder::state(const robot_state_t& state) {
+  const Model& model = robot_.model;
+  configuration(model, state.q, q_);
+  v_ = Eigen::Map<const Eigen::VectorXd>(state.v.data(), model.nv);
+  Json contact = Json::array(), forces = Json::array();
+  for (std::int8_t c : state.contact) contact.push_back(static_cast<int>(c));
+  if (!estimateForces(state, forces)) forces = Json::array();
+  return {{"type", "state"},
+          {"t", r6(static_cast<double>(state.utime) * 1e-6)},
+          {"q", numbers(q_.data(), model.nq)},
+          {"contact", std::move(contact)},
+          {"forces", std::move(forces)}};
+}
+
+void FrameBuilder::feetAt(const Eigen::VectorXd& q) {
+  forwardKinematics(robot_.model, data_, q);
+  for (std::size_t c = 0; c < feet_.size(); ++c)
+    feet_[c] = updateFramePlacement(robot_.model, data_, contacts_[static_cast<int>(c)].frame).p;
+}
+
+Json FrameBuilder::planFrom(double t, const std::vector<const std::vector<double>*>& qs,
+                            const std::vector<std::int32_t>& masks, Json forces) {
+  const Model& model = robot_.model;
+  const int nc = static_cast<int>(feet_.size());
+  Json base = Json::array(), feet = Json::array(), footholds = Json::array();
+  for (std::size_t k = 0; k < qs.size(); ++k) {
+    configuration(model, *qs[k], q_);
+    feetAt(q_);
+    base.push_back(model.hasFreeFlyer() ? vec3(q_.head<3>()) : vec3(Eigen::Vector3d::Zero()));
+    Json knot = Json::array();
+    for (int c = 0; c < nc; ++c) knot.push_back(vec3(feet_[c]));
+    feet.push_back(std::move(knot));
+    // A stance starts at knot k when contact c is closed there and was not at k - 1 (or k = 0).
+    // Knots without a known mask start nothing.
+    if (k >= masks.size()) continue;
+    for (int c = 0; c < nc; ++c) {
+      const bool closed = (masks[k] >> c) & 1;
+      const bool before = k > 0 && ((masks[k - 1] >> c) & 1);
+      if (closed && !before)
+        footholds.push_back(
+            {r6(feet_[c].x()), r6(feet_[c].y()), r6(feet_[c].z()), static_cast<int>(c)});
+    }
+  }
+  return {{"type", "plan"},
+          {"t", r6(t)},
+          {"base", std::move(base)},
+          {"feet", std::move(feet)},
+          {"footholds", std::move(footholds)},
+          {"forces", std::move(forces)}};
+}
+
+Json FrameBuilder::plan(const horizon_t& h) {
+  std::vector<const std::vector<double>*> qs;
+  for (const std::vector<double>& q : h.q) qs.push_back(&q);
+  // The planned forces now: knot 0's, or the first knot after it that is not a touch-down's
+  // impulse.
+  Json forces = Json::array();
+  for (int k = 0; k < h.knots; ++k) {
+    if (isImpulseKnot(h, k)) continue;
+    for (int c = 0; c < h.ncontacts; ++c)
+      forces.push_back(vec3(Eigen::Map<const Eigen::Vector3d>(h.force[k].data() + 3 * c)));
+    break;
+  }
+  return planFrom(static_cast<double>(h.utime) * 1e-6, qs, h.contact_mask, std::move(forces));
+}
+
+Json FrameBuilder::plan(const policy_t& p) {
+  std::vector<const std::vector<double>*> qs;
+  for (const std::vector<double>& x : p.x_ref) qs.push_back(&x);  // q is x's head
+  return planFrom(static_cast<double>(p.knot0_utime) * 1e-6, qs, {p.phase}, Json::array());
+}
+
+Json FrameBuilder::status(const mpc_status_t& s, const command_t* requested) {
+  Json frame = {{"type", "status"},
+                {"t", r6(static_cast<double>(s.utime) * 1e-6)},
+                {"tick", s.tick},
+                {"tick_ms", r6(s.tick_ms)},
+                {"solve_ms", r6(s.solve_ms)},
+                {"cost", s.cost},
+                {"iterations", s.iterations},
+                {"solver_status", s.solver_status},
+                {"policy_status", static_cast<int>(s.policy_status)},
+                {"deadline_misses", s.deadline_misses},
+                {"rejected", s.rejected_messages},
+                {"wrong_model", s.wrong_model},
+                {"gait", s.gait},
+                {"command", numbers(s.command, 4)}};
+  if (requested != nullptr)
+    frame["requested"] = {{"vx", r6(requested->vx)},
+                          {"vy", r6(requested->vy)},
+                          {"yaw_rate", r6(requested->yaw_rate)},
+                          {"gait", requested->gait},
+                          {"body_height", r6(requested->body_height)}};
+  return frame;
+}
+
+}  // namespace stride::viz

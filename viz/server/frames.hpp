@@ -1,0 +1,81 @@
+#pragma once
+// LCM messages -> the JSON frames the page draws (viz/README.md, "Frames"), computed with
+// Stride's own libraries: forward kinematics of the contact frames along a predicted trajectory,
+// and the contact forces at a measured state estimated with the KKT contact dynamics (paper eq. 10,
+// solver/contact) under the torque the robot applies there (sim/policy.hpp). Every input is a
+// message that already passed its checks (messages/validate.hpp, viz/server/wire.hpp) for the
+// robot given here.
+
+#include <cstdint>
+#include <nlohmann/json_fwd.hpp>
+
+#include "config/robot_config.hpp"
+#include "sim/policy.hpp"
+#include "solver/contact/contact_dynamics.hpp"
+#include "stride/command_t.hpp"
+#include "stride/horizon_t.hpp"
+#include "stride/mpc_status_t.hpp"
+#include "stride/policy_t.hpp"
+#include "stride/robot_model_t.hpp"
+#include "stride/robot_state_t.hpp"
+
+namespace stride::viz {
+
+using Json = nlohmann::json;
+
+// How the state frames' forces went: "forces" is [] unless estimated.
+struct ForceCounts {
+  long estimated = 0;
+  long no_policy = 0;         // no policy yet: no torque to estimate with
+  long no_contact_flags = 0;  // the state reports no contact flags: which contacts hold is unknown
+  long failed = 0;            // the contact solve failed (singular, non-finite)
+};
+
+class FrameBuilder {
+ public:
+  // Keeps a reference to `robot`: it must outlive the builder.
+  explicit FrameBuilder(const Robot& robot);
+  ~FrameBuilder();
+
+  // {"type":"model",...}: from the controller's robot_model_t when given, else from the robot.
+  Json model(const robot_model_t* wire) const;
+
+  // The policy the robot applies from now on: the state frames' forces use its torque.
+  void setPolicy(const policy_t& policy);
+  bool hasPolicy() const { return have_policy_; }
+
+  // {"type":"state","t","q","contact","forces"}: forces per contact frame, world axes [N], zero
+  // for open contacts, estimated at the state with the policy's torque at the state's time.
+  Json state(const robot_state_t& state);
+  // {"type":"plan","t","base","feet","footholds","forces"} from the controller's horizon.
+  Json plan(const horizon_t& horizon);
+  // The same from a policy's x_ref knots: no contact mask per knot (only at knot 0: footholds of
+  // the stances under way) and no planned forces ([]).
+  Json plan(const policy_t& policy);
+  // {"type":"status",...}; `requested`: the newest command_t seen, if any.
+  static Json status(const mpc_status_t& status, const command_t* requested);
+
+  const ForceCounts& forceCounts() const { return force_counts_; }
+
+ private:
+  // Contact frame positions (world) at configuration q: FK into data_, feet_ filled.
+  void feetAt(const Eigen::VectorXd& q);
+  Json planFrom(double t, const std::vector<const std::vector<double>*>& qs,
+                const std::vector<std::int32_t>& masks, Json forces);
+  bool estimateForces(const robot_state_t& state, Json& forces);
+
+  const Robot& robot_;
+  int nu_;
+  Data data_;
+  ContactSet contacts_;
+  ContactData contact_data_;
+  sim::PolicyEvaluator evaluator_;
+  sim::Policy policy_;
+  std::int64_t policy_knot0_utime_ = 0;
+  bool have_policy_ = false;
+  Eigen::VectorXd q_, v_, u_, tau_;
+  std::vector<Eigen::Vector3d> feet_;
+  ForceCounts force_counts_;
+};
+
+}  // namespace stride::viz
