@@ -179,7 +179,7 @@ class Viewer {
     if (!this.robot) {
       if (!this.robotLoading) {
         this.robotLoading = loadRobot(model.urdf || 'robot.urdf',
-                                      (w) => this.status.warn(`mesh:${w}`, w));
+                                      (w) => this.status.warn('meshes', w));
       }
       let robot;
       try {

@@ -66,7 +66,9 @@ export class SceneView {
     const center = box.getCenter(new THREE.Vector3());
     const size = box.getSize(new THREE.Vector3());
     const radius = Math.max(0.1, 0.5 * size.length());
-    const fov = THREE.MathUtils.degToRad(this.camera.fov);
+    // The narrower of the vertical and horizontal fields of view.
+    const vfov = THREE.MathUtils.degToRad(this.camera.fov);
+    const fov = Math.min(vfov, 2 * Math.atan(Math.tan(vfov / 2) * this.camera.aspect));
     const distance = (radius / Math.sin(fov / 2)) * 1.6;
     const dir = new THREE.Vector3(0.75, -1.0, 0.55).normalize();
     this.controls.target.copy(center);

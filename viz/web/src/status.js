@@ -82,8 +82,8 @@ export class StatusLine {
   warn(key, text) {
     if (text) {
       if (this.warnings.get(key) === text) return;
+      if (!this.warnings.has(key)) console.warn(`stride-viz: ${text}`);
       this.warnings.set(key, text);
-      console.warn(`stride-viz: ${text}`);
     } else if (!this.warnings.delete(key)) {
       return;
     }
