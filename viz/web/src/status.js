@@ -24,7 +24,10 @@ export class StatusLine {
 
   setInfo(info) {
     this.info = info;
-    this.warn('info', info.warning || null);
+    // stride-viz's warnings (the model hash of the messages against the robot it loaded, ...):
+    // `warnings`, a list, or `warning`, one text.
+    const list = [].concat(info.warnings ?? [], info.warning ?? []).filter((w) => w);
+    this.warn('info', list.length ? list.join(' · ') : null);
     this.paintMode();
     this.paintCounters(null);
   }
