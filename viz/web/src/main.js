@@ -88,7 +88,7 @@ class Viewer {
     const model = doc.model ?? frames.find((f) => f.type === 'model');
     if (!model) throw new Error('the log has no robot model');
     await this.setModel(model);
-    // The arrows' scale from the largest force of the whole log (live mode: the first forces).
+    // The arrows' scale from the whole log's forces (live mode: the first that come).
     this.overlays.fixScale([...this.states.frames, ...this.plans.frames].map((f) => f.forces));
     let t0 = Infinity;
     let t1 = -Infinity;

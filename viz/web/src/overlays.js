@@ -101,16 +101,22 @@ export class Overlays {
     this.feetPaths.length = names.length;
   }
 
-  /** Chooses the arrow scale once, from the largest of the forces given (the first that come
-   *  in live mode, the whole log's in log mode): that force is drawn at most 0.6 robot size
-   *  long; the scale is a round number of m/N. */
+  /** Chooses the arrow scale once, from the forces given (the whole log's in log mode, the
+   *  first that come in live mode): the 95th percentile of their norms is drawn half a robot
+   *  size long, rounded down to 1, 2 or 5 x 10^k m/N (impacts may be longer). */
   fixScale(forceLists) {
     if (this.scale !== null) return;
-    let max = 0;
+    const norms = [];
     for (const list of forceLists) {
-      for (const f of list ?? []) max = Math.max(max, Math.hypot(f[0], f[1], f[2]));
+      for (const f of list ?? []) {
+        const n = Math.hypot(f[0], f[1], f[2]);
+        if (n > 1e-9) norms.push(n);
+      }
     }
-    if (max > 1e-9) this.scale = niceBelow((0.6 * this.size) / max);
+    if (norms.length === 0) return;
+    norms.sort((a, b) => a - b);
+    const typical = norms[Math.floor(0.95 * (norms.length - 1))];
+    this.scale = niceBelow((0.5 * this.size) / typical);
   }
 
   /** The legend's scale line, e.g. "0.1 m = 20 N"; null before the scale is known. */
