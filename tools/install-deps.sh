@@ -21,10 +21,15 @@ packages=(
   iproute2 util-linux      # ip, unshare, taskset: the demo's private network namespace, pinning
   socat                    # demo.sh --viz: the viewer's port from the demo's namespace to the host
   python3-matplotlib       # tools/paper: the experiments' plots
+  nodejs npm               # viz/web: npm ci (the lock file's packages) and esbuild build stride-viz's page
+  chromium                 # viz/web/test: the page's browser test, headless
 )
 
 missing=()
 for p in "${packages[@]}"; do
+  # A Node.js from elsewhere than Debian (NodeSource's nodejs) brings its own npm and conflicts
+  # with Debian's npm package: an npm on the PATH is enough.
+  if [ "$p" = npm ] && command -v npm >/dev/null; then continue; fi
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if [ ${#missing[@]} -eq 0 ]; then

@@ -1,0 +1,105 @@
+// The 3D view: renderer, a z-up world (the robot's: x forward, z up), lights, the ground grid,
+// the camera with OrbitControls, framing the robot and following it.
+
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+
+export class SceneView {
+  constructor(container) {
+    this.container = container;
+    this.renderer = new THREE.WebGLRenderer({ antialias: true });
+    this.renderer.setPixelRatio(window.devicePixelRatio || 1);
+    container.appendChild(this.renderer.domElement);
+
+    this.scene = new THREE.Scene();
+    this.scene.background = new THREE.Color(0xe9edf1);
+    // The grid fades into the background with distance (set by frame()).
+    this.scene.fog = new THREE.Fog(0xe9edf1, 4, 16);
+
+    this.camera = new THREE.PerspectiveCamera(40, 1, 0.01, 500);
+    this.camera.up.set(0, 0, 1);
+    this.camera.position.set(1.2, -1.6, 0.9);
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.controls.enableDamping = false;
+    this.controls.target.set(0, 0, 0.2);
+    this.controls.update();
+
+    const hemi = new THREE.HemisphereLight(0xffffff, 0x8d8d8d, 2.0);
+    hemi.position.set(0, 0, 1);
+    this.scene.add(hemi);
+    this.sun = new THREE.DirectionalLight(0xffffff, 2.2);
+    this.sun.position.set(2, -3, 5);
+    this.scene.add(this.sun);
+
+    // The ground: 1 m and 0.1 m grids on z = 0, moved in whole metres to stay under the robot.
+    this.ground = new THREE.Group();
+    const fine = new THREE.GridHelper(10, 100, 0xc3c9cf, 0xd3d8dd);
+    const coarse = new THREE.GridHelper(40, 40, 0x8f99a3, 0xa7b0b8);
+    for (const g of [fine, coarse]) {
+      g.rotation.x = Math.PI / 2; // GridHelper lies in x-z; the world is z-up
+      g.material.depthWrite = false;
+      this.ground.add(g);
+    }
+    fine.position.z = -0.0005;
+    this.scene.add(this.ground);
+    const axes = new THREE.AxesHelper(0.15);
+    axes.position.z = 0.0005;
+    this.scene.add(axes);
+
+    this.followTarget = null; // the last followed point (world), or null before the first
+    this.follow = true;
+
+    this.resize();
+    new ResizeObserver(() => this.resize()).observe(container);
+  }
+
+  resize() {
+    const w = Math.max(1, this.container.clientWidth);
+    const h = Math.max(1, this.container.clientHeight);
+    this.renderer.setSize(w, h, false);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+  }
+
+  /** Points the camera at `box` (a THREE.Box3 of the robot) from the front right, above. */
+  frame(box) {
+    const center = box.getCenter(new THREE.Vector3());
+    const size = box.getSize(new THREE.Vector3());
+    const radius = Math.max(0.1, 0.5 * size.length());
+    // The narrower of the vertical and horizontal fields of view.
+    const vfov = THREE.MathUtils.degToRad(this.camera.fov);
+    const fov = Math.min(vfov, 2 * Math.atan(Math.tan(vfov / 2) * this.camera.aspect));
+    const distance = (radius / Math.sin(fov / 2)) * 1.6;
+    const dir = new THREE.Vector3(0.75, -1.0, 0.55).normalize();
+    this.controls.target.copy(center);
+    this.camera.position.copy(center).addScaledVector(dir, distance);
+    this.camera.near = Math.max(0.005, distance / 200);
+    this.camera.far = distance * 200;
+    this.camera.updateProjectionMatrix();
+    this.scene.fog.near = 3 * distance;
+    this.scene.fog.far = 12 * distance;
+    this.controls.update();
+    this.followTarget = center.clone();
+  }
+
+  /** Moves the camera with the robot: the target and the camera shift by the robot's motion,
+   *  keeping the user's angle and distance. The grid moves in whole metres. */
+  followPoint(p) {
+    this.ground.position.set(Math.round(p.x), Math.round(p.y), 0);
+    if (!this.follow) {
+      this.followTarget = null;
+      return;
+    }
+    if (this.followTarget !== null) {
+      const delta = new THREE.Vector3(p.x - this.followTarget.x, p.y - this.followTarget.y, 0);
+      this.controls.target.add(delta);
+      this.camera.position.add(delta);
+      this.controls.update();
+    }
+    this.followTarget = new THREE.Vector3(p.x, p.y, p.z);
+  }
+
+  render() {
+    this.renderer.render(this.scene, this.camera);
+  }
+}

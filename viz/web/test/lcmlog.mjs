@@ -1,0 +1,211 @@
+// An LCM log reader and a decoder of Stride's robot_state_t and robot_model_t in plain JavaScript,
+// written for the browser test from the formats alone (no LCM code, nothing of stride-viz): what
+// the page shows is checked against what this reads from the log.
+//
+// Log file (lcm-logger): a sequence of events, each
+//   uint32 sync word 0xEDA1DA01, int64 event number, int64 timestamp [µs],
+//   int32 channel length, int32 data length, channel (bytes, no NUL), data,
+// all big-endian. A message (data) is an 8-byte type fingerprint followed by the fields in
+// declaration order, big-endian: integers and doubles as they are, a string as int32 length
+// (with its NUL) + bytes + NUL, an array of a member's count as that many elements.
+//
+// The types below are messages/robot_state_t.lcm and messages/robot_model_t.lcm written out as
+// member lists; the fingerprint computed from a list (LCM's hash of member names, primitive type
+// names and dimensions) must equal the one in each message, so a change of the .lcm files that
+// this file does not follow fails loudly instead of decoding garbage.
+
+const SYNC = 0xeda1da01;
+
+/** robot_state_t (messages/robot_state_t.lcm). */
+export const robotStateType = {
+  name: 'robot_state_t',
+  members: [
+    ['utime', 'int64_t'],
+    ['model_hash', 'int64_t'],
+    ['nq', 'int32_t'],
+    ['nv', 'int32_t'],
+    ['q', 'double', ['nq']],
+    ['v', 'double', ['nv']],
+    ['ncontacts', 'int32_t'],
+    ['contact', 'int8_t', ['ncontacts']],
+  ],
+};
+
+/** robot_model_t (messages/robot_model_t.lcm). */
+export const robotModelType = {
+  name: 'robot_model_t',
+  members: [
+    ['robot', 'string'],
+    ['model_hash', 'int64_t'],
+    ['nq', 'int32_t'],
+    ['nv', 'int32_t'],
+    ['nu', 'int32_t'],
+    ['njoints', 'int32_t'],
+    ['joint_names', 'string', ['njoints']],
+    ['joint_types', 'string', ['njoints']],
+    ['joint_idx_q', 'int32_t', ['njoints']],
+    ['joint_idx_v', 'int32_t', ['njoints']],
+    ['ncontacts', 'int32_t'],
+    ['contact_frames', 'string', ['ncontacts']],
+  ],
+};
+
+const MASK64 = (1n << 64n) - 1n;
+
+// One step of LCM's type hash: v = ((v << 8) ^ (v >> 55)) + c on a signed 64-bit integer (the
+// shift right is arithmetic), c a signed char.
+function hashByte(v, c) {
+  const signedV = BigInt.asIntN(64, v);
+  const signedC = BigInt.asIntN(8, BigInt(c));
+  return BigInt.asIntN(64, ((signedV << 8n) ^ (signedV >> 55n)) + signedC);
+}
+
+function hashString(v, s) {
+  const bytes = new TextEncoder().encode(s);
+  v = hashByte(v, bytes.length);
+  for (const b of bytes) v = hashByte(v, b);
+  return v;
+}
+
+/**
+ * The fingerprint of a type of primitive members (no nested struct): the hash of every member's
+ * name, type name and dimensions (mode 0 constant, 1 variable; the size as text), from the seed
+ * 0x12345678, rotated left by one bit. Returned as an unsigned 64-bit BigInt.
+ */
+export function fingerprint(type) {
+  let v = 0x12345678n;
+  for (const [name, primitive, dims = []] of type.members) {
+    v = hashString(v, name);
+    v = hashString(v, primitive);
+    v = hashByte(v, dims.length);
+    for (const d of dims) {
+      const variable = typeof d === 'string' && !/^[0-9]+$/.test(d);
+      v = hashByte(v, variable ? 1 : 0);
+      v = hashString(v, String(d));
+    }
+  }
+  const u = BigInt.asUintN(64, v);
+  return ((u << 1n) | (u >> 63n)) & MASK64;
+}
+
+/** The events of a log file (a Buffer or Uint8Array): {eventNumber, timestamp, channel, data}. */
+export function readLog(bytes) {
+  const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
+  const events = [];
+  let pos = 0;
+  while (pos < bytes.byteLength) {
+    if (bytes.byteLength - pos < 28) throw new Error(`lcmlog: truncated event header at byte ${pos}`);
+    const sync = view.getUint32(pos);
+    if (sync !== SYNC) {
+      throw new Error(`lcmlog: bad sync word 0x${sync.toString(16)} at byte ${pos}`);
+    }
+    const eventNumber = view.getBigInt64(pos + 4);
+    const timestamp = view.getBigInt64(pos + 12);
+    const channelLength = view.getInt32(pos + 20);
+    const dataLength = view.getInt32(pos + 24);
+    pos += 28;
+    if (channelLength < 0 || dataLength < 0 || pos + channelLength + dataLength > bytes.byteLength) {
+      throw new Error(`lcmlog: truncated event ${eventNumber} at byte ${pos - 28}`);
+    }
+    const channel = new TextDecoder().decode(bytes.subarray(pos, pos + channelLength));
+    pos += channelLength;
+    const data = bytes.subarray(pos, pos + dataLength);
+    pos += dataLength;
+    events.push({ eventNumber, timestamp, channel, data });
+  }
+  return events;
+}
+
+/** Decodes one message of `type` (its fingerprint checked); int64 fields come as BigInt. */
+export function decode(type, data) {
+  const view = new DataView(data.buffer, data.byteOffset, data.byteLength);
+  let pos = 0;
+  const need = (n) => {
+    if (pos + n > data.byteLength) throw new Error(`lcmlog: ${type.name} truncated at byte ${pos}`);
+  };
+  need(8);
+  const got = view.getBigUint64(0);
+  const want = fingerprint(type);
+  if (got !== want) {
+    throw new Error(`lcmlog: not a ${type.name}: fingerprint ${got.toString(16)}, ` +
+                    `expected ${want.toString(16)} (messages/${type.name}.lcm changed?)`);
+  }
+  pos = 8;
+  const readOne = (primitive) => {
+    switch (primitive) {
+      case 'int8_t': need(1); return view.getInt8(pos++);
+      case 'int32_t': { need(4); const x = view.getInt32(pos); pos += 4; return x; }
+      case 'int64_t': { need(8); const x = view.getBigInt64(pos); pos += 8; return x; }
+      case 'double': { need(8); const x = view.getFloat64(pos); pos += 8; return x; }
+      case 'string': {
+        need(4);
+        const n = view.getInt32(pos); // bytes with the terminating NUL
+        pos += 4;
+        if (n < 1) throw new Error(`lcmlog: ${type.name}: bad string length ${n}`);
+        need(n);
+        const s = new TextDecoder().decode(data.subarray(pos, pos + n - 1));
+        pos += n;
+        return s;
+      }
+      default: throw new Error(`lcmlog: type ${primitive} not supported`);
+    }
+  };
+  const out = {};
+  for (const [name, primitive, dims = []] of type.members) {
+    const read = (level) => {
+      if (level === dims.length) return readOne(primitive);
+      const d = dims[level];
+      const n = typeof d === 'number' ? d : Number(out[d]);
+      if (!(n >= 0)) throw new Error(`lcmlog: ${type.name}.${name}: bad count ${n}`);
+      const arr = new Array(n);
+      for (let i = 0; i < n; ++i) arr[i] = read(level + 1);
+      return arr;
+    };
+    out[name] = read(0);
+  }
+  if (pos !== data.byteLength) {
+    throw new Error(`lcmlog: ${type.name}: ${data.byteLength - pos} bytes left after the last field`);
+  }
+  return out;
+}
+
+/** A model hash as the 16 hex digits Stride prints (stride-mpc --print-model). */
+export function hashHex(h) {
+  return BigInt.asUintN(64, h).toString(16).padStart(16, '0');
+}
+
+/**
+ * The robot states of a log on `channel`, in log order, each with t = utime * 1e-6 [s] (the
+ * robot's clock, as stride-viz's frames), plus the first robot model on `modelChannel` (null
+ * when the log has none).
+ */
+export function readSession(bytes, { channel = 'STRIDE_STATE', modelChannel = 'STRIDE_MODEL' } = {}) {
+  const states = [];
+  let model = null;
+  for (const e of readLog(bytes)) {
+    if (e.channel === channel) {
+      const s = decode(robotStateType, e.data);
+      s.t = Number(s.utime) * 1e-6;
+      states.push(s);
+    } else if (e.channel === modelChannel && model === null) {
+      model = decode(robotModelType, e.data);
+    }
+  }
+  return { states, model };
+}
+
+/**
+ * The state shown at time t: the newest state whose stamp is at or before t (the first state
+ * when t is before every stamp). `states` sorted by t (a log's order; checked by the caller).
+ */
+export function stateAt(states, t) {
+  let lo = 0;
+  let hi = states.length - 1;
+  if (hi < 0) return null;
+  if (t < states[0].t) return states[0];
+  while (lo < hi) { // invariant: states[lo].t <= t
+    const mid = (lo + hi + 1) >> 1;
+    if (states[mid].t <= t) lo = mid; else hi = mid - 1;
+  }
+  return states[lo];
+}
