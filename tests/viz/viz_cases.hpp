@@ -55,20 +55,15 @@ inline horizon_t standingHorizon(std::int64_t utime, int knots) {
   const Robot& r = quad();
   const int nc = static_cast<int>(r.contacts.size());
   horizon_t h;
+  msg::shape(h, knots, r.model.nq, nc);
   h.utime = utime;
   h.model_hash = modelHash(r);
-  h.knots = knots;
-  h.nq = r.model.nq;
-  h.ncontacts = nc;
-  h.nf = 3 * nc;
   for (int k = 0; k < knots; ++k) {
-    h.t.push_back(0.01 * k);
-    h.q.emplace_back(r.default_q.data(), r.default_q.data() + r.model.nq);
-    h.q.back()[0] = 0.001 * k;
-    h.contact_mask.push_back((k / 10) % 2 ? 0b1001 : 0b1111);
-    std::vector<double> f(3 * nc, 0.0);
-    for (int c = 0; c < nc; ++c) f[3 * c + 2] = 6.0 + k;
-    h.force.push_back(f);
+    h.t[k] = 0.01 * k;
+    h.q[k].assign(r.default_q.data(), r.default_q.data() + r.model.nq);
+    h.q[k][0] = 0.001 * k;
+    h.contact_mask[k] = (k / 10) % 2 ? 0b1001 : 0b1111;
+    for (int c = 0; c < nc; ++c) h.force[k][3 * c + 2] = 6.0 + k;
   }
   return h;
 }

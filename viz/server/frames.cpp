@@ -44,19 +44,9 @@ void configuration(const Model& model, const std::vector<double>& in, Eigen::Vec
   if (model.hasFreeFlyer()) q.segment<4>(3).normalize();
 }
 
-// horizon_t is gaining impulse[knots] (touch-down knots, whose `force` holds an impulse [N s]):
-// read it when the generated type has it, so that planned forces never show an impulse as a force.
-template <typename H, typename = void>
-struct HasImpulse : std::false_type {};
-template <typename H>
-struct HasImpulse<H, std::void_t<decltype(std::declval<const H&>().impulse)>> : std::true_type {};
-
-template <typename H>
-bool isImpulseKnot([[maybe_unused]] const H& horizon, [[maybe_unused]] int k) {
-  if constexpr (HasImpulse<H>::value)
-    return k < static_cast<int>(horizon.impulse.size()) && horizon.impulse[k] != 0;
-  else
-    return false;
+// A touch-down knot's `force` holds an impulse [N s], never shown as a force.
+bool isImpulseKnot(const horizon_t& horizon, int k) {
+  return k < static_cast<int>(horizon.impulse.size()) && horizon.impulse[k] != 0;
 }
 
 // Every contact of the robot, forces in world axes (LOCAL_WORLD_ALIGNED), without Baumgarte terms:
