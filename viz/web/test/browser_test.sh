@@ -18,7 +18,8 @@ fi
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 "$drive" --config "$config/controller/stride_quad.yaml" \
-  --commands "$config/commands/stride_quad.yaml" --duration 3 --log "$dir/session.lcmlog" \
+  --commands "$config/commands/stride_quad.yaml" --duration "${STRIDE_VIZ_LOG_DURATION:-3}" \
+  --log "$dir/session.lcmlog" \
   > "$dir/drive.txt" || { cat "$dir/drive.txt"; exit 1; }
 mkdir -p "$out"
 STRIDE_VIZ_NODE_MODULES="$modules" CHROMIUM="$chromium" \
