@@ -5,20 +5,6 @@
 namespace stride {
 
 namespace {
-const char* wireType(JointType type) {
-  switch (type) {
-    case JointType::FreeFlyer:
-      return "free-flyer";
-    case JointType::Revolute:
-      return "revolute";
-    case JointType::Prismatic:
-      return "prismatic";
-    case JointType::Universe:
-      break;
-  }
-  return "universe";
-}
-
 // FNV-1a, 64-bit (offset basis and prime from the published definition).
 void fnv1a(std::uint64_t& h, const std::string& s) {
   for (const char c : s) {
@@ -33,7 +19,9 @@ std::vector<WireJoint> wireJoints(const Model& model) {
   std::vector<WireJoint> joints;
   for (int i = 1; i < model.njoints(); ++i) {
     const Joint& j = model.joints[i];
-    joints.push_back({j.name, wireType(j.type), j.idx_q, j.idx_v});
+    // toString's names (free-flyer, revolute, prismatic) are the wire's joint types and enter the
+    // hash: renaming one changes every model hash.
+    joints.push_back({j.name, toString(j.type), j.idx_q, j.idx_v});
   }
   return joints;
 }

@@ -555,6 +555,9 @@ TEST(ModelHash, TellsRobotsOfTheSameSizesApart) {
   EXPECT_NE(modelHash(quad), modelHash(anymal));
   EXPECT_EQ(modelHash(anymal), modelHash(loadRobot(robotYaml("anymal_c"), {kPackages})));
   EXPECT_NE(modelHash(loadRobot(kHumanoid)), modelHash(quad));
+  // Pinned: estimators in the field carry this number; a change to the hash's definition (or to
+  // the joint type names it reads, toString(JointType)) must be a decision, not an accident.
+  EXPECT_EQ(static_cast<std::uint64_t>(modelHash(quad)), 0x08b107c975d49d74ULL);
 
   Robot changed = quad;  // the contacts in another order: the phase bits mean other feet
   std::swap(changed.contacts[0], changed.contacts[1]);
