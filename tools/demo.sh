@@ -41,6 +41,8 @@
 #                     socat pair forwards it through a Unix socket in DIR); afterwards
 #                     tools/viz.sh DIR/session.lcmlog replays the session in the same page
 #   --viz-port P      the viewer's port on the host's loopback (default 8765)
+#   --rss             record the resident memory of stride-mpc and stride-sim every 10 s in
+#                     DIR/rss.txt (t [s], kB, kB): tools/soak.sh reads it
 #   --slow-host F     the controller's solver takes F times its time (busy), as on a host F times
 #                     slower: shows how it sheds work when a period overruns (controller/README.md,
 #                     "Overload")
@@ -49,7 +51,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
-spy=0 check=0 slow_host="" viz=0 viz_port=8765
+spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0
 robots_dirs=()
 args=("$@")
 need_value() { [ $# -ge 2 ] || { echo "demo.sh: $1 needs a value (--help)" >&2; exit 2; }; }
@@ -70,6 +72,7 @@ while [ $# -gt 0 ]; do
     --spy) spy=1; shift ;;
     --viz) viz=1; shift ;;
     --viz-port) need_value "$@"; viz_port="$2"; shift 2 ;;
+    --rss) rss=1; shift ;;
     --slow-host) need_value "$@"; slow_host="$2"; shift 2 ;;
     -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown option '$1' (--help)" >&2; exit 2 ;;
@@ -268,6 +271,28 @@ mpc_pid=$!
 pids+=($mpc_pid)
 # The controller prints its line once subscribed (the first udpm subscribe can take seconds).
 started "$out/mpc.txt" "^stride-mpc: .* mode" "$mpc_pid" stride-mpc
+if [ "$rss" = 1 ]; then
+  # VmRSS of the controller and of the mock robot (once it runs), on the side core, until the
+  # controller stops: a leak shows as growth between the first and the last line.
+  rm -f "$out/rss.txt"
+  (
+    t=0
+    # The programs run under `timeout`, children of this script: found through it, never a
+    # program of the same name elsewhere on the machine.
+    program() { for p in $(pgrep -P $$); do pgrep -P "$p" -x "$1"; done | head -n 1; }
+    rss_of() {
+      local pid
+      pid=$(program "$1")
+      [ -n "$pid" ] && awk '/^VmRSS:/ { print $2 }' "/proc/$pid/status" 2>/dev/null || echo 0
+    }
+    while kill -0 "$mpc_pid" 2>/dev/null; do
+      echo "$t $(rss_of stride-mpc) $(rss_of stride-sim)" >> "$out/rss.txt"
+      sleep 10
+      t=$((t + 10))
+    done
+  ) &
+  pids+=($!)
+fi
 teleop_bin="$build/tools/stride-teleop"
 if [ "$commands" = none ]; then
   # No command source: whoever joins the bus drives (the controller stands until then).
