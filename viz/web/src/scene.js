@@ -32,11 +32,15 @@ export class SceneView {
     this.scene.add(this.sun);
 
     // The ground: 1 m and 0.1 m grids on z = 0, moved in whole metres to stay under the robot.
+    // Not THREE.GridHelper: its lines run the grid's whole width, so the camera (inside the
+    // grid, just above it) has every nearby line pass behind it, and some rasterizers
+    // (Chromium's SwiftShader/ANGLE, the browser test's and headless viewers') drop a GL line
+    // with an end behind the camera instead of clipping it: the grid under the robot vanished
+    // and only its far part was drawn. Lines cut into one-cell segments stay drawn.
     this.ground = new THREE.Group();
-    const fine = new THREE.GridHelper(10, 100, 0xc3c9cf, 0xd3d8dd);
-    const coarse = new THREE.GridHelper(40, 40, 0x8f99a3, 0xa7b0b8);
+    const fine = makeGrid(10, 100, 0xc3c9cf, 0xd3d8dd);
+    const coarse = makeGrid(40, 40, 0x8f99a3, 0xa7b0b8);
     for (const g of [fine, coarse]) {
-      g.rotation.x = Math.PI / 2; // GridHelper lies in x-z; the world is z-up
       g.material.depthWrite = false;
       this.ground.add(g);
     }
@@ -102,4 +106,30 @@ export class SceneView {
   render() {
     this.renderer.render(this.scene, this.camera);
   }
+}
+
+/** A grid on z = 0 like THREE.GridHelper's (size, divisions, centre-line colour, line colour),
+ *  in the x-y plane, every line made of one-cell segments (see the ground in SceneView). */
+function makeGrid(size, divisions, centerColor, color) {
+  const step = size / divisions;
+  const half = size / 2;
+  const positions = [];
+  const colors = [];
+  const c0 = new THREE.Color(centerColor);
+  const c1 = new THREE.Color(color);
+  for (let i = 0; i <= divisions; ++i) {
+    const k = -half + i * step;
+    const c = 2 * i === divisions ? c0 : c1;
+    for (let j = 0; j < divisions; ++j) {
+      const a = -half + j * step;
+      const b = a + step;
+      positions.push(a, k, 0, b, k, 0, k, a, 0, k, b, 0);
+      for (let v = 0; v < 4; ++v) colors.push(c.r, c.g, c.b);
+    }
+  }
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.Float32BufferAttribute(positions, 3));
+  geometry.setAttribute('color', new THREE.Float32BufferAttribute(colors, 3));
+  return new THREE.LineSegments(geometry,
+                                new THREE.LineBasicMaterial({ vertexColors: true, toneMapped: false }));
 }
