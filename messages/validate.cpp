@@ -92,7 +92,9 @@ bool readStateClaim(const void* buf, int size, WireClaim& claim) {
 }
 
 bool readPolicySource(const void* buf, int size, std::int64_t& source_id) {
-  return readInt64(buf, size, kPolicySourceAt, source_id);
+  std::int64_t type = 0;  // another type on the channel (garbage, say) is nobody's policy
+  return readInt64(buf, size, 0, type) && type == policy_t::getHash() &&
+         readInt64(buf, size, kPolicySourceAt, source_id);
 }
 
 bool readPolicyClaim(const void* buf, int size, WireClaim& claim) {

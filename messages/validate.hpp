@@ -53,7 +53,8 @@ struct WireClaim {
 };
 bool readStateClaim(const void* buf, int size, WireClaim& claim);
 bool readPolicyClaim(const void* buf, int size, WireClaim& claim);
-// The controller a policy comes from (policy_t.source_id), read from its raw bytes.
+// The controller a policy comes from (policy_t.source_id), read from its raw bytes; false when
+// the buffer is too short or not a policy_t (its type fingerprint).
 bool readPolicySource(const void* buf, int size, std::int64_t& source_id);
 // "expected nq 19, nv 18 (anymal_c, hash 8c1d...), got nq 29, nv 28 (hash 03a4...)", or for the
 // same sizes "expected hash 8c1d... (anymal_c, nq 19, nv 18), got hash 5e7f...: same sizes, another

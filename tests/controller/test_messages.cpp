@@ -1,6 +1,7 @@
 // LCM messages: a memq round trip of every type, and the node's rejection of malformed input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
@@ -319,6 +320,38 @@ TEST_F(NodeInput, PublishesTheHorizonAt10Hz) {
     fz += h.force[0][3 * c + 2];
   }
   EXPECT_NEAR(fz, robot.model.totalMass() * 9.81, 0.1 * robot.model.totalMass() * 9.81);
+}
+
+// The controller watches its policy channel: its own policies come back and count for nothing,
+// another controller's are a rival (counted, in the status), bytes of another type are nobody's.
+TEST_F(NodeInput, SeesARivalControllersPolicies) {
+  auto feedPolicy = [&](const std::vector<unsigned char>& b) {
+    lcm::ReceiveBuffer rbuf{const_cast<unsigned char*>(b.data()), static_cast<uint32_t>(b.size()),
+                            0};
+    node_.onPolicy(&rbuf, "STRIDE_POLICY");
+  };
+  policy_t p = node_.mpc().policy();
+  std::vector<unsigned char> own(p.getEncodedSize());
+  p.encode(own.data(), 0, static_cast<int>(own.size()));
+  feedPolicy(own);
+  EXPECT_EQ(node_.rivalPolicies(), 0);
+  std::vector<unsigned char> garbage(own.size(), 0x5a);
+  feedPolicy(garbage);
+  EXPECT_EQ(node_.rivalPolicies(), 0);
+  p.source_id = node_.sourceId() + 1;
+  std::vector<unsigned char> rival(p.getEncodedSize());
+  p.encode(rival.data(), 0, static_cast<int>(rival.size()));
+  testing::internal::CaptureStderr();
+  feedPolicy(rival);
+  feedPolicy(rival);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(node_.rivalPolicies(), 2);
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;  // said once per rival
+  EXPECT_NE(err.find("another controller"), std::string::npos) << err;
+  feed(good(1000));
+  node_.tick(Mpc::Clock::time_point::max());
+  EXPECT_EQ(node_.mpc().status().rival_policies, 2);
+  EXPECT_EQ(node_.mpc().status().source_id, node_.sourceId());
 }
 
 TEST_F(NodeInput, NoStateNoPolicy) {
