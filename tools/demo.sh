@@ -114,8 +114,9 @@ awk -v d="$duration" 'BEGIN { exit !(d == "" || d + 0 > 0) }' ||
 out="${out:-$build/demo}"
 summary="${summary:-$out/summary.json}"
 
-# Set-up (skipped inside the namespace: the outer invocation did it).
-if [ -z "${STRIDE_DEMO_INSIDE:-}" ]; then
+# Set-up (skipped inside the namespace: the outer invocation did it; and by tests, which run on a
+# tree already built: STRIDE_DEMO_NO_SETUP=1).
+if [ -z "${STRIDE_DEMO_INSIDE:-}" ] && [ -z "${STRIDE_DEMO_NO_SETUP:-}" ]; then
   "$root/tools/install-deps.sh"
   "$root/tools/build.sh"
 fi

@@ -20,6 +20,7 @@ packages=(
   openjdk-17-jdk-headless  # javac: the jar of our message types that lcm-spy decodes with
   iproute2 util-linux      # ip, unshare, taskset: the demo's private network namespace, pinning
   socat                    # demo.sh --viz: the viewer's port from the demo's namespace to the host
+  curl                     # tests: the viewer through demo.sh --viz's forward
   python3-matplotlib       # tools/paper: the experiments' plots
   nodejs npm               # viz/web: npm ci (the lock file's packages) and esbuild build stride-viz's page
   chromium                 # viz/web/test: the page's browser test, headless
