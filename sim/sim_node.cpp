@@ -203,9 +203,8 @@ void SimNode::writeSummary(const std::string& path) const {
       "stride-sim: %.2f s simulated, walked %.3f m (x %+.3f), base height %.3f .. %.3f m, max "
       "tilt %.1f deg, %s; %lld states published (%lld dropped), %lld policies (%lld rejected, "
       "%lld of another model, %lld of a rival controller; %lld controller switches), %lld steps on "
-      "the hold PD before the first policy and %lld after, "
-      "%lld past a policy's end, "
-      "%lld lock-step timeouts\n",
+      "the hold PD before the first policy and %lld after, %lld past a policy's end, %lld "
+      "lock-step timeouts\n",
       sim_.time(), distance, q[0] - s.x0, s.z_min, s.z_max, s.max_tilt_deg,
       s.diverged ? "DIVERGED" : (s.fell ? "FELL" : "did not fall"),
       static_cast<long long>(s.states_published), static_cast<long long>(s.states_dropped),
