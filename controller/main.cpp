@@ -54,8 +54,7 @@ int main(int argc, char** argv) {
   app.footer(
       "Exit status: 0 ran until stopped (or the log's end); 1 an error: configuration, robot, a "
       "replay log that cannot be read, or states that came and were all rejected (another "
-      "robot's: stderr says which); 2 a usage error or an "
-      "LCM URL that cannot be opened.");
+      "robot's: stderr says which); 2 a usage error or an LCM URL that cannot be opened.");
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
   std::signal(SIGINT, onSignal);

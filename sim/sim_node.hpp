@@ -112,8 +112,8 @@ class SimNode {
   int n_mismatches_ = 0;
   std::int64_t source_ = 0;  // the controller followed (policy_t.source_id)
   bool have_source_ = false;
-  double source_seen_ = 0.0;                // sim time of its newest policy
-  std::array<std::int64_t, 4> rivals_{};    // the rival sources already reported
+  double source_seen_ = 0.0;              // sim time of its newest policy
+  std::array<std::int64_t, 4> rivals_{};  // the rival sources already reported
   int n_rivals_ = 0;
   std::vector<unsigned char> buffer_;
   Eigen::VectorXd q_pub_, v_pub_, tau_;
