@@ -215,7 +215,7 @@ Robot loadRobot(const std::string& yaml_path, const std::vector<std::string>& ro
   try {
     checkKeys(root,
               {"name", "urdf", "srdf", "reference_posture", "root_joint", "contacts",
-               "sole_half_extents", "torque_limits", "default_posture"},
+               "sole_half_extents", "torque_limits", "default_posture", "joint_pd"},
               yaml_path, "");
     robot.name = need(root, "name", yaml_path).as<std::string>();
     robot.urdf_path = resolve("urdf");
@@ -249,6 +249,14 @@ Robot loadRobot(const std::string& yaml_path, const std::vector<std::string>& ro
       robot.sole_half_extents << e[0], e[1];
     }
     applyTorqueLimits(root["torque_limits"], model, yaml_path);
+    if (const YAML::Node pd = root["joint_pd"]) {
+      checkKeys(pd, {"kp", "kd"}, yaml_path, "joint_pd.");
+      robot.joint_kp = need(pd, "kp", yaml_path).as<double>();
+      robot.joint_kd = need(pd, "kd", yaml_path).as<double>();
+      if (!(robot.joint_kp > 0.0) || !(robot.joint_kd >= 0.0) || !std::isfinite(robot.joint_kp) ||
+          !std::isfinite(robot.joint_kd))
+        fail(yaml_path, "joint_pd: kp must be positive and kd not negative, both finite");
+    }
 
     std::string base_source;
     robot.default_q = readPosture(root, robot, yaml_path, base_source);

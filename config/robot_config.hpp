@@ -29,6 +29,10 @@ struct Robot {
   // lowest contact frame at z = 0 exactly, whatever the YAML or SRDF said.
   Eigen::VectorXd default_q;
   Eigen::Vector2d sole_half_extents = Eigen::Vector2d::Zero();  // surface contacts, if given
+  // The robot's own joint PD (YAML `joint_pd: {kp, kd}`): what its low level does without a
+  // controller (the mock robot before the first policy and when it stands down, sim/README.md).
+  // Zero when the YAML does not give it.
+  double joint_kp = 0.0, joint_kd = 0.0;
 };
 
 // Loads the YAML, its URDF and its SRDF (if any). `robots_dirs` (e.g. the programs' repeatable

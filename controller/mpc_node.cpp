@@ -128,12 +128,21 @@ void MpcNode::setSourceId(std::int64_t id) {
   mpc_.status().source_id = id;
 }
 
+MpcNode::~MpcNode() {
+  if (bus_ != nullptr)
+    for (lcm::Subscription* s : subscriptions_) bus_->unsubscribe(s);
+}
+
 void MpcNode::subscribe(lcm::LCM& in, bool watch_policies) {
-  in.subscribe(config_.state_channel, &MpcNode::onState, this)->setQueueCapacity(kQueueCapacity);
-  if (watch_policies)
-    in.subscribe(config_.policy_channel, &MpcNode::onPolicy, this)->setQueueCapacity(100);
-  in.subscribe(config_.plan_channel, &MpcNode::onPlan, this)->setQueueCapacity(10);
-  in.subscribe(config_.command_channel, &MpcNode::onCommand, this)->setQueueCapacity(100);
+  bus_ = &in;
+  auto add = [&](lcm::Subscription* s, int capacity) {
+    s->setQueueCapacity(capacity);
+    subscriptions_.push_back(s);
+  };
+  add(in.subscribe(config_.state_channel, &MpcNode::onState, this), kQueueCapacity);
+  if (watch_policies) add(in.subscribe(config_.policy_channel, &MpcNode::onPolicy, this), 100);
+  add(in.subscribe(config_.plan_channel, &MpcNode::onPlan, this), 10);
+  add(in.subscribe(config_.command_channel, &MpcNode::onCommand, this), 100);
 }
 
 void MpcNode::reject(msg::Reject reason) {

@@ -39,6 +39,10 @@ class MpcNode {
  public:
   using Clock = Mpc::Clock;
   MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time);
+  // Unsubscribes: a node may die before its bus (a controller killed in a closed-loop test).
+  ~MpcNode();
+  MpcNode(const MpcNode&) = delete;
+  MpcNode& operator=(const MpcNode&) = delete;
 
   // Subscribes the raw handlers on `in`, with queues deep enough for a 1 kHz estimator. With
   // watch_policies (on a live bus, not a log) also the policy channel, to see a rival controller.
@@ -128,6 +132,8 @@ class MpcNode {
   double horizon_sent_at_ = -1e300;
   std::array<ModelMismatch, kMaxMismatches> mismatches_{};
   std::int64_t source_id_ = 0, rival_policies_ = 0;
+  lcm::LCM* bus_ = nullptr;  // what subscribe() subscribed on
+  std::vector<lcm::Subscription*> subscriptions_;
   std::array<std::int64_t, 4> rivals_{};  // the rival sources already reported
   int n_rivals_ = 0;
   int n_mismatches_ = 0, latest_mismatch_ = -1;

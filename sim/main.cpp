@@ -60,8 +60,13 @@ int main(int argc, char** argv) {
   app.add_option("--push", pushes, "a push on the base: start:duration:fx,fy,fz (repeatable)");
   app.add_option("--lockstep-timeout", timeout, "lock-step: wall seconds to wait for an answer");
   app.add_option("--hold-kp", node_options.hold_kp,
-                 "joint PD holding the default posture until the first policy [Nm/rad]");
+                 "the robot's joint PD (before the first policy, standing down) [Nm/rad] "
+                 "(default: the robot YAML's joint_pd)");
   app.add_option("--hold-kd", node_options.hold_kd, "its damping [Nm s/rad]");
+  app.add_option("--stand-down-grace", node_options.stand_down.grace,
+                 "seconds past a policy's end before the robot stands down (0.05)");
+  app.add_option("--stand-down-ramp", node_options.stand_down.ramp,
+                 "seconds from the robot as it is to the default posture (0.3)");
   app.add_option("--summary", summary, "write the run's summary as JSON here");
   app.add_option("--robots-dir", robots_dirs,
                  "where package:// URIs of the robot YAML are looked for before ROS_PACKAGE_PATH "

@@ -168,4 +168,44 @@ void HoldPolicy::torque(const Model& model, const Eigen::Ref<const Eigen::Vector
   }
 }
 
+StandDown::StandDown(const Model& model, const HoldPolicy& hold,
+                     const std::vector<int>& contact_frames, const StandDownOptions& options)
+    : model_(model),
+      hold_(hold),
+      options_(options),
+      chains_(hold.kp.size(), 0u),
+      planted_(hold.kp.size(), 0),
+      q_start_(hold.q_ref),
+      u_start_(Eigen::VectorXd::Zero(hold.kp.size())) {
+  const int first = model.hasFreeFlyer() ? 6 : 0;
+  for (std::size_t c = 0; c < contact_frames.size() && c < 32; ++c)
+    for (int j = model.frames.at(contact_frames[c]).parentJoint; j > 0; j = model.joints[j].parent)
+      if (model.joints[j].type != JointType::FreeFlyer)
+        chains_[model.joints[j].idx_v - first] |= 1u << c;
+}
+
+void StandDown::begin(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& u_last, unsigned on_ground) {
+  t0_ = t;
+  q_start_ = q;
+  u_start_ = u_last;
+  for (std::size_t i = 0; i < chains_.size(); ++i) planted_[i] = (chains_[i] & on_ground) != 0;
+}
+
+void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
+                       const Eigen::Ref<const Eigen::VectorXd>& v,
+                       Eigen::Ref<Eigen::VectorXd> tau) const {
+  const double s = options_.ramp > 0.0 ? std::clamp((t - t0_) / options_.ramp, 0.0, 1.0) : 1.0;
+  const int first = model_.hasFreeFlyer() ? 6 : 0;
+  for (int j = 1; j < model_.njoints(); ++j) {
+    const Joint& jt = model_.joints[j];
+    if (jt.type == JointType::FreeFlyer) continue;
+    const int i = jt.idx_v - first;  // 1-dof joints, as HoldPolicy
+    const double start = q_start_[jt.idx_q];
+    const double target = planted_[i] ? start : start + s * (hold_.q_ref[jt.idx_q] - start);
+    tau[i] =
+        (1.0 - s) * u_start_[i] + hold_.kp[i] * (target - q[jt.idx_q]) - hold_.kd[i] * v[jt.idx_v];
+  }
+}
+
 }  // namespace stride::sim

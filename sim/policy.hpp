@@ -86,4 +86,42 @@ struct HoldPolicy {
               const Eigen::Ref<const Eigen::VectorXd>& v, Eigen::Ref<Eigen::VectorXd> tau) const;
 };
 
+// What the robot does when its controller goes silent (sim/README.md, "Controller loss"): past
+// the last policy's end plus a grace period, a stand-down. The legs whose foot is on the ground
+// hold the angles they have (the feet stay where they are: pulling planted feet towards a default
+// stance would fight the closed chain through the ground), the other joints (legs in swing, the
+// arms) move linearly to the default posture over `ramp` seconds, and the last policy's
+// feed-forward (the torques that carried the robot's weight) fades out over the same time while
+// the PD takes the load. Then the PD alone, until a controller is back.
+struct StandDownOptions {
+  double grace = 0.05;  // [s] past the policy's end: its last knot held (a late answer)
+  double ramp = 0.3;    // [s] for the swinging legs to reach the default posture
+};
+
+class StandDown {
+ public:
+  // hold: the PD and the default posture; contact_frames: the robot's contacts, in the order of
+  // begin()'s mask. Allocates.
+  StandDown(const Model& model, const HoldPolicy& hold, const std::vector<int>& contact_frames,
+            const StandDownOptions& options);
+
+  const StandDownOptions& options() const { return options_; }
+  // Starts at time t from configuration q, with u_last the feed-forward the robot was applying
+  // and bit c of `on_ground` set when contact c carries load. Allocates nothing.
+  void begin(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
+             const Eigen::Ref<const Eigen::VectorXd>& u_last, unsigned on_ground);
+  // τ (size nu) at time t ≥ the start. Allocates nothing.
+  void torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
+              const Eigen::Ref<const Eigen::VectorXd>& v, Eigen::Ref<Eigen::VectorXd> tau) const;
+
+ private:
+  const Model& model_;
+  const HoldPolicy& hold_;
+  StandDownOptions options_;
+  std::vector<unsigned> chains_;  // per actuated joint: bit c when it moves contact c's frame
+  std::vector<char> planted_;     // per actuated joint: holds its angle (its foot is down)
+  double t0_ = 0.0;
+  Eigen::VectorXd q_start_, u_start_;
+};
+
 }  // namespace stride::sim

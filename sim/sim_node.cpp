@@ -11,6 +11,19 @@
 
 namespace stride::sim {
 
+namespace {
+// The option when given, else the robot's own, else a fallback.
+double holdGain(double option, double robot, double fallback) {
+  return option >= 0.0 ? option : robot > 0.0 ? robot : fallback;
+}
+
+std::vector<int> contactFrames(const Robot& robot) {
+  std::vector<int> frames;
+  for (const ContactSpec& c : robot.contacts) frames.push_back(robot.model.getFrameId(c.frame));
+  return frames;
+}
+}  // namespace
+
 SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions& options,
                  Publisher& out)
     : robot_(robot),
@@ -18,7 +31,9 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
       sim_(robot, sim),
       out_(out),
       evaluator_(robot.model, actuatedDimension(robot.model)),
-      hold_(robot.model, robot.default_q, options.hold_kp, options.hold_kd, sim.dt),
+      hold_(robot.model, robot.default_q, holdGain(options.hold_kp, robot.joint_kp, 5.0),
+            holdGain(options.hold_kd, robot.joint_kd, 0.1), sim.dt),
+      stand_down_(robot.model, hold_, contactFrames(robot), options.stand_down),
       noise_(options.noise_q, options.noise_v, options.seed),
       delay_(robot.model.nq, robot.model.nv, options.delay),
       dropper_(options.drop, options.seed + 1) {
@@ -34,8 +49,14 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
   tau_ = Eigen::VectorXd::Zero(sim_.nu());
 }
 
+SimNode::~SimNode() {
+  if (bus_ != nullptr && subscription_ != nullptr) bus_->unsubscribe(subscription_);
+}
+
 void SimNode::subscribe(lcm::LCM& in) {
-  in.subscribe(options_.policy_channel, &SimNode::onPolicy, this)->setQueueCapacity(100);
+  bus_ = &in;
+  subscription_ = in.subscribe(options_.policy_channel, &SimNode::onPolicy, this);
+  subscription_->setQueueCapacity(100);
 }
 
 std::int64_t SimNode::utime() const {
@@ -46,6 +67,7 @@ void SimNode::reset(const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
   sim_.reset(q, v, 0.0);
   delay_.clear();
   have_policy_ = false;
+  standing_down_ = false;
   last_answer_ = -1;
   have_source_ = false;
   n_rivals_ = 0;
@@ -152,6 +174,10 @@ std::int64_t SimNode::publishState() {
   std::copy(v_pub_.data(), v_pub_.data() + model.nv, state_msg_.v.begin());
   for (int c = 0; c < state_msg_.ncontacts; ++c)
     state_msg_.contact[c] = sim_.normalForce(c) > 0.0 ? 1 : 0;
+  if (state_fault_ && !state_fault_(state_msg_, t)) {
+    ++stats_.states_dropped;
+    return -1;
+  }
   const int n = state_msg_.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
   if (n > 0) out_.publish(options_.state_channel, buffer_.data(), n);
   ++stats_.states_published;
@@ -165,7 +191,33 @@ bool SimNode::advance(int steps) {
     if (!push.isZero()) sim_.applyExternalWrench(push, options_.pushes.activeUntil(t));
     PolicyStatus status = PolicyStatus::Invalid;
     if (have_policy_) status = evaluator_.evaluate(policy_, t, sim_.q(), sim_.v(), tau_);
-    if (status == PolicyStatus::Exhausted) ++stats_.exhausted_steps;
+    if (status == PolicyStatus::Exhausted) {
+      // A late answer: the last knot held for the grace period; longer, the controller is lost.
+      const double end = policy_.t0 + (policy_.knots - 1) * policy_.dt;
+      if (!standing_down_ && t - end > options_.stand_down.grace) {
+        const int last = policy_.knots - 1;
+        unsigned on_ground = 0;
+        for (int c = 0; c < static_cast<int>(robot_.contacts.size()); ++c)
+          if (sim_.normalForce(c) > 0.0) on_ground |= 1u << c;
+        stand_down_.begin(t, sim_.q(),
+                          Eigen::Map<const Eigen::VectorXd>(policy_.uFf(last), sim_.nu()),
+                          on_ground);
+        standing_down_ = true;
+        if (++stats_.stand_downs <= 4)
+          std::fprintf(stderr,
+                       "stride-sim: no policy for %.3f s past the last one's end: standing down "
+                       "(sim/README.md, \"Controller loss\")\n",
+                       t - end);
+      }
+      if (standing_down_) {
+        stand_down_.torque(t, sim_.q(), sim_.v(), tau_);
+        ++stats_.stand_down_steps;
+      } else {
+        ++stats_.exhausted_steps;
+      }
+    } else if (status != PolicyStatus::Invalid) {
+      standing_down_ = false;  // a policy in force again: the controller is back
+    }
     if (status == PolicyStatus::Invalid) {
       hold_.torque(robot_.model, sim_.q(), sim_.v(), tau_);
       ++(have_policy_ ? stats_.hold_steps : stats_.waiting_steps);
@@ -204,7 +256,7 @@ void SimNode::writeSummary(const std::string& path) const {
       "tilt %.1f deg, %s; %lld states published (%lld dropped), %lld policies (%lld rejected, "
       "%lld of another model, %lld of a rival controller; %lld controller switches), %lld steps on "
       "the hold PD before the first policy and %lld after, %lld past a policy's end, %lld "
-      "lock-step timeouts\n",
+      "standing down (%lld stand-downs), %lld lock-step timeouts\n",
       sim_.time(), distance, q[0] - s.x0, s.z_min, s.z_max, s.max_tilt_deg,
       s.diverged ? "DIVERGED" : (s.fell ? "FELL" : "did not fall"),
       static_cast<long long>(s.states_published), static_cast<long long>(s.states_dropped),
@@ -212,6 +264,7 @@ void SimNode::writeSummary(const std::string& path) const {
       static_cast<long long>(s.policies_wrong_model), static_cast<long long>(s.policies_rival),
       static_cast<long long>(s.source_switches), static_cast<long long>(s.waiting_steps),
       static_cast<long long>(s.hold_steps), static_cast<long long>(s.exhausted_steps),
+      static_cast<long long>(s.stand_down_steps), static_cast<long long>(s.stand_downs),
       static_cast<long long>(s.lockstep_timeouts));
   if (path.empty()) return;
   nlohmann::ordered_json j;
@@ -232,6 +285,8 @@ void SimNode::writeSummary(const std::string& path) const {
   j["waiting_steps"] = s.waiting_steps;
   j["hold_steps"] = s.hold_steps;
   j["exhausted_steps"] = s.exhausted_steps;
+  j["stand_downs"] = s.stand_downs;
+  j["stand_down_steps"] = s.stand_down_steps;
   j["lockstep_timeouts"] = s.lockstep_timeouts;
   std::ofstream f(path);
   f << j.dump(2) << "\n";

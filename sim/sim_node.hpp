@@ -1,16 +1,18 @@
 #pragma once
 // stride-sim's LCM side: publishes the mock robot's state estimates (with the configured noise,
 // delay and drops) and applies the newest valid policy at every physics step (ARCHITECTURE.md §1,
-// §6). Until the first policy arrives, and whenever one runs out, a joint PD holds the default
-// posture (counted). States carry the robot's model hash; a policy of another model (hash, nq or
-// nv: another robot's controller) is refused, counted, and each distinct cause written to stderr
-// once (controller/README.md, "Wire contract").
+// §6). Until the first policy arrives a joint PD holds the default posture; when the controller
+// goes silent (past a policy's end by a grace period) the robot stands down (StandDown,
+// sim/README.md "Controller loss"); both counted. States carry the robot's model hash; a policy of
+// another model (hash, nq or nv: another robot's controller) is refused, counted, and each distinct
+// cause written to stderr once (controller/README.md, "Wire contract").
 //
 // Time: the robot's clock is utime = utime_base + sim time, in µs. In lock-step the base is fixed
 // (deterministic stamps); in real time it is CLOCK_MONOTONIC at start and the loop keeps sim time
 // on the wall clock. A policy's knot 0 sits at its utime on that clock.
 
 #include <array>
+#include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <string>
 
@@ -30,7 +32,9 @@ struct SimNodeOptions {
   double drop = 0.0;                    // probability of dropping an estimate
   std::uint64_t seed = 1;
   PushSchedule pushes;
-  double hold_kp = 5.0, hold_kd = 0.1;  // the PD before the first policy
+  // The joint PD before the first policy and when standing down; negative: the robot YAML's
+  // `joint_pd` (kp 5, kd 0.1 without one).
+  double hold_kp = -1.0, hold_kd = -1.0;
   std::string state_channel = "STRIDE_STATE", policy_channel = "STRIDE_POLICY";
   std::int64_t utime_base = 1000000;
   int max_policy_knots = 64;
@@ -38,6 +42,8 @@ struct SimNodeOptions {
   // while the followed one has published within this many seconds of robot time; after such a
   // silence (a controller restarted) the new source is followed.
   double source_timeout = 0.2;
+  // When the controller goes silent (sim/README.md, "Controller loss").
+  StandDownOptions stand_down;
   // Fallen: base below this fraction of its start height, or tilted more than this.
   double fall_height = 0.5, fall_tilt_deg = 60.0;
 };
@@ -51,6 +57,8 @@ struct SimNodeStats {
   // On the hold PD: before the first policy came (waiting, e.g. the controller's start-up solve
   // in real time), and after (a policy that did not apply: a fallback of the robot).
   std::int64_t waiting_steps = 0, hold_steps = 0, exhausted_steps = 0, steps = 0;
+  // Past a policy's end by more than the grace: the controller is lost, the robot stands down.
+  std::int64_t stand_downs = 0, stand_down_steps = 0;
   std::int64_t lockstep_timeouts = 0;
   double x0 = 0, y0 = 0, z0 = 0, z_min = 1e300, z_max = -1e300, max_tilt_deg = 0.0;
   double peak_normal_force = 0.0;
@@ -61,9 +69,19 @@ struct SimNodeStats {
 class SimNode {
  public:
   SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions& options, Publisher& out);
+  // Unsubscribes: a node may die before its bus (the mock robot restarted in a closed-loop test).
+  ~SimNode();
+  SimNode(const SimNode&) = delete;
+  SimNode& operator=(const SimNode&) = delete;
 
   void subscribe(lcm::LCM& in);
   void onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+
+  // A fault injector for tests and stride-drive: called with each estimate (and its sim time)
+  // just before it is encoded; it may change it (a NaN, an old stamp) or return false to drop it
+  // (a gap in the stream). It must not allocate.
+  using StateFault = std::function<bool(robot_state_t&, double)>;
+  void setStateFault(StateFault fault) { state_fault_ = std::move(fault); }
 
   // Puts the robot at (q, v) at sim time 0.
   void reset(const Eigen::VectorXd& q, const Eigen::VectorXd& v);
@@ -98,6 +116,8 @@ class SimNode {
   Publisher& out_;
   PolicyEvaluator evaluator_;
   HoldPolicy hold_;
+  StandDown stand_down_;
+  bool standing_down_ = false;
   StateNoise noise_;
   StateDelay delay_;
   MessageDropper dropper_;
@@ -107,6 +127,7 @@ class SimNode {
   bool have_policy_ = false;
   std::int64_t last_answer_ = -1;
   robot_state_t state_msg_;
+  StateFault state_fault_;
   msg::WireModel wire_;
   std::array<msg::WireClaim, 4> mismatches_{};  // the causes already written to stderr
   int n_mismatches_ = 0;
@@ -115,6 +136,8 @@ class SimNode {
   double source_seen_ = 0.0;              // sim time of its newest policy
   std::array<std::int64_t, 4> rivals_{};  // the rival sources already reported
   int n_rivals_ = 0;
+  lcm::LCM* bus_ = nullptr;
+  lcm::Subscription* subscription_ = nullptr;
   std::vector<unsigned char> buffer_;
   Eigen::VectorXd q_pub_, v_pub_, tau_;
   SimNodeStats stats_;

@@ -9,7 +9,7 @@
 #   tools/demo.sh [--robot NAME | --humanoid] [--commands FILE | --teleop] [--duration S]
 #                 [--realtime | --lockstep] [--robots-dir DIR]... [--check-tracking]
 #                 [--host-network] [--out DIR] [--summary FILE] [--spy] [--viz [--viz-port P]]
-#                 [--slow-host F]
+#                 [--slow-host F] [--kill-controller T]
 #
 #   --robot NAME      stride_quad (default), solo12, anymal_c, stride_humanoid, talos_reduced:
 #                     config/controller/NAME.yaml; solo12, anymal_c and talos_reduced need
@@ -46,12 +46,16 @@
 #   --slow-host F     the controller's solver takes F times its time (busy), as on a host F times
 #                     slower: shows how it sheds work when a period overruns (controller/README.md,
 #                     "Overload")
+#   --kill-controller T  SIGKILL stride-mpc T seconds after the robot starts and start a new one
+#                     1 s later (issue 19: the robot stands down on its own meanwhile, sim/README.md
+#                     "Controller loss"; the new controller takes over); its output in
+#                     DIR/mpc-restarted.txt. tools/faults.sh runs it at 10 instants
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
-spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0
+spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller=""
 robots_dirs=()
 args=("$@")
 need_value() { [ $# -ge 2 ] || { echo "demo.sh: $1 needs a value (--help)" >&2; exit 2; }; }
@@ -74,6 +78,7 @@ while [ $# -gt 0 ]; do
     --viz-port) need_value "$@"; viz_port="$2"; shift 2 ;;
     --rss) rss=1; shift ;;
     --slow-host) need_value "$@"; slow_host="$2"; shift 2 ;;
+    --kill-controller) need_value "$@"; kill_controller="$2"; shift 2 ;;
     -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown option '$1' (--help)" >&2; exit 2 ;;
   esac
@@ -142,9 +147,6 @@ robot_yaml=$(echo "$model" | sed -n 's/^  yaml  //p')
 gaits=biped
 echo "$model" | grep -q '^gaits:.* trot' && gaits=quadruped
 rate=$(sed -n 's/^rate_hz: *\([0-9.]*\).*/\1/p' "$config")  # lock-step: a state per tick
-# The sim's PD before the first policy: the controller's own hold gains.
-hold_kp=$(sed -n 's/^  hold_kp: *\([0-9.eE+-]*\).*/\1/p' "$config")
-hold_kd=$(sed -n 's/^  hold_kd: *\([0-9.eE+-]*\).*/\1/p' "$config")
 
 if [ -z "${STRIDE_DEMO_INSIDE:-}" ] && [ "$host_network" = 0 ]; then
   # Re-run this script in a new network namespace (as root directly, else as a user namespace's
@@ -259,7 +261,7 @@ fi
 mpc_args=(--config "$config" "${dirs_args[@]}" --summary "$out/mpc.json")
 [ -n "$slow_host" ] && mpc_args+=(--emulate-slow-host "$slow_host")
 sim_args=(--robot "$robot_yaml" "${dirs_args[@]}" --duration "$sim_duration"
-  --summary "$out/sim.json" --hold-kp "${hold_kp:-5}" --hold-kd "${hold_kd:-0.2}")
+  --summary "$out/sim.json")
 if [ "$mode" = lockstep ]; then
   mpc_args+=(--lockstep)
   sim_args+=(--lockstep --rate "$rate")
@@ -295,6 +297,25 @@ if [ "$rss" = 1 ]; then
   pids+=($!)
 fi
 teleop_bin="$build/tools/stride-teleop"
+if [ -n "$kill_controller" ]; then
+  # The controller killed (no chance to say goodbye) while the robot walks, a new one started a
+  # second later on the same core with the same arguments. Timed from here: the sim starts next.
+  (
+    sleep "$kill_controller"
+    pkill -KILL -P "$mpc_pid" -x stride-mpc || true
+    echo "demo: killed stride-mpc at $(date +%s.%N)" > "$out/kill.txt"
+    sleep 1
+    restarted=()
+    for a in "${mpc_args[@]}"; do
+      [ "$a" = "$out/mpc.json" ] && a="$out/mpc-restarted.json"
+      restarted+=("$a")
+    done
+    exec timeout "$limit" taskset -c "$mpc_cpu" "$build/controller/stride-mpc" "${restarted[@]}" \
+      > "$out/mpc-restarted.txt" 2>&1
+  ) &
+  restart_pid=$!
+  pids+=($restart_pid)
+fi
 if [ "$commands" = none ]; then
   # No command source: whoever joins the bus drives (the controller stands until then).
   join=""
@@ -353,12 +374,20 @@ fi
 # Stop the controller at once: from now on its states go stale and it would (rightly) fall back.
 kill -TERM "$mpc_pid" 2>/dev/null || true
 wait "$mpc_pid" 2>/dev/null || true
+if [ -n "$kill_controller" ]; then
+  kill -TERM "$restart_pid" 2>/dev/null || true  # the restarted one's timeout passes it on
+  wait "$restart_pid" 2>/dev/null || true
+fi
 sleep 0.2
 cleanup
 trap - EXIT
 wall=$(awk -v a="$started" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
 
 cat "$out/mpc.txt" "$out/sim.txt" | grep -E '^stride-(mpc|sim):' || true
+if [ -n "$kill_controller" ]; then
+  echo "demo: stride-mpc killed at $kill_controller s and restarted 1 s later; the restarted one:"
+  grep -E '^stride-mpc:' "$out/mpc-restarted.txt" 2>/dev/null || echo "  (no output)"
+fi
 [ -f "$out/teleop.txt" ] && grep -E '^stride-teleop: stopped' "$out/teleop.txt" || true
 [ "$sim_status" = 124 ] && echo "demo: the sim was stopped by the safety net after $limit s"
 echo

@@ -395,6 +395,16 @@ TEST(RobotConfig, BadInput) {
   expectConfigError(with("root_joint: free-flyer", "root_joint: planar"), "root_joint must be");
   expectConfigError(with("0.0, 0.0, 0.0, 1.0]", "0.0, 0.0, 0.5, 1.0]"), "quaternion is not unit");
   expectConfigError(good + "reference_posture: standing\n", "reference_posture needs an 'srdf'");
+  const std::string pd = "joint_pd: {kp: 20.0, kd: 0.3}";
+  expectConfigError(with(pd, "joint_pd: {kp: -1, kd: 0.3}"), "kp must be positive");
+  expectConfigError(with(pd, "joint_pd: {kp: .nan, kd: 0.3}"), "kp must be positive");
+  expectConfigError(with(pd, "joint_pd: {kp: 20.0}"), "missing key 'kd'");
+  expectConfigError(with(pd, "joint_pd: {kp: 20.0, kd: 0.3, ki: 1}"), "unknown key 'joint_pd.ki'");
+  const std::string path = writeFile(testDir() + "/test_pd.yaml", good);
+  const Robot quad = loadRobot(path);
+  EXPECT_EQ(quad.joint_kp, 20.0);
+  EXPECT_EQ(quad.joint_kd, 0.3);
+  EXPECT_EQ(loadRobot(writeFile(testDir() + "/test_pd.yaml", with(pd, ""))).joint_kp, 0.0);
 }
 
 // A misspelt key would otherwise silently leave its default in place.

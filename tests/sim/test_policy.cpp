@@ -193,6 +193,33 @@ TEST(Policy, HoldPolicyIsAJointPd) {
   EXPECT_TRUE(tau.isApprox(expected, 1e-12));
 }
 
+// The stand-down (controller lost): the legs on the ground hold their angles, the others go to the
+// default posture over the ramp, the last feed-forward fades out over the same time.
+TEST(Policy, StandDownHoldsPlantedLegsAndBringsTheOthersDown) {
+  const Robot& r = robot("stride_quad");
+  const Model& model = r.model;
+  sim::HoldPolicy hold(model, r.default_q, 10.0, 0.0);
+  std::vector<int> frames;
+  for (const ContactSpec& c : r.contacts) frames.push_back(model.getFrameId(c.frame));
+  sim::StandDown down(model, hold, frames, sim::StandDownOptions{0.05, 0.2});
+  Eigen::VectorXd q = r.default_q, v = Eigen::VectorXd::Zero(18), tau(12);
+  q.tail(12).array() += 0.1;  // every joint 0.1 rad off the default
+  const Eigen::VectorXd u_last = Eigen::VectorXd::LinSpaced(12, 1.0, 12.0);
+  // FL (0) and HR (3) on the ground (a trot's support pair): joints 0-2 and 9-11 hold.
+  down.begin(1.0, q, u_last, 0b1001u);
+  down.torque(1.0, q, v, tau);
+  EXPECT_TRUE(tau.isApprox(u_last, 1e-12)) << "at the start: the feed-forward, no PD";
+  down.torque(1.1, q, v, tau);  // half-way
+  for (int i = 0; i < 12; ++i) {
+    const bool planted = i < 3 || i >= 9;
+    const double pd = planted ? 0.0 : 10.0 * (0.5 * -0.1);
+    EXPECT_NEAR(tau[i], 0.5 * u_last[i] + pd, 1e-12) << "joint " << i;
+  }
+  down.torque(2.0, q, v, tau);  // after the ramp: the PD alone
+  for (int i = 0; i < 12; ++i)
+    EXPECT_NEAR(tau[i], (i < 3 || i >= 9) ? 0.0 : -1.0, 1e-12) << "joint " << i;
+}
+
 // ---------------------------------------------------------------------------------------------
 TEST(Disturbances, StateNoiseIsSeededAndLeavesTheBasePose) {
   const Model& model = robot("stride_quad").model;

@@ -48,15 +48,37 @@ double tiltDeg(const Eigen::VectorXd& q) {
 Run run(const ControllerConfig& config, const Options& options) {
   lcm::LCM lcm("memq://");
   LcmPublisher publisher(lcm);
-  MpcNode mpc(config, publisher, TimeSource::Stamps);
-  mpc.subscribe(lcm);
-  const Robot& robot = mpc.mpc().robot();
+  auto mpc = std::make_unique<MpcNode>(config, publisher, TimeSource::Stamps);
+  mpc->subscribe(lcm);
+  // The sim keeps its own copy of the robot: the controller may die (options.controller_lost_at).
+  const Robot robot = mpc->mpc().robot();
   sim::SimNodeOptions o = options.sim;
   o.state_rate_hz = config.rate_hz;
-  sim::SimNode sim(robot, sim::SimOptions{}, o, publisher);
-  sim.subscribe(lcm);
-  sim.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
-  std::int64_t clock = sim.utime();
+  // The mock robot; a restart (options.sim_lost_at) is a new node, at the default posture, whose
+  // clock goes on from the old one's plus the outage (as stride-sim's monotonic stamps would).
+  std::unique_ptr<sim::SimNode> sim;
+  auto startSim = [&](std::int64_t utime_base) {
+    o.utime_base = utime_base;
+    sim = std::make_unique<sim::SimNode>(robot, sim::SimOptions{}, o, publisher);
+    sim->subscribe(lcm);
+    sim->reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
+    if (options.state_fault) sim->setStateFault(options.state_fault);
+  };
+  startSim(o.utime_base);
+  // The flood: a policy one entry too wide everywhere (another robot's), encoded once.
+  std::vector<unsigned char> flood;
+  if (options.flood_per_period > 0) {
+    policy_t foreign;
+    const int nu = robot.model.nv - (robot.model.hasFreeFlyer() ? 6 : 0);
+    msg::shape(foreign, 8, robot.model.nq + 1, robot.model.nv + 1, nu + 1);
+    foreign.model_hash = 0x5eed;
+    foreign.source_id = 0xf100d;
+    flood.resize(foreign.getEncodedSize());
+    foreign.encode(flood.data(), 0, static_cast<int>(flood.size()));
+  }
+  std::int64_t clock = sim->utime();
+  double t_offset = 0.0;         // run time at the current sim's time 0
+  sim::SimNodeStats sim_before;  // the first sim's figures, when it was restarted
   std::unique_ptr<MpcNode> rival;
   if (options.rival != nullptr) {
     rival = std::make_unique<MpcNode>(*options.rival, publisher, TimeSource::Stamps);
@@ -67,14 +89,49 @@ Run run(const ControllerConfig& config, const Options& options) {
 
   Run r;
   command_t command;
-  while (sim.simulator().time() < options.duration - 1e-9) {
-    const double t = sim.simulator().time();
-    clock = sim.utime();
-    const std::int64_t stamp = sim.publishState();
+  const bool loses = options.controller_lost_at >= 0.0;
+  bool lost = false;
+  // The last controller's figures, kept when it dies (the run reports the one alive at the end).
+  MpcCounters mpc_counters;
+  CommandCounters command_counters;
+  std::int64_t rejected = 0, rival_policies = 0;
+  auto keepFigures = [&] {
+    mpc_counters = mpc->mpc().counters();
+    command_counters = mpc->commands().counters();
+    rejected = mpc->rejected();
+    rival_policies = mpc->rivalPolicies();
+  };
+  while (t_offset + sim->simulator().time() < options.duration - 1e-9) {
+    if (options.sim_lost_at >= 0.0 && t_offset == 0.0 &&
+        sim->simulator().time() + 1e-9 >= options.sim_lost_at) {
+      // Killed, and back after the outage: no states meanwhile (the controller keeps ticking on
+      // none), then a robot standing at the origin.
+      sim_before = sim->stats();
+      const std::int64_t back =
+          sim->utime() + static_cast<std::int64_t>(std::llround(options.sim_back_after * 1e6));
+      t_offset = sim->simulator().time() + options.sim_back_after;
+      sim.reset();
+      startSim(back);
+      ++r.sim_starts;
+    }
+    const double t = t_offset + sim->simulator().time();
+    if (loses && !lost && mpc && t + 1e-9 >= options.controller_lost_at) {
+      keepFigures();
+      mpc.reset();  // killed: its subscriptions go with it
+      lost = true;
+    }
+    if (loses && lost && !mpc &&
+        t + 1e-9 >= options.controller_lost_at + options.controller_back_after) {
+      mpc = std::make_unique<MpcNode>(config, publisher, TimeSource::Stamps);
+      mpc->subscribe(lcm);
+      ++r.controller_starts;
+    }
+    clock = sim->utime();
+    const std::int64_t stamp = sim->publishState();
     if (!options.script.empty() && t + 1e-9 < options.commands_until) {
       // The sim's time is a sum of steps (3.9999999999997 for 4): an entry at 4 s applies at 4 s.
       const ScriptedCommand& c = options.script[commandAt(options.script, t + 1e-9)];
-      command.utime = sim.utime();
+      command.utime = sim->utime();
       command.vx = c.vx;
       command.vy = c.vy;
       command.yaw_rate = c.yaw_rate;
@@ -84,22 +141,29 @@ Run run(const ControllerConfig& config, const Options& options) {
       r.commands.push_back({t, c.vx, c.vy, c.yaw_rate, c.gait, c.body_height});
     }
     drain(lcm);
-    if (mpc.tickDue()) {
-      mpc.tick(Mpc::Clock::time_point::max());
-      mpc.prepare(Mpc::Clock::time_point::max());
+    if (mpc && mpc->tickDue()) {
+      mpc->tick(Mpc::Clock::time_point::max());
+      mpc->prepare(Mpc::Clock::time_point::max());
     }
     if (rival && rival->tickDue()) {  // after the robot's own: its first policy comes second
       rival->tick(Mpc::Clock::time_point::max());
       rival->prepare(Mpc::Clock::time_point::max());
     }
+    // The flood arrives with the answer, in the same queue of the robot's policy subscription.
+    for (int i = 0; i < options.flood_per_period; ++i)
+      lcm.publish(config.policy_channel, flood.data(), static_cast<unsigned>(flood.size()));
     drain(lcm);
-    if (stamp >= 0 && !sim.answered(stamp)) sim.countLockstepTimeout();
+    if (stamp >= 0 && !sim->answered(stamp)) sim->countLockstepTimeout();
     double k_max = 0.0;
-    for (double k : mpc.mpc().policy().K[0]) k_max = std::max(k_max, std::abs(k));
-    const mpc_status_t& status = mpc.mpc().status();
+    mpc_status_t status{};
+    status.policy_status = -1;  // no controller
+    if (mpc) {
+      for (double k : mpc->mpc().policy().K[0]) k_max = std::max(k_max, std::abs(k));
+      status = mpc->mpc().status();
+    }
     Sample s{t,
-             sim.simulator().q(),
-             sim.simulator().v(),
+             sim->simulator().q(),
+             sim->simulator().v(),
              status.cost,
              status.gap,
              status.policy_status,
@@ -108,33 +172,35 @@ Run run(const ControllerConfig& config, const Options& options) {
              status.regularization,
              0};
     for (int c = 0; c < static_cast<int>(robot.contacts.size()); ++c)
-      s.feet_down += sim.simulator().normalForce(c) > 0.0;
-    if (const Solver* solver = mpc.mpc().solver()) {
+      s.feet_down += sim->simulator().normalForce(c) > 0.0;
+    if (const Solver* solver = mpc ? mpc->mpc().solver() : nullptr) {
       s.backward_passes = solver->backwardPasses();
       s.forward_passes = solver->forwardPasses();
     }
     s.solve_ms = status.solve_ms;
     if (options.each) options.each(s);
     r.samples.push_back(std::move(s));
-    if (!sim.advance(sim.stepsPerState())) break;  // fell or diverged
+    if (!sim->advance(sim->stepsPerState())) break;  // fell or diverged
   }
-  clock = sim.utime();
-  if (sim.stats().fell) {
+  clock = sim->utime();
+  if (sim->stats().fell) {
     // The fallen pose goes into the samples (its segment is marked fallen) and the log too.
-    sim.publishState();
+    sim->publishState();
     Sample fallen = r.samples.empty() ? Sample{} : r.samples.back();
-    fallen.t = sim.simulator().time();
-    fallen.q = sim.simulator().q();
-    fallen.v = sim.simulator().v();
+    fallen.t = t_offset + sim->simulator().time();
+    fallen.q = sim->simulator().q();
+    fallen.v = sim->simulator().v();
     r.samples.push_back(std::move(fallen));
   }
   drain(lcm);
-  r.sim = sim.stats();
-  r.mpc = mpc.mpc().counters();
-  r.command_counters = mpc.commands().counters();
-  r.rejected = mpc.rejected();
-  r.rival_policies = mpc.rivalPolicies();
-  r.q_end = sim.simulator().q();
+  r.sim = sim->stats();
+  r.sim_before_restart = sim_before;
+  if (mpc) keepFigures();
+  r.mpc = mpc_counters;
+  r.command_counters = command_counters;
+  r.rejected = rejected;
+  r.rival_policies = rival_policies;
+  r.q_end = sim->simulator().q();
   return r;
 }
 

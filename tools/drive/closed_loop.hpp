@@ -40,6 +40,19 @@ struct Options {
   // A rival: a second controller on the same bus, ticking on the same states and publishing on
   // the same policy channel (the robot must keep following the first; sim/README.md).
   const ControllerConfig* rival = nullptr;
+  // A controller lost and restarted: at `controller_lost_at` [s] the controller process dies (its
+  // node is destroyed: no more policies), and `controller_back_after` [s] later a new one starts
+  // (a fresh node: new source id, start-up solve from the robot as it is). Negative: never.
+  double controller_lost_at = -1.0;
+  double controller_back_after = 1.0;
+  // Faults on the wire: each state estimate passes through this before it goes out (it may be
+  // changed or dropped; sim::SimNode::setStateFault), and every period `flood_per_period`
+  // policies of another robot's sizes are published on the policy channel before the answer.
+  sim::SimNode::StateFault state_fault;
+  // The mock robot restarted: at `sim_lost_at` [s] stride-sim dies; `sim_back_after` [s] later a
+  // new one starts, the robot standing at the default posture at the origin. Negative: never.
+  double sim_lost_at = -1.0, sim_back_after = 1.0;
+  int flood_per_period = 0;
 };
 
 struct Run {
@@ -49,7 +62,10 @@ struct Run {
   MpcCounters mpc;
   CommandCounters command_counters;
   std::int64_t rejected = 0;
-  std::int64_t rival_policies = 0;  // seen by the controller on its policy channel
+  std::int64_t rival_policies = 0;       // seen by the controller on its policy channel
+  int controller_starts = 1;             // 2 after a restart (Options::controller_lost_at)
+  int sim_starts = 1;                    // 2 after a restart (Options::sim_lost_at)
+  sim::SimNodeStats sim_before_restart;  // the first mock robot's figures, if restarted
   Eigen::VectorXd q_end;
   bool fell() const { return sim.fell; }
   // The base states for segments (t: sim time).

@@ -4,6 +4,7 @@
 //   stride-drive --config config/controller/solo12.yaml --commands config/commands/solo12.yaml
 //                [--robots-dir DIR] [--duration S] [--push START:DURATION:FX,FY,FZ]...
 //                [--log FILE] [--summary FILE.json] [--settle S] [--check-tracking]
+//                [--lose-controller AT [--controller-back-after S]]
 // Exit status: 0; 1 with --check-tracking when a segment missed its command or the robot fell;
 // 2 for bad arguments or files.
 
@@ -66,6 +67,10 @@ int main(int argc, char** argv) {
   app.add_option("--summary", summary, "write the segments as JSON here");
   app.add_option("--settle", segment_options.settle,
                  "seconds after each command before its segment's velocity is averaged (1)");
+  app.add_option("--lose-controller", options.controller_lost_at,
+                 "kill the controller at this time [s] (the robot's fallback takes over)");
+  app.add_option("--controller-back-after", options.controller_back_after,
+                 "start a new controller this long after the kill [s] (1)");
   app.add_flag("--check-tracking", check,
                "exit 1 when a segment of 2 s or more misses its command by more than max(15%, "
                "0.05 m/s, 0.1 rad/s), or the robot fell");
@@ -93,6 +98,15 @@ int main(int argc, char** argv) {
                 options.duration, run.fell() ? "FELL" : "no fall",
                 static_cast<long long>(run.mpc.fallbacks),
                 static_cast<long long>(run.mpc.failed_solves));
+    if (options.controller_lost_at >= 0.0)
+      std::printf(
+          "  controller killed at %.3f s, %s; the robot: %lld steps past a policy's end, %lld on "
+          "the hold PD, %lld controller switches\n",
+          options.controller_lost_at,
+          run.controller_starts > 1 ? "restarted after the outage" : "not restarted before the end",
+          static_cast<long long>(run.sim.exhausted_steps),
+          static_cast<long long>(run.sim.hold_steps),
+          static_cast<long long>(run.sim.source_switches));
     std::printf("  %6s %6s  %-5s %23s  %23s\n", "t0", "t1", "gait", "command [vx vy yaw]",
                 "achieved");
     for (const stride::logs::Segment& s : segments) {

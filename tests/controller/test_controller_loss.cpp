@@ -1,0 +1,90 @@
+// The controller lost and restarted (issue 19): the controller dies while the robot walks, the
+// robot stands down on its own (sim/README.md, "Controller loss"), and a new controller started a
+// second later takes it over from where it stands and walks it on. Lock-step in one process: the
+// kill is the controller node destroyed between two periods, the restart a fresh node (its own
+// source id, start-up solve from the measured state). Deterministic; the real-time version is
+// tools/faults.sh.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "controller_cases.hpp"
+#include "tools/drive/closed_loop.hpp"
+
+namespace stride {
+namespace {
+
+using drive::tiltDeg;
+
+struct Outcome {
+  bool fell = false;
+  double max_tilt = 0.0, z_min = 1e9, progress_after = 0.0;
+  drive::Run run;
+};
+
+// Walks `gait` at vx from `walk_at`, kills the controller at `kill`, restarts it 1 s later and
+// runs `after` more seconds. progress_after: forward distance over the last `after` / 2 seconds.
+Outcome killAndRestart(const ControllerConfig& config, const char* gait, double vx, double walk_at,
+                       double kill, double after) {
+  drive::Options o;
+  o.duration = kill + 1.0 + after;
+  o.controller_lost_at = kill;
+  o.controller_back_after = 1.0;
+  o.script.resize(2);  // stand from 0 s, then the gait
+  o.script[1].at = walk_at;
+  o.script[1].gait = gait;
+  o.script[1].vx = vx;
+  Outcome out;
+  out.run = drive::run(config, o);
+  out.fell = out.run.fell();
+  const double t_half = o.duration - 0.5 * after;
+  double x_half = 0.0;
+  for (const drive::Sample& s : out.run.samples) {
+    out.max_tilt = std::max(out.max_tilt, tiltDeg(s.q));
+    out.z_min = std::min(out.z_min, s.q[2]);
+    if (s.t <= t_half) x_half = s.q[0];
+  }
+  out.progress_after = out.run.q_end[0] - x_half;
+  return out;
+}
+
+// Ten kills spread over one gait cycle (every phase of the feet), a restart 1 s after each: the
+// robot stands down without falling, the new controller is followed, and walks it forward again.
+void tenKills(const char* robot, const char* gait, double vx, double walk_at, double cycle,
+              double after, double min_progress) {
+  const ControllerConfig config = loadControllerConfig(controller_cases::configPath(robot));
+  const double first_kill = walk_at + 1.5;  // walking at vx by then
+  int falls = 0;
+  for (int i = 0; i < 10; ++i) {
+    const double kill = first_kill + cycle * i / 10.0 + 0.0013 * i;  // off the period's grid too
+    const Outcome o = killAndRestart(config, gait, vx, walk_at, kill, after);
+    const sim::SimNodeStats& s = o.run.sim;
+    std::printf(
+        "%s killed at %.4f s: %s, tilt max %.1f deg, base min %.3f m, %.3f m forward in the last "
+        "%.1f s; %lld steps standing down, %lld past a policy's end\n",
+        robot, kill, o.fell ? "FELL" : "up", o.max_tilt, o.z_min, o.progress_after, 0.5 * after,
+        static_cast<long long>(s.stand_down_steps), static_cast<long long>(s.exhausted_steps));
+    falls += o.fell;
+    EXPECT_FALSE(o.fell) << "killed at " << kill;
+    EXPECT_EQ(o.run.controller_starts, 2);
+    EXPECT_EQ(s.stand_downs, 1) << "killed at " << kill;         // lost once, and only then
+    EXPECT_GT(s.stand_down_steps, 800) << "killed at " << kill;  // most of the silent second
+    EXPECT_EQ(s.source_switches, 1) << "the new controller is followed";
+    EXPECT_EQ(s.policies_rival, 0);
+    EXPECT_GT(o.progress_after, min_progress) << "walks on after the restart, killed at " << kill;
+  }
+  EXPECT_EQ(falls, 0);
+}
+
+TEST(ControllerLoss, QuadrupedTrottingSurvivesTenKillsAndRestarts) {
+  // stride_quad's trot: a 0.4 s cycle; 0.5 m/s forward.
+  tenKills("stride_quad", "trot", 0.5, 1.0, 0.4, 4.0, 0.5);
+}
+
+TEST(ControllerLoss, HumanoidWalkingSurvivesTenKillsAndRestarts) {
+  // stride_humanoid's walk: see its controller YAML for the cycle; 0.2 m/s forward.
+  tenKills("stride_humanoid", "walk", 0.2, 1.0, 1.0, 4.0, 0.15);
+}
+
+}  // namespace
+}  // namespace stride
