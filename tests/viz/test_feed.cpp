@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "viz/server/feed.hpp"
+#include "viz/server/frames.hpp"
 #include "viz/server/log_document.hpp"
 #include "viz/server/robot_files.hpp"
 #include "viz_cases.hpp"
@@ -192,6 +193,67 @@ TEST(Feed, EstimatedForcesOfAStandingRobotCarryItsWeight) {
   }
   EXPECT_GE(standing, 50);
   EXPECT_GT(feed.counters()["forces"]["estimated"].get<long>(), 0);
+}
+
+// A policy holding the default posture with feed-forward `u` on every joint and no gains: each
+// gives the standing robot its own forces.
+policy_t constantPolicy(std::int64_t utime, double u) {
+  const Robot& r = quad();
+  const int nu = r.model.nv - 6;
+  policy_t p;
+  msg::shape(p, 2, r.model.nq, r.model.nv, nu);
+  p.utime = p.knot0_utime = utime;
+  p.model_hash = modelHash(r);
+  p.source_id = 1;
+  p.tick = 0;
+  p.t0 = 0.0;
+  p.dt = 0.01;
+  p.status = 0;
+  for (int k = 0; k < 2; ++k) {
+    std::copy(r.default_q.data(), r.default_q.data() + r.model.nq, p.x_ref[k].begin());
+    std::fill(p.u_ff[k].begin(), p.u_ff[k].end(), u);
+  }
+  p.phase = 0b1111;
+  return p;
+}
+
+// Which policy's torque a state's forces use: the answer to that state when it comes before the
+// next state (a robot in lock-step waits for it), else the policy held when the state came (a
+// robot in real time does not wait). Before the first policy, states are framed as they come.
+TEST(Feed, AStateIsEstimatedWithThePolicyTheRobotApplied) {
+  Feed feed(Channels{}, quadSource());
+  const Channels ch;
+  FrameBuilder reference(quad());
+  auto forcesWith = [&](const policy_t& p, std::int64_t utime) {
+    reference.setPolicy(p);
+    return reference.state(standingState(utime))["forces"];
+  };
+  take(feed, ch.state, encode(standingState(1000)));
+  ASSERT_EQ(feed.pendingUtime(FrameKind::State), 1000);  // no policy yet: framed as it comes
+  EXPECT_EQ(feed.frame(FrameKind::State)["forces"], Json::array());
+
+  // Lock-step: state, then its answer.
+  const policy_t a = constantPolicy(1000, 0.0), b = constantPolicy(2000, 0.5);
+  take(feed, ch.policy, encode(a));
+  take(feed, ch.state, encode(standingState(2000)));
+  EXPECT_EQ(feed.pendingUtime(FrameKind::State), -1) << "waits for its answer";
+  take(feed, ch.policy, encode(b));
+  ASSERT_EQ(feed.pendingUtime(FrameKind::State), 2000);
+  const Json locked = feed.frame(FrameKind::State);
+  EXPECT_EQ(locked["forces"], forcesWith(b, 2000));
+  EXPECT_NE(locked["forces"], forcesWith(a, 2000));
+
+  // Real time: a state, a policy answering an older state, the next state: the first state goes
+  // with the policy held when it came (b), not the one that came after it (c).
+  const policy_t c = constantPolicy(2500, -0.5);
+  take(feed, ch.state, encode(standingState(3000)));
+  take(feed, ch.policy, encode(c));
+  EXPECT_EQ(feed.pendingUtime(FrameKind::State), -1);
+  take(feed, ch.state, encode(standingState(4000)));
+  ASSERT_EQ(feed.pendingUtime(FrameKind::State), 3000);
+  const Json real_time = feed.frame(FrameKind::State);
+  EXPECT_EQ(real_time["forces"], forcesWith(b, 3000));
+  EXPECT_NE(real_time["forces"], forcesWith(c, 3000));
 }
 
 TEST(RobotFiles, TheUrdfNamesOnlyTheServersUrls) {

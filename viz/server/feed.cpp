@@ -38,8 +38,13 @@ std::string hashText(std::int64_t hash) {
 struct Feed::Messages {
   robot_model_t model, model_in;
   bool have_model = false;
-  robot_state_t state, state_in;
-  bool state_pending = false;
+  // The state to frame (`state`, when state_pending) and the newest one (`waiting`), which waits
+  // for the policy answering it: a robot in lock-step applies that answer from the state on, a
+  // robot in real time the policy it held when it published the state. Each goes with the serial
+  // of its policy in the FrameBuilder.
+  robot_state_t state, waiting, state_in;
+  bool state_pending = false, have_waiting = false;
+  std::uint64_t state_policy = 0, waiting_policy = 0;
   std::int64_t last_state_utime = -1;
   policy_t policy, policy_in;
   horizon_t horizon, horizon_in;
@@ -212,9 +217,20 @@ Feed::Took Feed::takeState(const void* data, int size) {
     reject(channel, msg::describe(r));
     return Took::None;
   }
-  std::swap(m_->state, in);
-  m_->last_state_utime = m_->state.utime;
-  m_->state_pending = true;
+  m_->last_state_utime = in.utime;
+  if (!builder_->hasPolicy()) {
+    // No policy to wait for: framed as it is (forces []).
+    std::swap(m_->state, in);
+    m_->state_pending = true;
+    m_->have_waiting = false;
+    return Took::State;
+  }
+  // A newer state: the robot did not wait for an answer to the previous one (real time), which is
+  // then framed with the policy held when it came.
+  if (m_->have_waiting) readyWaitingState(m_->waiting_policy);
+  std::swap(m_->waiting, in);
+  m_->waiting_policy = builder_->policySerial();
+  m_->have_waiting = true;
   return Took::State;
 }
 
@@ -233,7 +249,10 @@ Feed::Took Feed::takePolicy(const void* data, int size) {
     return Took::None;
   }
   std::swap(m_->policy, in);
-  builder_->setPolicy(m_->policy);
+  const std::uint64_t serial = builder_->setPolicy(m_->policy);
+  // The answer to the waiting state (policy_t.utime: the state it answers): in lock-step the robot
+  // waited for it and applies it from that state on.
+  if (m_->have_waiting && m_->policy.utime >= m_->waiting.utime) readyWaitingState(serial);
   if (m_->policy.utime - m_->last_horizon_utime > kHorizonFreshUtime)
     m_->plan = Messages::PlanFrom::Policy;
   return Took::Policy;
@@ -281,6 +300,13 @@ Feed::Took Feed::takeCommand(const void* data, int size) {
   return Took::Command;
 }
 
+void Feed::readyWaitingState(std::uint64_t policy) {
+  std::swap(m_->state, m_->waiting);
+  m_->state_policy = policy;
+  m_->state_pending = true;
+  m_->have_waiting = false;
+}
+
 std::int64_t Feed::pendingUtime(FrameKind kind) const {
   switch (kind) {
     case FrameKind::State:
@@ -301,7 +327,7 @@ Json Feed::frame(FrameKind kind) {
     case FrameKind::State:
       if (!m_->state_pending) return nullptr;
       m_->state_pending = false;
-      return builder_->state(m_->state);
+      return builder_->state(m_->state, m_->state_policy);
     case FrameKind::Plan: {
       const auto from = m_->plan;
       m_->plan = Messages::PlanFrom::None;

@@ -58,7 +58,10 @@ class Feed {
   Took take(const std::string& channel, const void* data, int size);
 
   // The stamp [us] of the newest message not yet framed of that kind, -1 when there is none: the
-  // log reader decimates on it before building anything.
+  // log reader decimates on it before building anything. Once policies flow, a state is ready to
+  // frame when the policy answering it comes or when the next state does, whichever is first (so
+  // that its forces use the torque the robot applied there: viz/README.md, "How forces are
+  // estimated").
   std::int64_t pendingUtime(FrameKind kind) const;
   // The frame of the newest message of that kind not yet framed (State, Plan, Status), then that
   // message counts as framed; a null Json when there is none.
@@ -89,6 +92,8 @@ class Feed {
   Took takeHorizon(const void* data, int size);
   Took takeStatus(const void* data, int size);
   Took takeCommand(const void* data, int size);
+  // The waiting state becomes the one to frame, estimated with the policy of that serial.
+  void readyWaitingState(std::uint64_t policy);
 
   struct Messages;  // the newest of each kind and scratch messages to decode into
   struct Count {

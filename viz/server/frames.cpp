@@ -1,6 +1,7 @@
 #include "viz/server/frames.hpp"
 
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <type_traits>
 #include <utility>
@@ -72,6 +73,14 @@ FrameBuilder::FrameBuilder(const Robot& robot)
   v_.setZero(robot.model.nv);
   u_.setZero(nu_);
   tau_.setZero(robot.model.nv);
+  // The robot applies at most its effort limits (stride-sim clamps, as motors saturate); a joint
+  // without a limit (negative or infinite in the model) is not clamped.
+  const int first = robot.model.nv - nu_;
+  effort_.setConstant(nu_, std::numeric_limits<double>::infinity());
+  for (int i = 0; i < nu_; ++i) {
+    const double limit = robot.model.effortLimit[first + i];
+    if (limit >= 0.0) effort_[i] = limit;
+  }
   feet_.resize(robot.contacts.size(), Eigen::Vector3d::Zero());
 }
 
@@ -110,26 +119,31 @@ Json FrameBuilder::model(const robot_model_t* wire) const {
   return frame;
 }
 
-void FrameBuilder::setPolicy(const policy_t& p) {
+std::uint64_t FrameBuilder::setPolicy(const policy_t& p) {
   const Model& model = robot_.model;
-  if (policy_.knots != p.knots) policy_.resize(p.knots, model.nq, model.nv, nu_);
+  // Overwrites the oldest held policy.
+  HeldPolicy& held = policies_[serial_ % kPolicies];
+  sim::Policy& policy = held.policy;
+  if (policy.knots != p.knots) policy.resize(p.knots, model.nq, model.nv, nu_);
   // Times relative to knot 0: wall-clock stamps (~1.7e15 us) would cost the interpolation its
   // sub-microsecond resolution in double seconds.
-  policy_.t0 = 0.0;
-  policy_.dt = p.dt;
+  policy.t0 = 0.0;
+  policy.dt = p.dt;
   for (int k = 0; k < p.knots; ++k) {
-    std::copy(p.x_ref[k].begin(), p.x_ref[k].end(), policy_.xRef(k));
-    std::copy(p.u_ff[k].begin(), p.u_ff[k].end(), policy_.uFf(k));
-    std::copy(p.K[k].begin(), p.K[k].end(), policy_.gain(k));
+    std::copy(p.x_ref[k].begin(), p.x_ref[k].end(), policy.xRef(k));
+    std::copy(p.u_ff[k].begin(), p.u_ff[k].end(), policy.uFf(k));
+    std::copy(p.K[k].begin(), p.K[k].end(), policy.gain(k));
   }
-  policy_knot0_utime_ = p.knot0_utime;
-  have_policy_ = true;
+  held.knot0_utime = p.knot0_utime;
+  held.serial = ++serial_;
+  return serial_;
 }
 
-bool FrameBuilder::estimateForces(const robot_state_t& state, Json& forces) {
+bool FrameBuilder::estimateForces(const robot_state_t& state, std::uint64_t policy_serial,
+                                  Json& forces) {
   const Model& model = robot_.model;
   const int nc = contacts_.size();
-  if (!have_policy_) {
+  if (serial_ == 0) {
     ++force_counts_.no_policy;
     return false;
   }
@@ -137,18 +151,42 @@ bool FrameBuilder::estimateForces(const robot_state_t& state, Json& forces) {
     ++force_counts_.no_contact_flags;
     return false;
   }
-  const double t = static_cast<double>(state.utime - policy_knot0_utime_) * 1e-6;
-  if (evaluator_.evaluate(policy_, t, q_, v_, u_) == sim::PolicyStatus::Invalid) {
+  const HeldPolicy* held = &policies_[(serial_ - 1) % kPolicies];  // the newest
+  if (policy_serial != 0) {
+    const HeldPolicy& asked = policies_[(policy_serial - 1) % kPolicies];
+    if (asked.serial == policy_serial) held = &asked;
+  }
+  const double t = static_cast<double>(state.utime - held->knot0_utime) * 1e-6;
+  if (evaluator_.evaluate(held->policy, t, q_, v_, u_) == sim::PolicyStatus::Invalid) {
     ++force_counts_.failed;
     return false;
   }
+  u_ = u_.cwiseMax(-effort_).cwiseMin(effort_);
   // τ = [0_6; u] for a floating base, u for a fixed one (solver/contact/knot_dynamics.hpp).
   tau_.setZero();
   tau_.tail(nu_) = u_;
   for (int c = 0; c < nc; ++c) contacts_.setActive(c, state.contact[c] != 0);
-  if (contactDynamics(model, data_, contacts_, contact_data_, q_, v_, tau_) != ContactStatus::Ok) {
-    ++force_counts_.failed;
-    return false;
+  // The ground only pushes: a closed contact whose force pulls (the torque lifts that foot) is
+  // opened, the most pulling one first, and the rest solved again; at most once per contact.
+  for (int pass = 0; pass <= nc; ++pass) {
+    if (contactDynamics(model, data_, contacts_, contact_data_, q_, v_, tau_) !=
+        ContactStatus::Ok) {
+      ++force_counts_.failed;
+      return false;
+    }
+    int pulling = -1, row = 0;
+    double least = 0.0;
+    for (int c = 0; c < nc; ++c) {
+      if (!contacts_.isActive(c)) continue;
+      const double fz = contact_data_.lambda[row + 2];  // world z: the ground's normal
+      if (fz < least) {
+        least = fz;
+        pulling = c;
+      }
+      row += contacts_[c].dim;
+    }
+    if (pulling < 0) break;
+    contacts_.setActive(pulling, false);
   }
   int row = 0;  // λ stacks the active contacts in order, each `dim` rows, force part first
   for (int c = 0; c < nc; ++c) {
@@ -163,13 +201,13 @@ bool FrameBuilder::estimateForces(const robot_state_t& state, Json& forces) {
   return true;
 }
 
-Json FrameBuilder::state(const robot_state_t& state) {
+Json FrameBuilder::state(const robot_state_t& state, std::uint64_t policy_serial) {
   const Model& model = robot_.model;
   configuration(model, state.q, q_);
   v_ = Eigen::Map<const Eigen::VectorXd>(state.v.data(), model.nv);
   Json contact = Json::array(), forces = Json::array();
   for (std::int8_t c : state.contact) contact.push_back(static_cast<int>(c));
-  if (!estimateForces(state, forces)) forces = Json::array();
+  if (!estimateForces(state, policy_serial, forces)) forces = Json::array();
   return {{"type", "state"},
           {"t", r6(static_cast<double>(state.utime) * 1e-6)},
           {"q", numbers(q_.data(), model.nq)},

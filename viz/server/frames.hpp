@@ -6,6 +6,7 @@
 // message that already passed its checks (messages/validate.hpp, viz/server/wire.hpp) for the
 // robot given here.
 
+#include <array>
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
 
@@ -40,13 +41,21 @@ class FrameBuilder {
   // {"type":"model",...}: from the controller's robot_model_t when given, else from the robot.
   Json model(const robot_model_t* wire) const;
 
-  // The policy the robot applies from now on: the state frames' forces use its torque.
-  void setPolicy(const policy_t& policy);
-  bool hasPolicy() const { return have_policy_; }
+  // A policy the robot applies from now on; returns its serial (1, 2, ...). The builder holds the
+  // newest kPolicies: a state can be estimated with the policy the robot held when it published
+  // that state, even after newer ones came (viz/README.md, "How forces are estimated").
+  static constexpr int kPolicies = 3;
+  std::uint64_t setPolicy(const policy_t& policy);
+  bool hasPolicy() const { return serial_ > 0; }
+  std::uint64_t policySerial() const { return serial_; }  // the newest's; 0 before any
 
   // {"type":"state","t","q","contact","forces"}: forces per contact frame, world axes [N], zero
-  // for open contacts, estimated at the state with the policy's torque at the state's time.
-  Json state(const robot_state_t& state);
+  // for open contacts, estimated at the state with the torque the robot applies there: the policy
+  // of that serial (the newest one when 0, or when it is no longer held) at the state's time,
+  // clamped to the model's effort limits.
+  Json state(const robot_state_t& state, std::uint64_t policy_serial = 0);
+  // The torque of the last estimate (size nu), after clamping.
+  const Eigen::VectorXd& lastTorque() const { return u_; }
   // {"type":"plan","t","base","feet","footholds","forces"} from the controller's horizon.
   Json plan(const horizon_t& horizon);
   // The same from a policy's x_ref knots: no contact mask per knot (only at knot 0: footholds of
@@ -62,7 +71,14 @@ class FrameBuilder {
   void feetAt(const Eigen::VectorXd& q);
   Json planFrom(double t, const std::vector<const std::vector<double>*>& qs,
                 const std::vector<std::int32_t>& masks, Json forces);
-  bool estimateForces(const robot_state_t& state, Json& forces);
+  bool estimateForces(const robot_state_t& state, std::uint64_t policy_serial, Json& forces);
+
+  // A received policy in the evaluator's form, its times relative to knot 0.
+  struct HeldPolicy {
+    sim::Policy policy;
+    std::int64_t knot0_utime = 0;
+    std::uint64_t serial = 0;  // 0: empty
+  };
 
   const Robot& robot_;
   int nu_;
@@ -70,10 +86,9 @@ class FrameBuilder {
   ContactSet contacts_;
   ContactData contact_data_;
   sim::PolicyEvaluator evaluator_;
-  sim::Policy policy_;
-  std::int64_t policy_knot0_utime_ = 0;
-  bool have_policy_ = false;
-  Eigen::VectorXd q_, v_, u_, tau_;
+  std::array<HeldPolicy, kPolicies> policies_;
+  std::uint64_t serial_ = 0;
+  Eigen::VectorXd q_, v_, u_, tau_, effort_;
   std::vector<Eigen::Vector3d> feet_;
   ForceCounts force_counts_;
 };
