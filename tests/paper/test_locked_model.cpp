@@ -54,14 +54,16 @@ TEST(LockedModel, MatchesTheFullModelAtTheSameConfiguration) {
     const Eigen::VectorXd qr = randomConfiguration(red, rng);
     Eigen::VectorXd vr(red.nv);
     for (int i = 0; i < red.nv; ++i) vr[i] = rate(rng);
-    Eigen::VectorXd q = robot.default_q, v = Eigen::VectorXd::Zero(full.nv);
-    for (int i = 1; i < red.njoints(); ++i) {
-      const Joint& jr = red.joints[i];
-      const Joint& jf = full.joints[full.getJointId(jr.name)];
-      q.segment(jf.idx_q, jf.nq) = qr.segment(jr.idx_q, jr.nq);
-      v.segment(jf.idx_v, jf.nv) = vr.segment(jr.idx_v, jr.nv);
+    const Eigen::VectorXd q = expandConfiguration(full, red, qr, robot.default_q);
+    const Eigen::VectorXd v = expandVelocity(full, red, vr);
+    // The expansion keeps every locked joint at its default angle and at rest (the astronaut's
+    // log draws the full robot so), and the reduction is its inverse.
+    for (int i = 1; i < full.njoints(); ++i) {
+      const Joint& jf = full.joints[i];
+      if (jf.type == JointType::FreeFlyer || red.existJoint(jf.name)) continue;
+      EXPECT_EQ(q[jf.idx_q], robot.default_q[jf.idx_q]) << jf.name;
+      EXPECT_EQ(v[jf.idx_v], 0.0) << jf.name;
     }
-    // The reduction is the inverse of that expansion.
     ASSERT_TRUE(reduceConfiguration(full, red, q).isApprox(qr));
     ASSERT_TRUE(reduceVelocity(full, red, v).isApprox(vr));
 

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "viz/server/feed.hpp"
@@ -254,6 +255,30 @@ TEST(Feed, AStateIsEstimatedWithThePolicyTheRobotApplied) {
   const Json real_time = feed.frame(FrameKind::State);
   EXPECT_EQ(real_time["forces"], forcesWith(b, 3000));
   EXPECT_NE(real_time["forces"], forcesWith(c, 3000));
+}
+
+// stride-viz --all-frames (LogOptions of rate 0): every accepted state and plan of the log is a
+// frame (the horizons come at 10 Hz, under the default plan rate); by default the 200 Hz states
+// are decimated to 100 per second.
+TEST(Feed, RatesOfZeroKeepEveryFrameOfTheLog) {
+  const std::string log = sessionLog();
+  ASSERT_FALSE(log.empty());
+  const auto count = [&](const LogOptions& options, Json& counters) {
+    Feed feed(Channels{}, quadSource());
+    const LogDocument doc = readLog(log, feed, options, Json::object());
+    counters = feed.counters();
+    std::map<std::string, long> n;
+    for (const Json& f : doc.document["frames"]) ++n[f["type"].get<std::string>()];
+    return n;
+  };
+  Json counters;
+  const auto all = count({0.0, 0.0, 0.0}, counters);
+  const long states = counters["channels"][Channels{}.state]["accepted"].get<long>();
+  const long horizons = counters["channels"][Channels{}.horizon]["accepted"].get<long>();
+  EXPECT_EQ(all.at("state"), states);
+  EXPECT_GE(all.at("plan"), horizons);  // and the policies' plans between horizons
+  const auto decimated = count({}, counters);
+  EXPECT_LT(decimated.at("state"), states);
 }
 
 TEST(RobotFiles, TheUrdfNamesOnlyTheServersUrls) {

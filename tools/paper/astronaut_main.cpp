@@ -1,7 +1,8 @@
 // stride-paper-astronaut: the paper's astronaut reorientation (§V-B, Fig. 5-6). Builds the
 // problem (astronaut.hpp), plans it with DDP from zero torques in receding windows over the
 // orientation waypoints, checks the plan by re-integrating its torques with a finer step, prints
-// the numbers and writes the trajectories for tools/paper/plot_astronaut.py.
+// the numbers and writes the trajectories for tools/paper/plot_astronaut.py, and with --log the
+// motion as an LCM log of the full robot for stride-viz (the snapshot figure's frames).
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "config/command_line.hpp"
@@ -18,11 +20,16 @@
 #include "solver/multibody/kinematics.hpp"
 #include "solver/multibody/lie_group.hpp"
 #include "tools/paper/astronaut.hpp"
+#include "tools/paper/motion_log.hpp"
 
 using namespace stride;
 
 namespace {
 constexpr double kDeg = 180.0 / M_PI;
+// Where the log puts the initial CoM above the viewer's ground grid [m]: the problem has no ground
+// (zero gravity, base at the origin), and a body turning about its CoM at z = 0 would cut the grid.
+// 1.2 m clears the feet at every orientation (the feet are < 1 m from the CoM).
+constexpr double kLogCoMHeight = 1.2;
 
 // The points of the sagittal stick figure, and the segments between them.
 const std::vector<std::string> kFigureFrames = {
@@ -51,12 +58,16 @@ int main(int argc, char** argv) {
   AstronautOptions o;
   std::string robot_yaml =
       std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml";
-  std::string out;
+  std::string out, log_path;
   std::string solver_name = "ddp";
   int substeps = 10;
   bool verbose = false;
   app.add_option("--robot", robot_yaml, "robot YAML")->check(CLI::ExistingFile);
   app.add_option("--out", out, "output folder (CSV, JSON); nothing written without it");
+  app.add_option("--log", log_path,
+                 "also write the motion as an LCM log of the full robot for stride-viz (locked "
+                 "joints at their default angles, the initial CoM 1.2 m above the viewer's "
+                 "ground)");
   app.add_option("--dt", o.dt, "knot duration, s")->check(CLI::PositiveNumber);
   app.add_option("--knots", o.knots, "running knots")->check(CLI::PositiveNumber);
   app.add_option("--turn", o.turn_deg, "rotation about +y, degrees");
@@ -178,9 +189,35 @@ int main(int argc, char** argv) {
               ("max momentum change in one knot: dt/" + std::to_string(substeps)).c_str(),
               fine.max_dh_fine);
 
+  const int nq = model.nq, nv = model.nv, T = o.knots;
+  // The locked joints and the angles they are locked at (the robot's default posture).
+  std::map<std::string, double> locked_angles;
+  for (int i = 1; i < robot.model.njoints(); ++i) {
+    const Joint& j = robot.model.joints[i];
+    if (j.type != JointType::FreeFlyer && !model.existJoint(j.name))
+      locked_angles[j.name] = robot.default_q[j.idx_q];
+  }
+  if (!log_path.empty()) {
+    // The full robot, so that the viewer draws stride_humanoid from its own URDF with its own
+    // model hash: every state expanded (locked joints at their angles, at rest), in the full
+    // model's wire order, the whole motion shifted so that its initial CoM is kLogCoMHeight above
+    // the ground (a translation changes nothing in zero gravity). No contact is closed.
+    if (const auto dir = std::filesystem::path(log_path).parent_path(); !dir.empty())
+      std::filesystem::create_directories(dir);
+    MotionLog log(log_path, robot);
+    const Eigen::Vector3d shift = Eigen::Vector3d(0.0, 0.0, kLogCoMHeight) - m.com.front();
+    const std::vector<bool> open(robot.contacts.size(), false);
+    for (int k = 0; k <= T; ++k) {
+      Eigen::VectorXd q = expandConfiguration(robot.model, model, xs[k].head(nq), robot.default_q);
+      q.head<3>() += shift;
+      log.state(m.t[k], q, expandVelocity(robot.model, model, xs[k].tail(nv)), open);
+    }
+    std::printf("  wrote %s (%ld events: the full robot's states, stride-viz --log)\n",
+                log_path.c_str(), log.events());
+  }
+
   if (out.empty()) return 0;
   std::filesystem::create_directories(out);
-  const int nq = model.nq, nv = model.nv, T = o.knots;
   std::vector<std::string> joints = astro.locked().free;
 
   std::ofstream traj(out + "/trajectory.csv");
@@ -265,6 +302,9 @@ int main(int argc, char** argv) {
   sum["max_knot_momentum_change_plan"] = fine.max_dh_plan;
   sum["max_knot_momentum_change_fine"] = fine.max_dh_fine;
   sum["final_orientation_error_deg"] = final_err * kDeg;
+  sum["locked_joints"] = locked_angles;
+  sum["log"] = log_path.empty() ? json(nullptr) : json(log_path);
+  sum["log_com_height_m"] = kLogCoMHeight;
   sum["knots"] = T;
   sum["dt"] = o.dt;
   sum["waypoints"] = json::array();

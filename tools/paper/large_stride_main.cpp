@@ -1,7 +1,8 @@
 // stride-paper-large-stride: the paper's large strides on flat ground (§V-A, Fig. 2-4). For each
 // stride length: plans the contact sequence and the centroidal reference, tracks it with the IK
 // baseline and with KKT-DDP (warm-started from the IK), plays the DDP policy on the mock robot,
-// prints the table and writes the trajectories for tools/paper/plot_large_stride.py.
+// prints the table and writes the trajectories for tools/paper/plot_large_stride.py, and with
+// --logs each motion as an LCM log for stride-viz (the snapshot figure's frames).
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -16,6 +17,7 @@
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/kinematics.hpp"
 #include "tools/paper/large_stride.hpp"
+#include "tools/paper/motion_log.hpp"
 
 using namespace stride;
 
@@ -56,6 +58,22 @@ void writeFrames(const Model& model, const std::string& path, const std::vector<
     f << "\n";
   }
 }
+
+// One motion as an LCM log for stride-viz (motion_log.hpp): per sample k < N its state (v from
+// the motion), the plan's contacts and the motion's contact forces as the planned forces.
+void writeLog(const Robot& robot, const StridePlan& plan, const std::string& path,
+              const std::vector<Eigen::VectorXd>& q, const std::vector<Eigen::VectorXd>& v,
+              const std::vector<std::array<Vector6d, 2>>& wrench) {
+  MotionLog log(path, robot);
+  std::vector<Eigen::Vector3d> f(2);
+  for (int k = 0; k < plan.N; ++k) {
+    const std::vector<bool> closed = {plan.closed[k][0], plan.closed[k][1]};
+    // The force part of each sole's wrench [f; τ] (world axes): what the page draws as an arrow.
+    for (int c = 0; c < 2; ++c) f[c] = wrench[k][c].head<3>();
+    log.state(plan.t[k], q[k], v[k], closed);
+    log.plannedForces(plan.t[k], q[k], closed, f);
+  }
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -71,9 +89,14 @@ int main(int argc, char** argv) {
   StrideDdpOptions dop;
   IkOptions iko;
   int iterations = 100;
-  bool verbose = false, no_sim = false, sim_trace = false;
+  bool verbose = false, no_sim = false, sim_trace = false, logs = false;
   app.add_option("--robot", robot_yaml, "robot YAML")->check(CLI::ExistingFile);
-  app.add_option("--out", out, "output folder (CSV, JSON); nothing written without it");
+  CLI::Option* out_option =
+      app.add_option("--out", out, "output folder (CSV, JSON); nothing written without it");
+  app.add_flag("--logs", logs,
+               "also write each stride's IK and DDP motions as LCM logs for stride-viz "
+               "(stride_XXX/ik.lcmlog, ddp.lcmlog: states, contacts, forces as planned forces)")
+      ->needs(out_option);
   app.add_option("--lengths", lengths, "stride lengths [m] (foot displacement per step)");
   app.add_option("--strides", po.strides, "full strides (plus a half step at each end)");
   app.add_option("--dt", po.dt, "knot period [s]")->check(CLI::PositiveNumber);
@@ -265,6 +288,13 @@ int main(int argc, char** argv) {
       }
       writeFrames(model, dir + "/frames_ddp.csv", t, qd);
       writeFrames(model, dir + "/frames_ik.csv", t, qi);
+      if (logs) {
+        std::vector<Eigen::VectorXd> vd(plan.N);
+        for (int k = 0; k < plan.N; ++k) vd[k] = solve.xs[sp.contactKnot(k)].tail(model.nv);
+        writeLog(robot, plan, dir + "/ddp.lcmlog", qd, vd, ddp_force);
+        writeLog(robot, plan, dir + "/ik.lcmlog", qi, ik.v, ik.force);
+        std::printf("  wrote %s/{ik,ddp}.lcmlog (stride-viz --log)\n", dir.c_str());
+      }
     }
   }
 

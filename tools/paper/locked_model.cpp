@@ -107,4 +107,27 @@ Eigen::VectorXd reduceVelocity(const Model& full, const Model& reduced,
   return keepJoints(full, reduced, v_full, false);
 }
 
+Eigen::VectorXd expandConfiguration(const Model& full, const Model& reduced,
+                                    const Eigen::VectorXd& q_reduced,
+                                    const Eigen::VectorXd& q_locked) {
+  Eigen::VectorXd q = q_locked;
+  for (int i = 1; i < reduced.njoints(); ++i) {
+    const Joint& jr = reduced.joints[i];
+    const Joint& jf = full.joints[full.getJointId(jr.name)];
+    q.segment(jf.idx_q, jf.nq) = q_reduced.segment(jr.idx_q, jr.nq);
+  }
+  return q;
+}
+
+Eigen::VectorXd expandVelocity(const Model& full, const Model& reduced,
+                               const Eigen::VectorXd& v_reduced) {
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(full.nv);
+  for (int i = 1; i < reduced.njoints(); ++i) {
+    const Joint& jr = reduced.joints[i];
+    const Joint& jf = full.joints[full.getJointId(jr.name)];
+    v.segment(jf.idx_v, jf.nv) = v_reduced.segment(jr.idx_v, jr.nv);
+  }
+  return v;
+}
+
 }  // namespace stride

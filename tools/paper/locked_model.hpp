@@ -36,4 +36,14 @@ Eigen::VectorXd reduceConfiguration(const Model& full, const Model& reduced,
 Eigen::VectorXd reduceVelocity(const Model& full, const Model& reduced,
                                const Eigen::VectorXd& v_full);
 
+// The full robot's configuration / velocity matching a reduced one: base and free joints copied,
+// every locked joint at its value in `q_locked` (the angles it was locked at: the robot's
+// default_q) and at rest. What a viewer or a log of the full robot needs to show a motion of the
+// reduced model (stride-paper-astronaut --log).
+Eigen::VectorXd expandConfiguration(const Model& full, const Model& reduced,
+                                    const Eigen::VectorXd& q_reduced,
+                                    const Eigen::VectorXd& q_locked);
+Eigen::VectorXd expandVelocity(const Model& full, const Model& reduced,
+                               const Eigen::VectorXd& v_reduced);
+
 }  // namespace stride

@@ -1,16 +1,21 @@
 #!/usr/bin/env python3
 """Plots of the astronaut reorientation (paper §V-B, Fig. 5-6) from stride-paper-astronaut's output.
 
-Usage: plot_astronaut.py DIR   (reads DIR/{trajectory,frames}.csv, summary.json, skeleton.json;
-writes DIR/astronaut_{torques,pitch,snapshots,sagittal}.png). matplotlib only (Debian python3-matplotlib).
+Usage: plot_astronaut.py DIR [--viewer STRIDE_VIZ --node-modules DIR]
+(reads DIR/{trajectory,frames}.csv, summary.json, skeleton.json; writes
+DIR/astronaut_{torques,pitch,snapshots,sagittal}.png). matplotlib (Debian python3-matplotlib).
+With --viewer the snapshots are frames of stride-viz's page on DIR/session.lcmlog
+(snapshots.py: headless Chromium); without, stick figures.
 """
+import argparse
 import json
 import sys
 
+import snapshots
 from plot_common import plt, read_csv
 
 
-def main(out):
+def main(out, viewer=None, node_modules=None):
     traj = read_csv(f"{out}/trajectory.csv")
     frames = read_csv(f"{out}/frames.csv")
     with open(f"{out}/summary.json") as f:
@@ -62,10 +67,26 @@ def main(out):
     fig.savefig(f"{out}/astronaut_pitch.png", dpi=90)
     plt.close(fig)
 
-    # Fig. 5: stick figures in the sagittal plane (x forward, z up), side by side in time.
+    # Fig. 5: the robot at 12 instants, side by side in time: frames of stride-viz's page when
+    # a browser is there, else stick figures in the sagittal plane (x forward, z up).
     n = 12
     count = len(frames["t"])
     picks = [round(i * (count - 1) / (n - 1)) for i in range(n)]
+    labels = [f"{frames['t'][k]:.2f} s\n{traj['pitch_deg'][k]:.0f}°" for k in picks]
+    if viewer:
+        snapshots.render(viewer, node_modules, [("", f"{out}/session.lcmlog")],
+                         [frames["t"][k] for k in picks], f"{out}/astronaut_snapshots.png",
+                         labels=labels, view="astronaut",
+                         title="Astronaut reorientation, side view (base pitch under each frame)")
+    else:
+        stick_snapshots(frames, segments, picks, labels, f"{out}/astronaut_snapshots.png")
+    sagittal(frames, segments, traj, count, f"{out}/astronaut_sagittal.png")
+    print(f"  plots: {out}/astronaut_torques.png, astronaut_pitch.png, astronaut_snapshots.png "
+          f"({'stride-viz' if viewer else 'stick figures'}), astronaut_sagittal.png")
+
+
+def stick_snapshots(frames, segments, picks, labels, path):
+    """Stick figures in the sagittal plane at `picks`, side by side."""
     spacing = 1.4
     fig, ax = plt.subplots(figsize=(13, 2.6))
     for i, k in enumerate(picks):
@@ -78,17 +99,19 @@ def main(out):
                     [frames[f"{a}_z"][k], frames[f"{b}_z"][k]], color=color, lw=2,
                     solid_capstyle="round")
         ax.plot(frames["head_x"][k] + dx, frames["head_z"][k], "ko", ms=5)
-        ax.text(dx, -1.05, f"{frames['t'][k]:.2f} s\n{traj['pitch_deg'][k]:.0f}°", ha="center",
-                fontsize=7)
+        ax.text(dx, -1.05, labels[i], ha="center", fontsize=7)
     ax.set_aspect("equal")
     ax.set_ylim(-1.2, 1.0)
     ax.axis("off")
     ax.set_title("Astronaut reorientation, sagittal view (blue: left leg, red: right leg)", fontsize=9)
     fig.tight_layout()
-    fig.savefig(f"{out}/astronaut_snapshots.png", dpi=80)
+    fig.savefig(path, dpi=80)
     plt.close(fig)
-    # Sagittal view: the stick figure at a few instants overlaid about the initial CoM (the body
-    # turning round), and the legs' shape loops (hip vs knee angle) that produce the rotation.
+
+
+def sagittal(frames, segments, traj, count, path):
+    """The stick figure at a few instants overlaid about the initial CoM (the body turning
+    round), and the legs' shape loops (hip vs knee angle) that produce the rotation."""
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 5), gridspec_kw={"width_ratios": [1, 1.2]})
     n = 16
     picks = [round(i * (count - 1) / n) for i in range(n)]
@@ -115,13 +138,17 @@ def main(out):
     ax2.grid(alpha=0.3)
     ax2.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(f"{out}/astronaut_sagittal.png", dpi=80)
+    fig.savefig(path, dpi=80)
     plt.close(fig)
-    print(f"  plots: {out}/astronaut_torques.png, astronaut_pitch.png, astronaut_snapshots.png, "
-          "astronaut_sagittal.png")
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        sys.exit(__doc__)
-    main(sys.argv[1])
+    parser = argparse.ArgumentParser(usage=__doc__)
+    parser.add_argument("dir")
+    parser.add_argument("--viewer", help="stride-viz: snapshots from its page (else stick figures)")
+    parser.add_argument("--node-modules", help="node_modules with playwright-core")
+    args = parser.parse_args()
+    try:
+        main(args.dir, args.viewer, args.node_modules)
+    except snapshots.SnapshotError as e:
+        sys.exit(f"plot_astronaut.py: snapshots: {e}")

@@ -1,13 +1,18 @@
 #!/usr/bin/env python3
 """Plots of the large strides (paper §V-A, Fig. 2-4) from stride-paper-large-stride's output.
 
-Usage: plot_large_stride.py DIR   (reads DIR/summary.json, DIR/skeleton.json and, per stride,
+Usage: plot_large_stride.py DIR [--viewer STRIDE_VIZ --node-modules DIR]
+(reads DIR/summary.json, DIR/skeleton.json and, per stride,
 DIR/stride_XXX/{trajectory,iterations,frames_ik,frames_ddp}.csv; writes, per stride,
-DIR/large_stride_XXX_{grf,cost,snapshots}.png). matplotlib only (Debian python3-matplotlib).
+DIR/large_stride_XXX_{grf,cost,snapshots}.png). matplotlib (Debian python3-matplotlib). With
+--viewer the snapshots are frames of stride-viz's page on DIR/stride_XXX/{ik,ddp}.lcmlog
+(snapshots.py: headless Chromium, the planned forces as arrows); without, stick figures.
 """
+import argparse
 import json
 import sys
 
+import snapshots
 from plot_common import plt, read_csv
 
 
@@ -55,12 +60,18 @@ def plot_cost(it, groups, title, path):
     plt.close(fig)
 
 
-def plot_snapshots(frames_ik, frames_ddp, skeleton, title, path, count=12):
+def snapshot_samples(frames, count=12):
+    """Fig. 4's instants: `count` samples evenly spaced over the motion."""
+    n = len(frames["t"])
+    return [round(i * (n - 1) / (count - 1)) for i in range(count)]
+
+
+def plot_snapshots(frames_ik, frames_ddp, skeleton, title, path):
     """Fig. 4: sagittal stick figures, IK (top) and DDP (bottom), at evenly spaced instants."""
     names = skeleton["frames"]
     segs = skeleton["segments"]
-    n = len(frames_ddp["t"])
-    idx = [round(i * (n - 1) / (count - 1)) for i in range(count)]
+    idx = snapshot_samples(frames_ddp)
+    count = len(idx)
     fig, axes = plt.subplots(2, 1, figsize=(14, 5.5), sharex=True)
     for ax, frames, label, color in ((axes[0], frames_ik, "IK", "tab:red"),
                                      (axes[1], frames_ddp, "DDP", "tab:blue")):
@@ -80,7 +91,7 @@ def plot_snapshots(frames_ik, frames_ddp, skeleton, title, path, count=12):
     plt.close(fig)
 
 
-def main(out):
+def main(out, viewer=None, node_modules=None):
     with open(f"{out}/summary.json") as f:
         summary = json.load(f)
     with open(f"{out}/skeleton.json") as f:
@@ -96,10 +107,29 @@ def main(out):
         plot_grf(traj, s["weight_N"], title, f"{out}/large_stride_{cm:03d}_grf.png")
         plot_cost(it, groups, f"{cm} cm stride: cost by DDP iteration",
                   f"{out}/large_stride_{cm:03d}_cost.png")
-        plot_snapshots(read_csv(f"{d}/frames_ik.csv"), read_csv(f"{d}/frames_ddp.csv"), skeleton,
-                       f"{cm} cm stride (sagittal view)", f"{out}/large_stride_{cm:03d}_snapshots.png")
-    print(f"plots written to {out}/large_stride_*.png")
+        frames_ddp = read_csv(f"{d}/frames_ddp.csv")
+        path = f"{out}/large_stride_{cm:03d}_snapshots.png"
+        if viewer:
+            # The same instants as the stick figures, each motion's log in the page: IK above,
+            # DDP below, the forces each plans drawn as arrows.
+            times = [frames_ddp["t"][k] for k in snapshot_samples(frames_ddp)]
+            snapshots.render(viewer, node_modules,
+                             [("IK", f"{d}/ik.lcmlog"), ("DDP", f"{d}/ddp.lcmlog")], times, path,
+                             title=f"{cm} cm stride: IK (top) and DDP (bottom)", view="stride")
+        else:
+            plot_snapshots(read_csv(f"{d}/frames_ik.csv"), frames_ddp, skeleton,
+                           f"{cm} cm stride (sagittal view)", path)
+    print(f"plots written to {out}/large_stride_*.png (snapshots: "
+          f"{'stride-viz' if viewer else 'stick figures'})")
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else ".")
+    parser = argparse.ArgumentParser(usage=__doc__)
+    parser.add_argument("dir", nargs="?", default=".")
+    parser.add_argument("--viewer", help="stride-viz: snapshots from its page (else stick figures)")
+    parser.add_argument("--node-modules", help="node_modules with playwright-core")
+    args = parser.parse_args()
+    try:
+        main(args.dir, args.viewer, args.node_modules)
+    except snapshots.SnapshotError as e:
+        sys.exit(f"plot_large_stride.py: snapshots: {e}")

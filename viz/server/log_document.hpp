@@ -12,6 +12,7 @@
 
 namespace stride::viz {
 
+// A rate of 0 keeps every frame of its kind.
 struct LogOptions {
   double state_rate = 100.0;  // per second of log time
   double plan_rate = 20.0;

@@ -103,6 +103,11 @@ int main(int argc, char** argv) {
   app.add_option("--web-dir", server_options.web_dir, "the page's files (index.html, assets/)");
   app.add_option("--rate", rate, "live: frames of each kind per second, at most")
       ->check(CLI::Range(0.1, 1000.0));
+  bool all_frames = false;
+  app.add_flag("--all-frames", all_frames,
+               "log: every state, plan and status of the log becomes a frame (default: at most "
+               "100 states, 20 plans and 20 statuses per second of log time)")
+      ->needs("--log");
   app.add_option("--queue-frames", server_options.queue.max_frames,
                  "frames queued for one browser, at most (then the oldest are dropped)")
       ->check(CLI::Range(1, 100000));
@@ -152,7 +157,11 @@ int main(int argc, char** argv) {
         live ? Json{{"mode", "live"}, {"url", url}} : Json{{"mode", "log"}, {"log", log_path}};
     stride::viz::HttpServer server(server_options, info);
     if (!live) {
-      stride::viz::LogDocument log = stride::viz::readLog(log_path, feed, {}, info);
+      // Decimation keeps a long session's document small; a short log whose every knot matters
+      // (the paper's snapshots: a plan per state) asks for all of them.
+      stride::viz::LogOptions log_options;
+      if (all_frames) log_options = {0.0, 0.0, 0.0};
+      stride::viz::LogDocument log = stride::viz::readLog(log_path, feed, log_options, info);
       server.setLogDocument(std::make_shared<const std::string>(
           log.document.dump(-1, ' ', false, Json::error_handler_t::replace)));
       server.setRobotFiles(feed.robotFiles());  // the model travels in the document

@@ -257,6 +257,8 @@ class Viewer {
   }
 
   snapshot() {
+    const plan = this.time !== null ? this.plans.at(this.time) : null;
+    const base = this.robot ? this.robot.basePosition(new THREE.Vector3()) : null;
     return {
       t: this.shown ? this.shown.t : null,
       joint_names: this.robot ? this.robot.jointNames() : [],
@@ -264,7 +266,27 @@ class Viewer {
       urdf_joint_count: this.robot ? this.robot.movable.length : 0,
       frames_received: this.framesReceived,
       mode: this.mode,
+      base: base ? [base.x, base.y, base.z] : null,
+      plan_t: plan ? plan.t : null,
+      planned_forces: plan?.forces ?? [],
+      force_scale: this.overlays.scaleText(),
     };
+  }
+
+  /** The hook's camera(view): looks at view.target from view.position (world [x, y, z], metres)
+   *  and draws at once; returns where the camera is (SceneView.describe). */
+  camera(view) {
+    if (view !== undefined && view !== null) {
+      const point = (p, name) => {
+        if (!Array.isArray(p) || p.length !== 3 || !p.every(Number.isFinite)) {
+          throw new Error(`camera: ${name} must be [x, y, z] (finite numbers)`);
+        }
+        return new THREE.Vector3(p[0], p[1], p[2]);
+      };
+      this.view.aim(point(view.target, 'target'), point(view.position, 'position'));
+      this.view.render();
+    }
+    return this.view.describe();
   }
 }
 

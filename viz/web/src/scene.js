@@ -75,15 +75,36 @@ export class SceneView {
     const fov = Math.min(vfov, 2 * Math.atan(Math.tan(vfov / 2) * this.camera.aspect));
     const distance = (radius / Math.sin(fov / 2)) * 1.6;
     const dir = new THREE.Vector3(0.75, -1.0, 0.55).normalize();
-    this.controls.target.copy(center);
-    this.camera.position.copy(center).addScaledVector(dir, distance);
+    this.aim(center, center.clone().addScaledVector(dir, distance));
+    this.followTarget = center.clone();
+  }
+
+  /** Looks at `target` from `position` (THREE.Vector3, world): clipping planes and fog follow
+   *  the distance. While "follow" is on, the camera then moves with the base from there. */
+  aim(target, position) {
+    const distance = Math.max(1e-3, target.distanceTo(position));
+    this.controls.target.copy(target);
+    this.camera.position.copy(position);
     this.camera.near = Math.max(0.005, distance / 200);
     this.camera.far = distance * 200;
     this.camera.updateProjectionMatrix();
     this.scene.fog.near = 3 * distance;
     this.scene.fog.far = 12 * distance;
     this.controls.update();
-    this.followTarget = center.clone();
+  }
+
+  /** Where the camera is: target and position (world), vertical field of view [deg], and the
+   *  canvas's size in CSS pixels and aspect. */
+  describe() {
+    const v = (p) => [p.x, p.y, p.z];
+    return {
+      target: v(this.controls.target),
+      position: v(this.camera.position),
+      fov: this.camera.fov,
+      aspect: this.camera.aspect,
+      width: this.container.clientWidth,
+      height: this.container.clientHeight,
+    };
   }
 
   /** Moves the camera with the robot: the target and the camera shift by the robot's motion,

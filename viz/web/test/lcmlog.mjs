@@ -1,6 +1,6 @@
-// An LCM log reader and a decoder of Stride's robot_state_t and robot_model_t in plain JavaScript,
-// written for the browser test from the formats alone (no LCM code, nothing of stride-viz): what
-// the page shows is checked against what this reads from the log.
+// An LCM log reader and a decoder of Stride's robot_state_t, robot_model_t and horizon_t in plain
+// JavaScript, written for the browser tests from the formats alone (no LCM code, nothing of
+// stride-viz): what the page shows is checked against what this reads from the log.
 //
 // Log file (lcm-logger): a sequence of events, each
 //   uint32 sync word 0xEDA1DA01, int64 event number, int64 timestamp [µs],
@@ -9,10 +9,10 @@
 // declaration order, big-endian: integers and doubles as they are, a string as int32 length
 // (with its NUL) + bytes + NUL, an array of a member's count as that many elements.
 //
-// The types below are messages/robot_state_t.lcm and messages/robot_model_t.lcm written out as
-// member lists; the fingerprint computed from a list (LCM's hash of member names, primitive type
-// names and dimensions) must equal the one in each message, so a change of the .lcm files that
-// this file does not follow fails loudly instead of decoding garbage.
+// The types below are messages/robot_state_t.lcm, robot_model_t.lcm and horizon_t.lcm written out
+// as member lists; the fingerprint computed from a list (LCM's hash of member names, primitive
+// type names and dimensions) must equal the one in each message, so a change of the .lcm files
+// that this file does not follow fails loudly instead of decoding garbage.
 
 const SYNC = 0xeda1da01;
 
@@ -47,6 +47,24 @@ export const robotModelType = {
     ['joint_idx_v', 'int32_t', ['njoints']],
     ['ncontacts', 'int32_t'],
     ['contact_frames', 'string', ['ncontacts']],
+  ],
+};
+
+/** horizon_t (messages/horizon_t.lcm). */
+export const horizonType = {
+  name: 'horizon_t',
+  members: [
+    ['utime', 'int64_t'],
+    ['model_hash', 'int64_t'],
+    ['knots', 'int32_t'],
+    ['nq', 'int32_t'],
+    ['ncontacts', 'int32_t'],
+    ['nf', 'int32_t'],
+    ['t', 'double', ['knots']],
+    ['q', 'double', ['knots', 'nq']],
+    ['contact_mask', 'int32_t', ['knots']],
+    ['impulse', 'int8_t', ['knots']],
+    ['force', 'double', ['knots', 'nf']],
   ],
 };
 
@@ -176,22 +194,29 @@ export function hashHex(h) {
 
 /**
  * The robot states of a log on `channel`, in log order, each with t = utime * 1e-6 [s] (the
- * robot's clock, as stride-viz's frames), plus the first robot model on `modelChannel` (null
- * when the log has none).
+ * robot's clock, as stride-viz's frames), the first robot model on `modelChannel` (null when the
+ * log has none), and the horizons on `horizonChannel` (t likewise).
  */
-export function readSession(bytes, { channel = 'STRIDE_STATE', modelChannel = 'STRIDE_MODEL' } = {}) {
+export function readSession(bytes, {
+  channel = 'STRIDE_STATE', modelChannel = 'STRIDE_MODEL', horizonChannel = 'STRIDE_HORIZON',
+} = {}) {
   const states = [];
+  const horizons = [];
   let model = null;
   for (const e of readLog(bytes)) {
     if (e.channel === channel) {
       const s = decode(robotStateType, e.data);
       s.t = Number(s.utime) * 1e-6;
       states.push(s);
+    } else if (e.channel === horizonChannel) {
+      const h = decode(horizonType, e.data);
+      h.t0 = Number(h.utime) * 1e-6; // h.t is the knots' times after it
+      horizons.push(h);
     } else if (e.channel === modelChannel && model === null) {
       model = decode(robotModelType, e.data);
     }
   }
-  return { states, model };
+  return { states, model, horizons };
 }
 
 /**

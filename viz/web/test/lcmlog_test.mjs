@@ -8,13 +8,14 @@ import { existsSync, readFileSync } from 'node:fs';
 import path from 'node:path';
 import test from 'node:test';
 import {
-  decode, fingerprint, hashHex, readLog, readSession, robotModelType, robotStateType, stateAt,
+  decode, fingerprint, hashHex, horizonType, readLog, readSession, robotModelType, robotStateType,
+  stateAt,
 } from './lcmlog.mjs';
 
 const genDir = process.env.STRIDE_LCM_GEN_DIR;
 
 test('fingerprints equal lcm-gen\'s', { skip: genDir ? false : 'STRIDE_LCM_GEN_DIR not set' }, () => {
-  for (const type of [robotStateType, robotModelType]) {
+  for (const type of [robotStateType, robotModelType, horizonType]) {
     const header = path.join(genDir, 'stride', `${type.name}.hpp`);
     assert.ok(existsSync(header), `${header} (build the messages first)`);
     // lcm-gen writes the hash before its final rotation: `uint64_t hash = 0x...LL;`
@@ -80,6 +81,21 @@ function modelMessage() {
   return w.done();
 }
 
+// Two knots of the two_link robot (nq 9, one contact): arrays of arrays, row by row.
+function horizonMessage(utime) {
+  const w = new Writer();
+  w.u64(fingerprint(horizonType));
+  w.i64(utime);
+  w.i64(-5n);
+  w.i32(2); w.i32(9); w.i32(1); w.i32(3);
+  [0, 0.02].forEach((x) => w.f64(x));
+  [q(0), q(1)].forEach((row) => row.forEach((x) => w.f64(x)));
+  [1, 0].forEach((x) => w.i32(x));
+  [0, 1].forEach((x) => w.i8(x));
+  [[1, 2, 30], [0, 0, 0.5]].forEach((row) => row.forEach((x) => w.f64(x)));
+  return w.done();
+}
+
 function event(number, timestamp, channel, data) {
   const w = new Writer();
   w.bytes(4, (b) => b.writeUInt32BE(0xeda1da01));
@@ -100,11 +116,12 @@ const log = Buffer.concat([
   event(0, 1000000, 'STRIDE_MODEL', modelMessage()),
   ...states.map((s, i) => event(i + 1, s.utime, 'STRIDE_STATE', stateMessage(s))),
   event(9, 1010000, 'OTHER', Buffer.from([1, 2, 3])),
+  event(10, 1010000, 'STRIDE_HORIZON', horizonMessage(1010000)),
 ]);
 
 test('a log written here reads back', () => {
   const events = readLog(log);
-  assert.deepEqual(events.map((e) => e.channel), ['STRIDE_MODEL', 'STRIDE_STATE', 'STRIDE_STATE', 'STRIDE_STATE', 'OTHER']);
+  assert.deepEqual(events.map((e) => e.channel), ['STRIDE_MODEL', 'STRIDE_STATE', 'STRIDE_STATE', 'STRIDE_STATE', 'OTHER', 'STRIDE_HORIZON']);
   assert.equal(events[4].eventNumber, 9n);
   assert.equal(events[4].timestamp, 1010000n);
   const { states: got, model } = readSession(log);
@@ -121,6 +138,19 @@ test('a log written here reads back', () => {
     assert.deepEqual(s.contact, [i % 2]);
     assert.equal(s.nv, 8);
   });
+});
+
+test('a horizon reads back, its arrays of arrays row by row', () => {
+  const { horizons } = readSession(log);
+  assert.equal(horizons.length, 1);
+  const h = horizons[0];
+  assert.equal(h.t0, 1.01);
+  assert.equal(h.knots, 2);
+  assert.deepEqual(h.t, [0, 0.02]);
+  assert.deepEqual(h.q, [q(0), q(1)]);
+  assert.deepEqual(h.contact_mask, [1, 0]);
+  assert.deepEqual(h.impulse, [0, 1]);
+  assert.deepEqual(h.force, [[1, 2, 30], [0, 0, 0.5]]);
 });
 
 test('the state shown at t: the newest at or before t, the first before them all', () => {
