@@ -4,7 +4,7 @@
 //   stride-drive --config config/controller/solo12.yaml --commands config/commands/solo12.yaml
 //                [--robots-dir DIR] [--duration S] [--push START:DURATION:FX,FY,FZ]...
 //                [--log FILE] [--summary FILE.json] [--settle S] [--check-tracking]
-//                [--lose-controller AT [--controller-back-after S]]
+//                [--lose-controller AT [--controller-back-after S]] [--stand-down-ramp S]
 // Exit status: 0; 1 with --check-tracking when a segment missed its command or the robot fell;
 // 2 for bad arguments or files.
 
@@ -71,6 +71,8 @@ int main(int argc, char** argv) {
                  "kill the controller at this time [s] (the robot's fallback takes over)");
   app.add_option("--controller-back-after", options.controller_back_after,
                  "start a new controller this long after the kill [s] (1)");
+  app.add_option("--stand-down-ramp", options.sim.stand_down.ramp,
+                 "the robot's stand-down ramp [s] (sim/README.md, \"Controller loss\")");
   app.add_flag("--check-tracking", check,
                "exit 1 when a segment of 2 s or more misses its command by more than max(15%, "
                "0.05 m/s, 0.1 rad/s), or the robot fell");
