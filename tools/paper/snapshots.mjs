@@ -25,12 +25,11 @@
 // (stamp, joint angles read back from the drawn robot, base, planned forces) and the camera, for
 // the caller's checks.
 
-import { spawn } from 'node:child_process';
 import { mkdirSync, readFileSync, writeFileSync } from 'node:fs';
 import { createRequire } from 'node:module';
 import path from 'node:path';
+import { startViz as launchViz } from '../../viz/web/test/start_viz.mjs';
 
-const START_TIMEOUT_MS = 60000; // stride-viz reads the whole log before it listens
 const READY_TIMEOUT_MS = 60000;
 const TOTAL_TIMEOUT_MS = 240000;
 // A time is sought this far past its stamp: the state stamped there is shown whatever the
@@ -56,27 +55,7 @@ function fail(what) {
 }
 
 function startViz(log) {
-  const child = spawn(spec.viz, ['--log', log, '--port', '0', '--all-frames'],
-                      { stdio: ['ignore', 'pipe', 'pipe'] });
-  let stderr = '';
-  child.stderr.on('data', (d) => { stderr += d; });
-  const url = new Promise((resolve, reject) => {
-    let out = '';
-    const timer = setTimeout(() => reject(new Error(`stride-viz printed no address in ${START_TIMEOUT_MS / 1000} s; stderr:\n${stderr}`)), START_TIMEOUT_MS);
-    child.stdout.on('data', (d) => {
-      out += d;
-      const m = out.match(/^stride-viz: (http:\/\/[^\s/]+\/)/m);
-      if (m) {
-        clearTimeout(timer);
-        resolve(m[1]);
-      }
-    });
-    child.on('exit', (code, signal) => {
-      clearTimeout(timer);
-      reject(new Error(`stride-viz exited (${code ?? signal}) before it listened; stderr:\n${stderr}`));
-    });
-  });
-  return { child, url, stderr: () => stderr };
+  return launchViz(spec.viz, ['--log', log, '--port', '0', '--all-frames']);
 }
 
 async function stopViz(viz) {

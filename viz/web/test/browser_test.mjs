@@ -19,15 +19,14 @@
 // Environment: STRIDE_VIZ_NODE_MODULES, the node_modules with playwright-core (the build's
 // npm install; nothing is installed in the source tree); CHROMIUM, the browser (/usr/bin/chromium).
 
-import { spawn } from 'node:child_process';
 import { mkdirSync, readFileSync, writeFileSync } from 'node:fs';
 import { createRequire } from 'node:module';
 import path from 'node:path';
+import { startViz as launchViz } from './start_viz.mjs';
 import { readSession, hashHex } from './lcmlog.mjs';
 
 const TOLERANCE = 1e-6; // rad (or m for a prismatic joint)
 const MAX_AGE = 0.03; // s: a state at most this much older than the seek time (log decimation)
-const START_TIMEOUT_MS = 60000; // stride-viz reads the whole log before it listens
 const READY_TIMEOUT_MS = 60000;
 const TOTAL_TIMEOUT_MS = 170000;
 
@@ -87,26 +86,7 @@ function logStateAt(t) {
 
 // ---- stride-viz ----
 function startViz() {
-  const child = spawn(vizBin, ['--log', logPath, '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
-  let stderr = '';
-  child.stderr.on('data', (d) => { stderr += d; });
-  const url = new Promise((resolve, reject) => {
-    let out = '';
-    const timer = setTimeout(() => reject(new Error(`stride-viz printed no address in ${START_TIMEOUT_MS / 1000} s; stderr:\n${stderr}`)), START_TIMEOUT_MS);
-    child.stdout.on('data', (d) => {
-      out += d;
-      const m = out.match(/^stride-viz: (http:\/\/[^\s/]+\/)/m);
-      if (m) {
-        clearTimeout(timer);
-        resolve(m[1]);
-      }
-    });
-    child.on('exit', (code, signal) => {
-      clearTimeout(timer);
-      reject(new Error(`stride-viz exited (${code ?? signal}) before it listened; stderr:\n${stderr}`));
-    });
-  });
-  return { child, url, stderr: () => stderr };
+  return launchViz(vizBin, ['--log', logPath, '--port', '0']);
 }
 
 async function main() {
