@@ -7,6 +7,8 @@
 #include <Eigen/Cholesky>
 
 #include "solver/multibody/crba.hpp"
+#include "solver/multibody/frames.hpp"
+#include "solver/multibody/jacobian.hpp"
 #include "solver/multibody/lie_group.hpp"
 
 namespace stride::sim {
@@ -169,42 +171,139 @@ void HoldPolicy::torque(const Model& model, const Eigen::Ref<const Eigen::Vector
 }
 
 StandDown::StandDown(const Model& model, const HoldPolicy& hold,
-                     const std::vector<int>& contact_frames, const StandDownOptions& options)
+                     const std::vector<StandDownContact>& contacts, const StandDownOptions& options)
     : model_(model),
       hold_(hold),
       options_(options),
-      chains_(hold.kp.size(), 0u),
-      planted_(hold.kp.size(), 0),
+      in_leg_(hold.kp.size(), 0),
+      data_(model),
+      J_(Matrix6Xd::Zero(6, model.nv)),
       q_start_(hold.q_ref),
       u_start_(Eigen::VectorXd::Zero(hold.kp.size())) {
-  const int first = model.hasFreeFlyer() ? 6 : 0;
-  for (std::size_t c = 0; c < contact_frames.size() && c < 32; ++c)
-    for (int j = model.frames.at(contact_frames[c]).parentJoint; j > 0; j = model.joints[j].parent)
-      if (model.joints[j].type != JointType::FreeFlyer)
-        chains_[model.joints[j].idx_v - first] |= 1u << c;
+  if (!model.hasFreeFlyer()) return;  // a fixed base has nothing to level: default posture only
+  const int first = 6;
+  // How many contacts each actuated joint moves: a leg is the joints that move one contact only.
+  std::vector<int> users(hold.kp.size(), 0);
+  std::vector<std::vector<int>> chains(contacts.size());
+  for (std::size_t c = 0; c < contacts.size(); ++c)
+    for (int j = model.frames.at(contacts[c].frame).parentJoint; j > 0; j = model.joints[j].parent)
+      if (model.joints[j].type != JointType::FreeFlyer) {
+        chains[c].push_back(j);
+        ++users[model.joints[j].idx_v - first];
+      }
+  framesForwardKinematics(model, data_, hold.q_ref);
+  const SE3 base = data_.oMi[freeFlyerJoint()];
+  for (std::size_t c = 0; c < contacts.size(); ++c) {
+    Leg leg;
+    leg.frame = contacts[c].frame;
+    leg.dim = contacts[c].dim == 6 ? 6 : 3;
+    for (int j : chains[c]) {
+      const int i = model.joints[j].idx_v - first;
+      if (users[i] != 1) continue;
+      leg.joints.push_back(i);
+      leg.columns.push_back(model.joints[j].idx_v);
+      in_leg_[i] = 1;
+    }
+    if (leg.joints.empty() || leg.joints.size() > kMaxLegJoints)
+      throw std::invalid_argument("stand-down: contact frame '" + model.frames[leg.frame].name +
+                                  "' has " + std::to_string(leg.joints.size()) +
+                                  " joints of its own (1 to " + std::to_string(kMaxLegJoints) +
+                                  " expected)");
+    leg.base_to_foot = base.actInv(data_.oMf[leg.frame]);
+    legs_.push_back(std::move(leg));
+  }
+}
+
+int StandDown::freeFlyerJoint() const {
+  for (int j = 1; j < model_.njoints(); ++j)
+    if (model_.joints[j].type == JointType::FreeFlyer) return j;
+  return 0;
 }
 
 void StandDown::begin(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
-                      const Eigen::Ref<const Eigen::VectorXd>& u_last, unsigned on_ground) {
+                      const Eigen::Ref<const Eigen::VectorXd>& u_last) {
   t0_ = t;
   q_start_ = q;
   u_start_ = u_last;
-  for (std::size_t i = 0; i < chains_.size(); ++i) planted_[i] = (chains_[i] & on_ground) != 0;
+  for (Leg& leg : legs_) leg.latched = false;
 }
 
 void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
-                       const Eigen::Ref<const Eigen::VectorXd>& v,
-                       Eigen::Ref<Eigen::VectorXd> tau) const {
+                       const Eigen::Ref<const Eigen::VectorXd>& v, unsigned on_ground,
+                       Eigen::Ref<Eigen::VectorXd> tau) {
   const double s = options_.ramp > 0.0 ? std::clamp((t - t0_) / options_.ramp, 0.0, 1.0) : 1.0;
   const int first = model_.hasFreeFlyer() ? 6 : 0;
+  // Joints outside the legs: linearly to the default posture.
   for (int j = 1; j < model_.njoints(); ++j) {
     const Joint& jt = model_.joints[j];
     if (jt.type == JointType::FreeFlyer) continue;
     const int i = jt.idx_v - first;  // 1-dof joints, as HoldPolicy
+    if (in_leg_[i]) continue;
     const double start = q_start_[jt.idx_q];
-    const double target = planted_[i] ? start : start + s * (hold_.q_ref[jt.idx_q] - start);
+    const double target = start + s * (hold_.q_ref[jt.idx_q] - start);
     tau[i] =
         (1.0 - s) * u_start_[i] + hold_.kp[i] * (target - q[jt.idx_q]) - hold_.kd[i] * v[jt.idx_v];
+  }
+  if (legs_.empty()) return;
+
+  // The legs: where each foot belongs under a level base of the present heading.
+  computeJointJacobians(model_, data_, q);
+  const SE3& base = data_.oMi[freeFlyerJoint()];
+  const double yaw = std::atan2(base.R(1, 0), base.R(0, 0));
+  const Eigen::Matrix3d level = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  // Feet on the ground stay where they touched down. Each says where the base should be for it to
+  // be at its default place under the base; their mean is where the base goes: over its support,
+  // and one rigid displacement of the base for every planted leg (they never pull against each
+  // other through the ground).
+  Eigen::Vector2d base_xy = Eigen::Vector2d::Zero();
+  int planted = 0;
+  for (std::size_t c = 0; c < legs_.size(); ++c) {
+    Leg& leg = legs_[c];
+    const bool down = c < 32 && (on_ground >> c & 1u);
+    if (down && !leg.latched) leg.anchor = updateFramePlacement(model_, data_, leg.frame).p;
+    leg.latched = down;
+    if (!down) continue;
+    base_xy += (leg.anchor - level * leg.base_to_foot.p).head<2>();
+    ++planted;
+  }
+  const Eigen::Vector3d base_target(planted ? base_xy.x() / planted : base.p.x(),
+                                    planted ? base_xy.y() / planted : base.p.y(), base.p.z());
+  for (std::size_t c = 0; c < legs_.size(); ++c) {
+    Leg& leg = legs_[c];
+    const SE3& foot = updateFramePlacement(model_, data_, leg.frame);
+    // Where the foot belongs in a level base frame at base_target: a planted foot at its place on
+    // the ground at the default's depth (the base's height), a foot in the air under its hip.
+    // Compared with where the foot is in the real base frame: a tilted base shows as the feet's
+    // height differences, which the legs then undo.
+    Eigen::Vector3d target = leg.base_to_foot.p;
+    if (leg.latched) target.head<2>() = (level.transpose() * (leg.anchor - base_target)).head<2>();
+    LegVector e(leg.dim);
+    e.head<3>() = target - base.R.transpose() * (foot.p - base.p);
+    if (leg.dim == 6) {  // a sole: as at the default posture relative to a level base
+      const Eigen::Matrix3d foot_in_base = base.R.transpose() * foot.R;
+      e.tail<3>() = foot_in_base * log3(foot_in_base.transpose() * leg.base_to_foot.R);
+    }
+    const double norm = e.norm();
+    if (norm > options_.max_step) e *= options_.max_step / norm;
+
+    // One damped least-squares step of the leg's inverse kinematics (base held where it is).
+    getFrameJacobian(model_, data_, leg.frame, ReferenceFrame::LocalWorldAligned, J_);
+    const int n = static_cast<int>(leg.joints.size());
+    LegJacobian A(leg.dim, n);
+    for (int k = 0; k < n; ++k) {  // in the base's axes, as the errors
+      A.col(k).head<3>() = base.R.transpose() * J_.col(leg.columns[k]).head<3>();
+      if (leg.dim == 6) A.col(k).tail<3>() = base.R.transpose() * J_.col(leg.columns[k]).tail<3>();
+    }
+    LegSquare AAt(leg.dim, leg.dim);
+    AAt.noalias() = A * A.transpose();
+    AAt.diagonal().array() += kDamping * kDamping;
+    const Eigen::LDLT<LegSquare> ldlt(AAt);
+    const LegVector y = ldlt.solve(e);
+    for (int k = 0; k < n; ++k) {
+      const int i = leg.joints[k];
+      const double dq = A.col(k).dot(y);
+      tau[i] = (1.0 - s) * u_start_[i] + hold_.kp[i] * dq - hold_.kd[i] * v[leg.columns[k]];
+    }
   }
 }
 

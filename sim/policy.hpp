@@ -9,6 +9,9 @@
 #include <cstdint>
 #include <vector>
 
+#include <Eigen/Cholesky>
+
+#include "solver/multibody/data.hpp"
 #include "solver/multibody/model.hpp"
 
 namespace stride::sim {
@@ -87,39 +90,76 @@ struct HoldPolicy {
 };
 
 // What the robot does when its controller goes silent (sim/README.md, "Controller loss"): past
-// the last policy's end plus a grace period, a stand-down. The legs whose foot is on the ground
-// hold the angles they have (the feet stay where they are: pulling planted feet towards a default
-// stance would fight the closed chain through the ground), the other joints (legs in swing, the
-// arms) move linearly to the default posture over `ramp` seconds, and the last policy's
-// feed-forward (the torques that carried the robot's weight) fades out over the same time while
-// the PD takes the load. Then the PD alone, until a controller is back.
+// the last policy's end plus a grace period, a stand-down that levels the body over its feet, as
+// a robot's low level would with its IMU and joint encoders:
+// - each leg (the joints that move one contact's frame, and no other) is given the joint angles
+//   that put its foot where it belongs under a LEVEL base of the present heading, at the default
+//   posture's depth below the base: a foot on the ground at the place where it is (latched at
+//   touch-down, so planted feet are not dragged across the ground against each other), a foot in
+//   the air under its hip (so it comes down where it supports the body). A tilted body then has
+//   its low side's legs extended and its high side's shortened: the body levels itself.
+//   Those angles are one damped least-squares step of the leg's inverse kinematics each physics
+//   step (the PD tracks a target that is recomputed as the robot moves);
+// - the other joints (arms, torso, joints shared by several contacts) move linearly to the default
+//   posture over `ramp` seconds;
+// - the last policy's feed-forward (the torques that carried the robot's weight) fades out over the
+//   same time while the PD takes the load.
+// Then the PD alone, leveling, until a controller is back.
 struct StandDownOptions {
-  double grace = 0.05;  // [s] past the policy's end: its last knot held (a late answer)
-  double ramp = 0.3;    // [s] for the swinging legs to reach the default posture
+  double grace = 0.05;     // [s] past the policy's end: its last knot held (a late answer)
+  double ramp = 0.3;       // [s] for the feed-forward to fade and the other joints to reach default
+  double max_step = 0.05;  // [m] (and rad): the largest foot error one IK step corrects
+};
+
+// A contact of the robot as the stand-down sees it: its frame and its dimension (3: a point foot,
+// position only; 6: a sole, position and orientation).
+struct StandDownContact {
+  int frame = -1;
+  int dim = 3;
 };
 
 class StandDown {
  public:
-  // hold: the PD and the default posture; contact_frames: the robot's contacts, in the order of
-  // begin()'s mask. Allocates.
-  StandDown(const Model& model, const HoldPolicy& hold, const std::vector<int>& contact_frames,
-            const StandDownOptions& options);
+  // hold: the PD and the default posture (whose forward kinematics gives each foot's place under
+  // the base); contacts in the order of the on-ground masks. Allocates.
+  StandDown(const Model& model, const HoldPolicy& hold,
+            const std::vector<StandDownContact>& contacts, const StandDownOptions& options);
 
   const StandDownOptions& options() const { return options_; }
-  // Starts at time t from configuration q, with u_last the feed-forward the robot was applying
-  // and bit c of `on_ground` set when contact c carries load. Allocates nothing.
+  // Starts at time t from configuration q, with u_last the feed-forward the robot was applying.
+  // Allocates nothing.
   void begin(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
-             const Eigen::Ref<const Eigen::VectorXd>& u_last, unsigned on_ground);
-  // τ (size nu) at time t ≥ the start. Allocates nothing.
+             const Eigen::Ref<const Eigen::VectorXd>& u_last);
+  // τ (size nu) at time t ≥ the start; bit c of `on_ground` set when contact c carries load
+  // (what the robot's contact sensing or its estimator says). Allocates nothing.
   void torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
-              const Eigen::Ref<const Eigen::VectorXd>& v, Eigen::Ref<Eigen::VectorXd> tau) const;
+              const Eigen::Ref<const Eigen::VectorXd>& v, unsigned on_ground,
+              Eigen::Ref<Eigen::VectorXd> tau);
 
  private:
+  static constexpr std::size_t kMaxLegJoints = 12;
+  static constexpr double kDamping = 0.01;  // [m] of the damped least squares: near a straight
+                                            // knee the step stays bounded
+  using LegJacobian = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, kMaxLegJoints>;
+  using LegVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
+  using LegSquare = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+  int freeFlyerJoint() const;
+
+  struct Leg {
+    int frame = -1, dim = 3;
+    std::vector<int> joints;   // actuated indices (0..nu-1) of the leg's own joints
+    std::vector<int> columns;  // their velocity indices (columns of the Jacobian)
+    SE3 base_to_foot;          // the foot in the base frame at the default posture
+    bool latched = false;      // on the ground since `anchor` was taken
+    Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // where it touched down (world)
+  };
   const Model& model_;
   const HoldPolicy& hold_;
   StandDownOptions options_;
-  std::vector<unsigned> chains_;  // per actuated joint: bit c when it moves contact c's frame
-  std::vector<char> planted_;     // per actuated joint: holds its angle (its foot is down)
+  std::vector<Leg> legs_;
+  std::vector<char> in_leg_;  // per actuated joint: belongs to a leg
+  Data data_;
+  Matrix6Xd J_;
   double t0_ = 0.0;
   Eigen::VectorXd q_start_, u_start_;
 };

@@ -17,10 +17,11 @@ double holdGain(double option, double robot, double fallback) {
   return option >= 0.0 ? option : robot > 0.0 ? robot : fallback;
 }
 
-std::vector<int> contactFrames(const Robot& robot) {
-  std::vector<int> frames;
-  for (const ContactSpec& c : robot.contacts) frames.push_back(robot.model.getFrameId(c.frame));
-  return frames;
+std::vector<StandDownContact> standDownContacts(const Robot& robot) {
+  std::vector<StandDownContact> contacts;
+  for (const ContactSpec& c : robot.contacts)
+    contacts.push_back({robot.model.getFrameId(c.frame), c.dim});
+  return contacts;
 }
 }  // namespace
 
@@ -33,7 +34,7 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
       evaluator_(robot.model, actuatedDimension(robot.model)),
       hold_(robot.model, robot.default_q, holdGain(options.hold_kp, robot.joint_kp, 5.0),
             holdGain(options.hold_kd, robot.joint_kd, 0.1), sim.dt),
-      stand_down_(robot.model, hold_, contactFrames(robot), options.stand_down),
+      stand_down_(robot.model, hold_, standDownContacts(robot), options.stand_down),
       noise_(options.noise_q, options.noise_v, options.seed),
       delay_(robot.model.nq, robot.model.nv, options.delay),
       dropper_(options.drop, options.seed + 1) {
@@ -196,12 +197,8 @@ bool SimNode::advance(int steps) {
       const double end = policy_.t0 + (policy_.knots - 1) * policy_.dt;
       if (!standing_down_ && t - end > options_.stand_down.grace) {
         const int last = policy_.knots - 1;
-        unsigned on_ground = 0;
-        for (int c = 0; c < static_cast<int>(robot_.contacts.size()); ++c)
-          if (sim_.normalForce(c) > 0.0) on_ground |= 1u << c;
         stand_down_.begin(t, sim_.q(),
-                          Eigen::Map<const Eigen::VectorXd>(policy_.uFf(last), sim_.nu()),
-                          on_ground);
+                          Eigen::Map<const Eigen::VectorXd>(policy_.uFf(last), sim_.nu()));
         standing_down_ = true;
         if (++stats_.stand_downs <= 4)
           std::fprintf(stderr,
@@ -210,7 +207,10 @@ bool SimNode::advance(int steps) {
                        t - end);
       }
       if (standing_down_) {
-        stand_down_.torque(t, sim_.q(), sim_.v(), tau_);
+        unsigned on_ground = 0;  // the robot's contact sensing
+        for (int c = 0; c < static_cast<int>(robot_.contacts.size()) && c < 32; ++c)
+          if (sim_.normalForce(c) > 0.0) on_ground |= 1u << c;
+        stand_down_.torque(t, sim_.q(), sim_.v(), on_ground, tau_);
         ++stats_.stand_down_steps;
       } else {
         ++stats_.exhausted_steps;

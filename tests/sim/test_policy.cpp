@@ -193,31 +193,57 @@ TEST(Policy, HoldPolicyIsAJointPd) {
   EXPECT_TRUE(tau.isApprox(expected, 1e-12));
 }
 
-// The stand-down (controller lost): the legs on the ground hold their angles, the others go to the
-// default posture over the ramp, the last feed-forward fades out over the same time.
-TEST(Policy, StandDownHoldsPlantedLegsAndBringsTheOthersDown) {
+// The stand-down (controller lost), sim/README.md "Controller loss".
+std::vector<sim::StandDownContact> standDownContacts(const Robot& r) {
+  std::vector<sim::StandDownContact> contacts;
+  for (const ContactSpec& c : r.contacts) contacts.push_back({r.model.getFrameId(c.frame), c.dim});
+  return contacts;
+}
+
+// Standing level at the default posture on its four feet: nothing to correct, so the last
+// feed-forward alone at the start, fading out over the ramp, and zero once it has.
+TEST(Policy, StandDownAtTheDefaultPostureOnlyFadesTheFeedForward) {
   const Robot& r = robot("stride_quad");
-  const Model& model = r.model;
-  sim::HoldPolicy hold(model, r.default_q, 10.0, 0.0);
-  std::vector<int> frames;
-  for (const ContactSpec& c : r.contacts) frames.push_back(model.getFrameId(c.frame));
-  sim::StandDown down(model, hold, frames, sim::StandDownOptions{0.05, 0.2});
-  Eigen::VectorXd q = r.default_q, v = Eigen::VectorXd::Zero(18), tau(12);
-  q.tail(12).array() += 0.1;  // every joint 0.1 rad off the default
+  sim::HoldPolicy hold(r.model, r.default_q, 10.0, 0.0);
+  sim::StandDown down(r.model, hold, standDownContacts(r), sim::StandDownOptions{0.05, 0.2});
+  const Eigen::VectorXd v = Eigen::VectorXd::Zero(18);
   const Eigen::VectorXd u_last = Eigen::VectorXd::LinSpaced(12, 1.0, 12.0);
-  // FL (0) and HR (3) on the ground (a trot's support pair): joints 0-2 and 9-11 hold.
-  down.begin(1.0, q, u_last, 0b1001u);
-  down.torque(1.0, q, v, tau);
-  EXPECT_TRUE(tau.isApprox(u_last, 1e-12)) << "at the start: the feed-forward, no PD";
-  down.torque(1.1, q, v, tau);  // half-way
-  for (int i = 0; i < 12; ++i) {
-    const bool planted = i < 3 || i >= 9;
-    const double pd = planted ? 0.0 : 10.0 * (0.5 * -0.1);
-    EXPECT_NEAR(tau[i], 0.5 * u_last[i] + pd, 1e-12) << "joint " << i;
-  }
-  down.torque(2.0, q, v, tau);  // after the ramp: the PD alone
-  for (int i = 0; i < 12; ++i)
-    EXPECT_NEAR(tau[i], (i < 3 || i >= 9) ? 0.0 : -1.0, 1e-12) << "joint " << i;
+  Eigen::VectorXd tau(12);
+  down.begin(1.0, r.default_q, u_last);
+  down.torque(1.0, r.default_q, v, 0b1111u, tau);
+  EXPECT_TRUE(tau.isApprox(u_last, 1e-9));
+  down.torque(1.1, r.default_q, v, 0b1111u, tau);
+  EXPECT_TRUE(tau.isApprox(0.5 * u_last, 1e-9));
+  down.torque(2.0, r.default_q, v, 0b1111u, tau);
+  EXPECT_LT(tau.cwiseAbs().maxCoeff(), 1e-9);
+}
+
+// A planted foot is held at the default depth below the base, where it touched down: on flat
+// ground a tilted body shows as feet at unequal depths in the base frame, and equalizing them
+// levels it. FR's knee bent 0.3 rad further (its foot higher in the base frame, as under a body
+// rolled to the right) with all four feet down: FR's knee straightens, harder than anything else
+// moves. A foot in the air goes under its hip: FL bent the same way, off the ground, straightens;
+// the planted legs, at their default place, get (almost) nothing.
+TEST(Policy, StandDownHoldsPlantedFeetAtTheDefaultDepthAndBringsTheOthersUnderTheHips) {
+  const Robot& r = robot("stride_quad");
+  sim::HoldPolicy hold(r.model, r.default_q, 10.0, 0.0);
+  sim::StandDown down(r.model, hold, standDownContacts(r), sim::StandDownOptions{0.05, 0.2});
+  const Eigen::VectorXd v = Eigen::VectorXd::Zero(18);
+  Eigen::VectorXd q = r.default_q, tau(12);
+  q[7 + 5] -= 0.3;  // FR_KFE (default -1.6: more bent)
+  down.begin(0.0, q, Eigen::VectorXd::Zero(12));
+  down.torque(1.0, q, v, 0b1111u, tau);  // after the ramp: the PD alone
+  EXPECT_GT(tau[5], 0.5);
+  Eigen::Index largest;
+  tau.cwiseAbs().maxCoeff(&largest);
+  EXPECT_EQ(largest, 5);
+
+  q = r.default_q;
+  q[7 + 2] -= 0.3;  // FL_KFE
+  down.begin(0.0, q, Eigen::VectorXd::Zero(12));
+  down.torque(1.0, q, v, 0b1110u, tau);
+  EXPECT_GT(tau[2], 0.5);
+  EXPECT_LT(tau.tail(9).cwiseAbs().maxCoeff(), 1e-9);
 }
 
 // ---------------------------------------------------------------------------------------------

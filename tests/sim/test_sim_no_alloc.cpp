@@ -72,9 +72,9 @@ TEST(SimNoAllocation, PolicyAndDisturbances) {
   }
   sim::PolicyEvaluator eval(model, 12);
   const sim::HoldPolicy hold(model, r.default_q, 5.0, 0.1);
-  std::vector<int> frames;
-  for (const ContactSpec& c : r.contacts) frames.push_back(model.getFrameId(c.frame));
-  sim::StandDown down(model, hold, frames, sim::StandDownOptions{});
+  std::vector<sim::StandDownContact> contacts;
+  for (const ContactSpec& c : r.contacts) contacts.push_back({model.getFrameId(c.frame), c.dim});
+  sim::StandDown down(model, hold, contacts, sim::StandDownOptions{});
   sim::StateNoise noise(0.01, 0.1, 3);
   sim::StateDelay delay(model.nq, model.nv, 4);
   sim::MessageDropper dropper(0.3, 4);
@@ -87,8 +87,8 @@ TEST(SimNoAllocation, PolicyAndDisturbances) {
     for (int i = 0; i < 80; ++i) {
       const double t = -0.01 + 0.001 * i;  // before, during and after the policy
       eval.evaluate(p, t, q, v, tau);
-      if (i == 40) down.begin(t, q, tau, 0b0110u);
-      if (i >= 40) down.torque(t, q, v, tau);
+      if (i == 40) down.begin(t, q, tau);
+      if (i >= 40) down.torque(t, q, v, i < 60 ? 0b0110u : 0b1111u, tau);
       noise.apply(model, q, v);
       delay.push(t, q, v);
       if (delay.delayed(td, qd, vd)) sink += td;

@@ -172,7 +172,10 @@ Run run(const ControllerConfig& config, const Options& options) {
              status.regularization,
              0};
     for (int c = 0; c < static_cast<int>(robot.contacts.size()); ++c)
-      s.feet_down += sim->simulator().normalForce(c) > 0.0;
+      if (sim->simulator().normalForce(c) > 0.0) {
+        ++s.feet_down;
+        s.feet_mask |= 1u << c;
+      }
     if (const Solver* solver = mpc ? mpc->mpc().solver() : nullptr) {
       s.backward_passes = solver->backwardPasses();
       s.forward_passes = solver->forwardPasses();

@@ -25,6 +25,7 @@ struct Sample {
   double k_max;  // largest |K| entry of the policy's first knot
   double step, reg;
   int feet_down;                                // robot contacts carrying load (sim)
+  unsigned feet_mask = 0;                       // bit c: contact c carries load
   int backward_passes = 0, forward_passes = 0;  // of the tick's solve
   double solve_ms = 0.0;
 };

@@ -3,7 +3,8 @@
 // Prints how each command segment was tracked; optionally writes the session as an LCM log.
 //   stride-drive --config config/controller/solo12.yaml --commands config/commands/solo12.yaml
 //                [--robots-dir DIR] [--duration S] [--push START:DURATION:FX,FY,FZ]...
-//                [--log FILE] [--summary FILE.json] [--settle S] [--check-tracking]
+//                [--log FILE] [--summary FILE.json] [--trace FILE.csv] [--settle S]
+//                [--check-tracking]
 //                [--lose-controller AT [--controller-back-after S]] [--stand-down-ramp S]
 // Exit status: 0; 1 with --check-tracking when a segment missed its command or the robot fell;
 // 2 for bad arguments or files.
@@ -49,7 +50,7 @@ void writeJson(const std::string& path, const stride::drive::Run& run,
 int main(int argc, char** argv) {
   CLI::App app{"stride-drive: drive a robot with a command script, in one process, in lock-step"};
   stride::commandLineConventions(app, "stride-drive");
-  std::string config_path, script_path, summary;
+  std::string config_path, script_path, summary, trace_path;
   std::vector<std::string> robots_dirs, pushes;
   stride::drive::Options options;
   options.duration = 0.0;
@@ -65,6 +66,9 @@ int main(int argc, char** argv) {
   app.add_option("--push", pushes, "a push on the base: start:duration:fx,fy,fz (repeatable)");
   app.add_option("--log", options.log, "write every message as an LCM log (lcm-logger's format)");
   app.add_option("--summary", summary, "write the segments as JSON here");
+  app.add_option("--trace", trace_path,
+                 "write one CSV row per controller period: base pose and velocity, tilt, feet "
+                 "down, the policy's status and the solve (to see how a run went, or fell)");
   app.add_option("--settle", segment_options.settle,
                  "seconds after each command before its segment's velocity is averaged (1)");
   app.add_option("--lose-controller", options.controller_lost_at,
@@ -92,7 +96,28 @@ int main(int argc, char** argv) {
       }
       options.sim.pushes.pushes.push_back(push);
     }
+    std::FILE* trace = nullptr;
+    if (!trace_path.empty()) {
+      trace = std::fopen(trace_path.c_str(), "w");
+      if (!trace) {
+        std::fprintf(stderr, "stride-drive: cannot write '%s'\n", trace_path.c_str());
+        return 2;
+      }
+      std::fprintf(trace,
+                   "t,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz,tilt_deg,feet_down,feet_mask,"
+                   "policy_status,cost,gap,step,reg,k_max,solve_ms\n");
+      options.each = [trace](const stride::drive::Sample& s) {
+        if (s.q.size() < 7 || s.v.size() < 6) return;  // a fixed-base arm: no base to trace
+        std::fprintf(trace, "%.4f", s.t);
+        for (int i = 0; i < 7; ++i) std::fprintf(trace, ",%.6f", s.q[i]);
+        for (int i = 0; i < 6; ++i) std::fprintf(trace, ",%.5f", s.v[i]);
+        std::fprintf(trace, ",%.3f,%d,%u,%d,%.6g,%.4g,%.4g,%.4g,%.4g,%.3f\n",
+                     stride::drive::tiltDeg(s.q), s.feet_down, s.feet_mask, s.policy_status, s.cost,
+                     s.gap, s.step, s.reg, s.k_max, s.solve_ms);
+      };
+    }
     const stride::drive::Run run = stride::drive::run(config, options);
+    if (trace) std::fclose(trace);
     const std::vector<stride::logs::Segment> segments = run.segments(segment_options);
     const std::vector<stride::logs::TrackingMiss> misses = stride::logs::checkTracking(segments);
     std::printf("stride-drive: %s, %.1f s of %.1f s, %s; %lld fallbacks, %lld failed solves\n",
