@@ -228,6 +228,12 @@ void StandDown::begin(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
   for (Leg& leg : legs_) leg.latched = false;
 }
 
+// GCC 12 warns that Eigen's AVX-512 reductions read past the legs' small vectors (at most 6 of 8
+// lanes): they take the 8-wide packet path only for sizes of 8 and more, a false positive.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Warray-bounds"
+#endif
 void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
                        const Eigen::Ref<const Eigen::VectorXd>& v, unsigned on_ground,
                        Eigen::Ref<Eigen::VectorXd> tau) {
@@ -306,5 +312,8 @@ void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
     }
   }
 }
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
 
 }  // namespace stride::sim
