@@ -295,6 +295,34 @@ TEST(Feed, StatusStringLengthsAreCheckedOnTheBytes) {
   EXPECT_EQ(feed.frame(FrameKind::Status)["gait"], "trot");
 }
 
+// Each refusal cause is said once, but a bus may carry any number of them (every model hash, every
+// robot name): the warnings stop at Feed::kMaxWarnings, the last saying so; the counts go on.
+TEST(Feed, WarningsAreBounded) {
+  Feed feed(Channels{}, quadSource());
+  const Channels ch;
+  take(feed, ch.model, encode(quadModel()));
+  testing::internal::CaptureStderr();
+  for (int i = 0; i < 1000; ++i) {
+    robot_model_t other = quadModel();
+    other.robot = "robot_" + std::to_string(i);
+    other.model_hash = i;
+    take(feed, ch.model, encode(other));
+    robot_state_t s = standingState(1000 + i);
+    s.model_hash = 1000000 + i;
+    take(feed, ch.state, encode(s));
+  }
+  const std::string err = testing::internal::GetCapturedStderr();
+  ASSERT_EQ(feed.warnings().size(), Feed::kMaxWarnings);
+  EXPECT_NE(feed.warnings().back().find("the later ones are not kept"), std::string::npos)
+      << feed.warnings().back();
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), static_cast<long>(Feed::kMaxWarnings));
+  EXPECT_EQ(feed.rejected(ch.model), 1000);
+  EXPECT_EQ(feed.rejected(ch.state), 1000);
+  // Still accepting what is good.
+  take(feed, ch.state, encode(standingState(5000)));
+  EXPECT_EQ(feed.accepted(ch.state), 1);
+}
+
 // stride-viz --all-frames (LogOptions of rate 0): every accepted state and plan of the log is a
 // frame (the horizons come at 10 Hz, under the default plan rate); by default the 200 Hz states
 // are decimated to 100 per second.
