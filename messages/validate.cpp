@@ -180,6 +180,23 @@ Reject checkCommandWire(const void* buf, int size) {
   return size == kHash + 32 + 4 + len + 8 ? Reject::None : Reject::WrongSize;
 }
 
+Reject checkStatusWire(const void* buf, int size) {
+  // mpc_status_t.lcm: the fixed fields before wrong_model_cause (type hash included), between it
+  // and gait, and after gait. lcm-gen's decoder takes a string's length minus one as the number of
+  // characters to copy: a length of -2^31 overflows (undefined behaviour, in practice 2^31 - 1
+  // characters read past the buffer) and 0 makes std::string throw.
+  constexpr long kBeforeCause = kHash + 158, kBetween = 48, kAfterGait = 32;
+  long at = kBeforeCause;
+  for (const long fixed_after : {kBetween, kAfterGait}) {
+    std::int32_t len;  // counts the terminating NUL, which must be there
+    if (!readInt32(buf, size, at, len)) return Reject::Undecodable;
+    if (len < 1 || len > size - at - 4) return Reject::WrongSize;
+    if (static_cast<const unsigned char*>(buf)[at + 4 + len - 1] != 0) return Reject::Undecodable;
+    at += 4 + len + fixed_after;
+  }
+  return at == size ? Reject::None : Reject::WrongSize;
+}
+
 Reject checkState(const robot_state_t& m, bool floating_base) {
   if (m.nq != static_cast<int>(m.q.size()) || m.nv != static_cast<int>(m.v.size()) ||
       m.ncontacts != static_cast<int>(m.contact.size()))

@@ -72,6 +72,10 @@ Reject checkPlanWire(const void* buf, int size, int max_contacts, int max_phases
 // A command whose gait name has at most kMaxGaitName characters.
 constexpr int kMaxGaitName = 31;
 Reject checkCommandWire(const void* buf, int size);
+// A status whose two strings (wrong_model_cause, gait) have lengths inside the buffer, each
+// NUL-terminated, and the exact size they imply. It has no counts: this is all that keeps lcm-gen's
+// decoder from reading past the buffer.
+Reject checkStatusWire(const void* buf, int size);
 
 // Content checks on decoded messages. floating_base: q[3..7) is a quaternion (x y z w).
 Reject checkState(const robot_state_t& m, bool floating_base);

@@ -4,6 +4,7 @@
 // gets names no file outside the server.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
@@ -255,6 +256,71 @@ TEST(Feed, AStateIsEstimatedWithThePolicyTheRobotApplied) {
   const Json real_time = feed.frame(FrameKind::State);
   EXPECT_EQ(real_time["forces"], forcesWith(b, 3000));
   EXPECT_NE(real_time["forces"], forcesWith(c, 3000));
+}
+
+// mpc_status_t has no counts but two strings; lcm-gen's decoder reads 2^31 - 1 characters past the
+// buffer for a length of -2^31 (found by the fuzzer, tests/fuzz): the lengths are checked on the
+// bytes first (msg::checkStatusWire), whichever string and whatever the length.
+TEST(Feed, StatusStringLengthsAreCheckedOnTheBytes) {
+  Feed feed(Channels{}, quadSource());
+  const std::string& ch = Channels{}.status;
+  mpc_status_t st{};
+  st.utime = 1000;
+  st.wrong_model_cause = "cause";
+  st.gait = "trot";
+  const std::vector<unsigned char> good = encode(st);
+  // wrong_model_cause's length field after 166 bytes of fixed fields (type hash included), gait's
+  // before its 5 bytes and the 4 int64 after it.
+  const std::size_t cause_at = 166, gait_at = good.size() - 32 - 5 - 4;
+  long refused = 0;
+  for (const std::size_t at : {cause_at, gait_at}) {
+    for (const std::int32_t len : {std::numeric_limits<std::int32_t>::min(), -1, 0, 1000,
+                                   std::numeric_limits<std::int32_t>::max()}) {
+      std::vector<unsigned char> bad = good;
+      poke32(bad, at, len);
+      EXPECT_EQ(feed.take(ch, bad.data(), static_cast<int>(bad.size())), Feed::Took::None)
+          << "length " << len << " at " << at;
+      ++refused;
+    }
+  }
+  std::vector<unsigned char> bad = good;
+  bad[cause_at + 4 + 5] = 'x';  // "cause" without its NUL
+  EXPECT_EQ(feed.take(ch, bad.data(), static_cast<int>(bad.size())), Feed::Took::None);
+  bad = good;
+  bad.push_back(0);  // one byte more than the strings imply
+  EXPECT_EQ(feed.take(ch, bad.data(), static_cast<int>(bad.size())), Feed::Took::None);
+  EXPECT_EQ(feed.rejected(ch), refused + 2);
+  EXPECT_EQ(msg::checkStatusWire(good.data(), static_cast<int>(good.size())), msg::Reject::None);
+  EXPECT_EQ(feed.take(ch, good.data(), static_cast<int>(good.size())), Feed::Took::Status);
+  EXPECT_EQ(feed.frame(FrameKind::Status)["gait"], "trot");
+}
+
+// Each refusal cause is said once, but a bus may carry any number of them (every model hash, every
+// robot name): the warnings stop at Feed::kMaxWarnings, the last saying so; the counts go on.
+TEST(Feed, WarningsAreBounded) {
+  Feed feed(Channels{}, quadSource());
+  const Channels ch;
+  take(feed, ch.model, encode(quadModel()));
+  testing::internal::CaptureStderr();
+  for (int i = 0; i < 1000; ++i) {
+    robot_model_t other = quadModel();
+    other.robot = "robot_" + std::to_string(i);
+    other.model_hash = i;
+    take(feed, ch.model, encode(other));
+    robot_state_t s = standingState(1000 + i);
+    s.model_hash = 1000000 + i;
+    take(feed, ch.state, encode(s));
+  }
+  const std::string err = testing::internal::GetCapturedStderr();
+  ASSERT_EQ(feed.warnings().size(), Feed::kMaxWarnings);
+  EXPECT_NE(feed.warnings().back().find("the later ones are not kept"), std::string::npos)
+      << feed.warnings().back();
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), static_cast<long>(Feed::kMaxWarnings));
+  EXPECT_EQ(feed.rejected(ch.model), 1000);
+  EXPECT_EQ(feed.rejected(ch.state), 1000);
+  // Still accepting what is good.
+  take(feed, ch.state, encode(standingState(5000)));
+  EXPECT_EQ(feed.accepted(ch.state), 1);
 }
 
 // stride-viz --all-frames (LogOptions of rate 0): every accepted state and plan of the log is a

@@ -297,7 +297,11 @@ int main(int argc, char** argv) {
       command_reader.read(*e);
     } else if (e->channel == status_channel) {
       stride::mpc_status_t st;
-      if (st.decode(e->data, 0, static_cast<int>(e->datalen)) < 0) {
+      // The string lengths on the bytes first (a corrupt one would make the decoder read past the
+      // event).
+      if (stride::msg::checkStatusWire(e->data, static_cast<int>(e->datalen)) !=
+              stride::msg::Reject::None ||
+          st.decode(e->data, 0, static_cast<int>(e->datalen)) < 0) {
         ++bad;
         continue;
       }

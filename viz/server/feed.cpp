@@ -67,8 +67,16 @@ Feed::Feed(Channels channels, RobotSource source)
 Feed::~Feed() = default;
 
 void Feed::warn(const std::string& text) {
-  std::fprintf(stderr, "stride-viz: %s\n", text.c_str());
-  warnings_.push_back(text);
+  // Each cause is said once, but a bus can carry any number of causes (every message of another
+  // model hash, every robot name): the list and what it takes to remember the causes are bounded.
+  if (!canWarn()) return;
+  const std::string& said =
+      warnings_.size() + 1 < kMaxWarnings
+          ? text
+          : "more than " + std::to_string(kMaxWarnings - 1) +
+                " warnings: the later ones are not kept (the messages are still counted)";
+  std::fprintf(stderr, "stride-viz: %s\n", said.c_str());
+  warnings_.push_back(said);
 }
 
 void Feed::reject(const std::string& channel, const char* reason) {
@@ -136,7 +144,7 @@ Feed::Took Feed::takeModel(const void* data, int size) {
     if (in.model_hash == m_->model.model_hash && in.robot == m_->model.robot) return Took::Model;
     const std::string cause = "another model on '" + channel + "' (" + in.robot + ", hash " +
                               hashText(in.model_hash) + ") after " + m_->model.robot + "'s";
-    if (m_->refused_claims.insert(cause).second)
+    if (canWarn() && m_->refused_claims.insert(cause).second)
       warn(cause + ": stride-viz keeps the first model; restart it to follow the new one");
     reject(channel, "another model than the first");
     return Took::None;
@@ -146,7 +154,7 @@ Feed::Took Feed::takeModel(const void* data, int size) {
     const std::string yaml = findRobotYaml(in.robot, source_.config_dirs, &tried);
     const bool first_try =
         std::find(tried_names_.begin(), tried_names_.end(), in.robot) == tried_names_.end();
-    if (first_try) tried_names_.push_back(in.robot);
+    if (first_try && canWarn()) tried_names_.push_back(in.robot);
     if (yaml.empty()) {
       if (first_try) {
         std::string text = "the bus's robot '" + in.robot + "' has no YAML; give it with --robot";
@@ -199,7 +207,7 @@ Feed::Took Feed::takeState(const void* data, int size) {
   if (r == msg::Reject::WrongModel) {
     msg::WireClaim claim;
     char text[256];
-    if (msg::readStateClaim(data, size, claim) &&
+    if (canWarn() && msg::readStateClaim(data, size, claim) &&
         m_->refused_claims
             .insert("state " + std::to_string(claim.hash) + " " + std::to_string(claim.nq) + " " +
                     std::to_string(claim.nv))

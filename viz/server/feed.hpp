@@ -75,8 +75,10 @@ class Feed {
   std::shared_ptr<const RobotFiles> robotFiles() const { return files_; }
   const Robot* robot() const { return robot_.get(); }
 
-  // Every warning so far (each also written once to stderr), and the counters by channel and
-  // reason: {"STRIDE_STATE": {"accepted": n, "rejected": {"reason": n}}, ..., "forces": {...}}.
+  // Every warning so far (each also written once to stderr), at most kMaxWarnings (the last one
+  // then says that later ones are not kept), and the counters by channel and reason:
+  // {"STRIDE_STATE": {"accepted": n, "rejected": {"reason": n}}, ..., "forces": {...}}.
+  static constexpr std::size_t kMaxWarnings = 32;
   const std::vector<std::string>& warnings() const { return warnings_; }
   Json counters() const;
   long accepted(const std::string& channel) const;
@@ -85,6 +87,7 @@ class Feed {
  private:
   void loadRobot(const std::string& yaml);
   void warn(const std::string& text);
+  bool canWarn() const { return warnings_.size() < kMaxWarnings; }
   void reject(const std::string& channel, const char* reason);
   Took takeModel(const void* data, int size);
   Took takeState(const void* data, int size);

@@ -142,6 +142,9 @@ msg::Reject decodeHorizon(const void* buf, int size, const msg::WireModel& model
 }
 
 msg::Reject decodeStatus(const void* buf, int size, mpc_status_t& m) {
+  // Its string lengths on the bytes first: lcm-gen's decoder only checks that a length is not past
+  // the end, and reads ~2 GB past the buffer for a length of -2^31.
+  if (const msg::Reject r = msg::checkStatusWire(buf, size); r != msg::Reject::None) return r;
   if (!decodeExactly(buf, size, m)) return msg::Reject::Undecodable;
   return m.utime >= 0 ? msg::Reject::None : msg::Reject::BadField;
 }

@@ -24,9 +24,10 @@ msg::Reject decodeModel(const void* buf, int size, robot_model_t& m);
 msg::Reject decodeHorizon(const void* buf, int size, const msg::WireModel& model, int ncontacts,
                           int max_knots, bool floating_base, horizon_t& m);
 
-// mpc_status_t has no counts, only two strings: decoded whole, which fails on a string length that
-// does not fit the buffer or is below 1 (wire.cpp), and the stamp must be >= 0. Its numbers may be
-// NaN (a failed solve's cost): the frames carry them as null.
+// mpc_status_t has no counts, only two strings: their lengths checked on the bytes
+// (msg::checkStatusWire: inside the buffer, at least 1, NUL-terminated, the exact size), then
+// decoded; the stamp must be >= 0. Its numbers may be NaN (a failed solve's cost): the frames carry
+// them as null.
 msg::Reject decodeStatus(const void* buf, int size, mpc_status_t& m);
 
 }  // namespace stride::viz

@@ -1,0 +1,38 @@
+#pragma once
+// The inputs of the message fuzzer (tests/fuzz/fuzz_messages.cpp) and of its seed corpus
+// (corpus.cpp): the first byte of an input picks the handler, modulo kFuzzChannels, and the rest
+// is the LCM payload that handler receives, exactly as it comes off the bus.
+
+#include <cstdint>
+#include <string>
+
+namespace stride::fuzz {
+
+enum class Channel : std::uint8_t {
+  MpcState,    // MpcNode::onState (stride-mpc)
+  MpcPlan,     // MpcNode::onPlan, then applyPendingPlan
+  MpcCommand,  // MpcNode::onCommand
+  MpcPolicy,   // MpcNode::onPolicy (a rival controller on the policy channel)
+  SimPolicy,   // SimNode::onPolicy (stride-sim), then one physics step
+  VizModel,    // viz::Feed::take on each of stride-viz's six channels, then its frames
+  VizState,
+  VizPolicy,
+  VizHorizon,
+  VizStatus,
+  VizCommand,
+};
+constexpr int kFuzzChannels = static_cast<int>(Channel::VizCommand) + 1;
+
+// The corpus files' names start with it ("mpc_state-standing").
+inline const char* name(Channel c) {
+  constexpr const char* kNames[kFuzzChannels] = {
+      "mpc_state", "mpc_plan",   "mpc_command", "mpc_policy", "sim_policy", "viz_model",
+      "viz_state", "viz_policy", "viz_horizon", "viz_status", "viz_command"};
+  return kNames[static_cast<int>(c)];
+}
+
+// What the handlers made of the inputs so far: accepted and refused, per program and channel
+// (fuzz_messages.cpp; stride-fuzz-replay prints it).
+std::string handledSummary();
+
+}  // namespace stride::fuzz
