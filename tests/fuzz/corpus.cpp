@@ -134,6 +134,9 @@ class Corpus {
     zero.duration[1] = 0.0;
     add(Channel::MpcPlan, "zero_duration", encode(zero));
     add(Channel::MpcPlan, "name_length_negative", poke32(encode(trot), 8 + 8 + 1 + 4, -2));
+    contact_plan_t early = trot;
+    early.utime = std::numeric_limits<std::int64_t>::min();
+    add(Channel::MpcPlan, "stamp_most_negative", encode(early));
 
     // Body commands from a teleop, stamped in the files' name order too.
     add(Channel::MpcCommand, "beyond_limits", encode(command(2000000, "walk", 8.0)));
