@@ -236,6 +236,7 @@ Reject checkPlan(const contact_plan_t& m) {
     for (std::int8_t c : m.closed[i])
       if (c != 0 && c != 1) return Reject::BadField;
   }
+  if (m.utime < 0) return Reject::BadField;  // as every stamp (and a tick subtracts it)
   return m.cyclic == 0 || m.cyclic == 1 ? Reject::None : Reject::BadField;
 }
 

@@ -80,6 +80,7 @@ Reject checkStatusWire(const void* buf, int size);
 // Content checks on decoded messages. floating_base: q[3..7) is a quaternion (x y z w).
 Reject checkState(const robot_state_t& m, bool floating_base);
 Reject checkPolicy(const policy_t& m, bool floating_base);
+// Durations > 0, flags in {0, 1}, a stamp >= 0.
 Reject checkPlan(const contact_plan_t& m);
 // Finite numbers, a stamp >= 0. The gait name and the limits are the receiver's (its robot's gaits,
 // its configuration's limits).

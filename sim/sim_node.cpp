@@ -103,7 +103,11 @@ void SimNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channe
   source_seen_ = sim_.time();
   if (policy_.knots != incoming_.knots)
     policy_.resize(incoming_.knots, model.nq, model.nv, sim_.nu());
-  policy_.t0 = static_cast<double>(incoming_.knot0_utime - options_.utime_base) * 1e-6;
+  // In double: a stamp near -2^63 minus the base would overflow int64 (undefined behaviour; found
+  // by the message fuzzer).
+  policy_.t0 =
+      (static_cast<double>(incoming_.knot0_utime) - static_cast<double>(options_.utime_base)) *
+      1e-6;
   policy_.dt = incoming_.dt;
   for (int k = 0; k < incoming_.knots; ++k) {
     std::copy(incoming_.x_ref[k].begin(), incoming_.x_ref[k].end(), policy_.xRef(k));

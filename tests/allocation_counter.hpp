@@ -3,10 +3,15 @@
 // new and Eigen both end there), and Eigen's own check (EIGEN_RUNTIME_NO_MALLOC, defined for the
 // no-allocation test binaries) is armed while counting. The interposition is per binary: include
 // this header in exactly one source file of a test executable.
+// Under AddressSanitizer, which owns malloc (an interposed one would hand it blocks it did not
+// allocate), the count comes from its allocation hook instead: every malloc, operator new,
+// aligned or reallocated block goes through it.
 
 #include <Eigen/Core>
 #include <atomic>
 #include <cstdlib>
+
+#include "sanitizers.hpp"
 
 namespace stride::testing::detail {
 inline std::atomic<bool> g_counting{false};
@@ -16,6 +21,17 @@ inline void count() {
 }
 }  // namespace stride::testing::detail
 
+#ifdef STRIDE_ADDRESS_SANITIZER
+namespace stride::testing::detail {
+inline void allocated(const volatile void*, size_t) {
+  count();
+}
+inline void freed(const volatile void*) {}
+// Static, not inline: the header is in one source file of a binary, and the hook must be installed.
+[[maybe_unused]] static const int g_hooks_installed =
+    __sanitizer_install_malloc_and_free_hooks(allocated, freed);
+}  // namespace stride::testing::detail
+#else
 extern "C" {
 void* __libc_malloc(size_t);
 void* __libc_calloc(size_t, size_t);
@@ -48,6 +64,7 @@ int posix_memalign(void** p, size_t a, size_t n) {
   return *p ? 0 : 12;
 }
 }
+#endif
 
 namespace stride::testing {
 

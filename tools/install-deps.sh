@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages Stride builds and runs with; runs `apt-get update` first only
 # when something is missing. Needs root (or sudo). Used by tools/demo.sh and tools/test.sh.
+#   --sanitize  also clang 14 with its sanitizer and libFuzzer runtimes (tools/test.sh --sanitize)
 set -euo pipefail
 
 packages=(
@@ -25,6 +26,17 @@ packages=(
   nodejs npm               # viz/web: npm ci (the lock file's packages) and esbuild build stride-viz's page
   chromium                 # viz/web/test: the page's browser test, headless
 )
+case "${1:-}" in
+  -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;;
+  --sanitize)
+    packages+=(
+      clang-14                 # tools/test.sh --sanitize: the compiler (OpenMP: libomp-dev above)
+      libclang-rt-14-dev       # AddressSanitizer, UndefinedBehaviorSanitizer and libFuzzer
+      llvm-14                  # llvm-symbolizer-14: file and line in the sanitizers' reports
+    ) ;;
+  "") ;;
+  *) echo "install-deps: unknown argument '$1'" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do

@@ -297,39 +297,46 @@ void kktDerivatives(const Model& model, Data& data, const ContactSet& contacts, 
     b.cols = b.R ? nv : nv - tau_first;
     b.offset = used;
     used += b.cols;
-    auto work = cd.work.block(0, b.offset, nc, b.cols);
     auto rhs = cd.rhs3.middleCols(b.offset, b.cols);
     if (b.R) {
-      work.noalias() = cd.Yt.topRows(nc) * *b.R;
-      work -= b.A->topRows(nc);
+      if (nc > 0) {
+        auto work = cd.work.block(0, b.offset, nc, b.cols);
+        work.noalias() = cd.Yt.topRows(nc) * *b.R;
+        work -= b.A->topRows(nc);
+      }
       rhs = -*b.R;
     } else {
-      work = -cd.Yt.topRows(nc).rightCols(b.cols);
+      if (nc > 0) cd.work.block(0, b.offset, nc, b.cols) = -cd.Yt.topRows(nc).rightCols(b.cols);
       rhs.setZero();
       rhs.bottomRows(b.cols).diagonal().setOnes();
     }
   }
-  // ∂λ/∂x, row-major for the row updates below, then to its outputs.
-  auto dual = cd.dual_rows.topLeftCorner(nc, used);
-  dual.noalias() = Kinv * cd.work.topLeftCorner(nc, used);
-  for (const Block& b : blocks)
-    if (b.primal) b.dual->topRows(nc).rightCols(b.cols) = dual.middleCols(b.offset, b.cols);
-  // rhs += Jc^T dual on the supporting rows of each contact.
-  const Eigen::Index stride = cd.rhs3.outerStride(), ldd = cd.dual_rows.outerStride();
-  int r = 0;
-  for (int c = 0; c < contacts.size(); ++c) {
-    if (!contacts.isActive(c)) continue;
-    const ContactModel& cm = contacts[c];
-    const Joint& jt = model.joints[model.frames[cm.frame].parentJoint];
-    const double* d = cd.dual_rows.data() + r * ldd;
-    for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
-      double* row = cd.rhs3.data() + k * stride;
-      if (cm.dim == 3)
-        addTransposedRows<3>(&cd.Jc(r, k), d, ldd, row, used);
-      else
-        addTransposedRows<6>(&cd.Jc(r, k), d, ldd, row, used);
+  // No contact closed: v̇'s derivatives are ABA's, and there is no λ. Not only a shortcut: a set
+  // without any contact has workspaces of no rows, whose data() is null, and a block of one at a
+  // column offset is undefined behaviour (found by UndefinedBehaviorSanitizer).
+  if (nc > 0) {
+    // ∂λ/∂x, row-major for the row updates below, then to its outputs.
+    auto dual = cd.dual_rows.topLeftCorner(nc, used);
+    dual.noalias() = Kinv * cd.work.topLeftCorner(nc, used);
+    for (const Block& b : blocks)
+      if (b.primal) b.dual->topRows(nc).rightCols(b.cols) = dual.middleCols(b.offset, b.cols);
+    // rhs += Jc^T dual on the supporting rows of each contact.
+    const Eigen::Index stride = cd.rhs3.outerStride(), ldd = cd.dual_rows.outerStride();
+    int r = 0;
+    for (int c = 0; c < contacts.size(); ++c) {
+      if (!contacts.isActive(c)) continue;
+      const ContactModel& cm = contacts[c];
+      const Joint& jt = model.joints[model.frames[cm.frame].parentJoint];
+      const double* d = cd.dual_rows.data() + r * ldd;
+      for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
+        double* row = cd.rhs3.data() + k * stride;
+        if (cm.dim == 3)
+          addTransposedRows<3>(&cd.Jc(r, k), d, ldd, row, used);
+        else
+          addTransposedRows<6>(&cd.Jc(r, k), d, ldd, row, used);
+      }
+      r += cm.dim;
     }
-    r += cm.dim;
   }
   solveMassMatrixRows(model, data, cd.rhs3.leftCols(used));
   if (!primal_matrices) return;

@@ -399,6 +399,14 @@ TEST_F(NodeInput, MalformedPlansAreRejected) {
   node_.onPlan(&rbuf, "STRIDE_PLAN");
   node_.applyPendingPlan();
   EXPECT_EQ(node_.planUpdates(), 1);
+  // A negative stamp, as for every other message: the plan's time at a tick is the state's stamp
+  // minus the plan's, which overflowed for one near -2^63.
+  plan.utime = std::numeric_limits<std::int64_t>::min();
+  plan.encode(b.data(), 0, static_cast<int>(b.size()));
+  node_.onPlan(&rbuf, "STRIDE_PLAN");
+  node_.applyPendingPlan();
+  EXPECT_EQ(node_.rejected(msg::Reject::BadField), 3);
+  EXPECT_EQ(node_.planUpdates(), 1);
 }
 
 }  // namespace

@@ -9,6 +9,8 @@
 #   two_processes.sh BUILD_DIR CONFIG_DIR
 set -euo pipefail
 build=$1 config=$2
+# Under the sanitizers (tools/test.sh --sanitize) the loop runs 15-20x slower: the guards scale.
+scale=${STRIDE_TEST_TIME_SCALE:-1}
 # shellcheck source=../private_netns.sh
 source "$(dirname "$0")/../private_netns.sh"
 private_netns "$@"
@@ -17,17 +19,17 @@ dir=$(mktemp -d)
 pids=()
 trap 'for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; rm -rf "$dir"' EXIT
 
-timeout 120 lcm-logger --quiet "$dir/session.lcmlog" &
+timeout $((120 * scale)) lcm-logger --quiet "$dir/session.lcmlog" &
 logger=$!
 pids+=($logger)
 # No command source here: the controller's deadman keeps the robot standing.
 sed -e "s|^robot: .*|robot: $config/robots/stride_quad/stride_quad.yaml|" \
   "$config/controller/stride_quad.yaml" > "$dir/quad.yaml"
-timeout 120 "$build/controller/stride-mpc" --config "$dir/quad.yaml" --lockstep > "$dir/mpc.txt" 2>&1 &
+timeout $((120 * scale)) "$build/controller/stride-mpc" --config "$dir/quad.yaml" --lockstep > "$dir/mpc.txt" 2>&1 &
 mpc=$!
 pids+=($mpc)
 sleep 0.5
-timeout 120 "$build/sim/stride-sim" --robot "$config/robots/stride_quad/stride_quad.yaml" \
+timeout $((120 * scale)) "$build/sim/stride-sim" --robot "$config/robots/stride_quad/stride_quad.yaml" \
   --lockstep --rate 200 --duration 3 --summary "$dir/sim.json" > "$dir/sim.txt" 2>&1
 kill -TERM "$mpc"
 wait "$mpc" || true
@@ -60,7 +62,7 @@ wait "$logger" || true
 # one): it skips the packages, the build and its own namespace, and checks that only lo is here.
 printf -- '- {at: 0.0, gait: stand}\n- {at: 1.0, gait: trot, vx: 0.3}\n' > "$dir/drive.yaml"
 status=0
-STRIDE_DEMO_INSIDE=1 STRIDE_BUILD_DIR="$build" timeout 120 "$config/../tools/demo.sh" \
+STRIDE_DEMO_INSIDE=1 STRIDE_BUILD_DIR="$build" timeout $((120 * scale)) "$config/../tools/demo.sh" \
   --robot stride_quad --lockstep --commands "$dir/drive.yaml" --duration 6 --out "$dir/demo" \
   --check-tracking > "$dir/demo.txt" 2>&1 || status=$?
 cat "$dir/demo.txt"

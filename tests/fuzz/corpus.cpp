@@ -134,6 +134,9 @@ class Corpus {
     zero.duration[1] = 0.0;
     add(Channel::MpcPlan, "zero_duration", encode(zero));
     add(Channel::MpcPlan, "name_length_negative", poke32(encode(trot), 8 + 8 + 1 + 4, -2));
+    contact_plan_t early = trot;
+    early.utime = std::numeric_limits<std::int64_t>::min();
+    add(Channel::MpcPlan, "stamp_most_negative", encode(early));
 
     // Body commands from a teleop, stamped in the files' name order too.
     add(Channel::MpcCommand, "beyond_limits", encode(command(2000000, "walk", 8.0)));
@@ -196,7 +199,15 @@ class Corpus {
         poke32(encode(model), 8 + 4 + robot_.name.size() + 1 + 8 + 12, kHuge));
     add(Channel::VizState, "standing", encode(state(1000000, false)));
     add(Channel::VizState, "standing_contacts", encode(state(1001000, true)));
+    // The next state frames the one before with the policy held (its forces estimated).
+    add(Channel::VizState, "standing_contacts_next", encode(state(1002000, true)));
     add(Channel::VizPolicy, "hold", encode(policy(1000000, 2, 1)));
+    // Stamps at the ends of int64 (after the horizon, before the states: the files' name order).
+    p = policy(1000000, 2, 1);
+    p.utime = p.knot0_utime = std::numeric_limits<std::int64_t>::max();
+    add(Channel::VizPolicy, "stamps_highest", encode(p));
+    p.utime = p.knot0_utime = std::numeric_limits<std::int64_t>::min();
+    add(Channel::VizPolicy, "stamps_lowest", encode(p));
     add(Channel::VizHorizon, "standing", encode(horizon(1000000, 8)));
     horizon_t h = horizon(1000000, 8);
     h.contact_mask[3] = 1 << nc_;

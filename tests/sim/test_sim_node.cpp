@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,31 @@ TEST(SimNode, StatesCarryTheModelHashAndAnotherModelsPoliciesAreRefused) {
   feed(holdPolicy(robot, 19, 18, modelHash(robot)));
   EXPECT_EQ(node.stats().policies, 1);
   EXPECT_TRUE(node.answered(1000000));
+}
+
+// A valid policy whose knot 0 sits at any stamp, down to -2^63 µs: its time on the robot's clock
+// was an int64 difference that overflowed (undefined behaviour, found by the message fuzzer,
+// tests/fuzz; UndefinedBehaviorSanitizer sees it in tools/test.sh --sanitize). Long past its
+// end, it is not applied: the robot stands down.
+TEST(SimNode, APolicyOfAnyStampIsTakenWithoutOverflow) {
+  const Robot& robot = sim_test::robot("stride_quad");
+  Sink out;
+  sim::SimNode node(robot, sim::SimOptions{}, sim::SimNodeOptions{}, out);
+  for (const std::int64_t knot0 : {std::numeric_limits<std::int64_t>::min(), std::int64_t{0},
+                                   std::numeric_limits<std::int64_t>::max()}) {
+    node.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
+    policy_t p = holdPolicy(robot, 19, 18, modelHash(robot));
+    p.knot0_utime = knot0;
+    std::vector<unsigned char> b = encode(p);
+    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
+    node.onPolicy(&rbuf, "STRIDE_POLICY");
+    EXPECT_EQ(node.stats().policies, 1) << knot0;
+    EXPECT_TRUE(node.advance(10)) << knot0;
+    EXPECT_EQ(node.stats().steps, 10) << knot0;
+    if (knot0 < 0) {
+      EXPECT_EQ(node.stats().stand_downs, 1) << knot0;  // long past its end
+    }
+  }
 }
 
 }  // namespace

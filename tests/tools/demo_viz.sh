@@ -8,6 +8,8 @@
 #   demo_viz.sh BUILD_DIR ROOT
 set -euo pipefail
 build=$1 root=$2
+# Under the sanitizers (tools/test.sh --sanitize) the loop runs 15-20x slower: the guards scale.
+scale=${STRIDE_TEST_TIME_SCALE:-1}
 # shellcheck source=../private_netns.sh
 source "$(dirname "$0")/../private_netns.sh"
 private_netns "$@"
@@ -17,7 +19,7 @@ trap 'kill $demo 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$dir"' E
 # A trot at 0.3 m/s: what this test checks is the viewer's forward, not the walk. (The default
 # drive's forward start at 0.5 m/s falls in lock-step on some CPUs: issue 19's sag, open.)
 printf -- '- {at: 0.0, gait: stand}\n- {at: 1.0, gait: trot, vx: 0.3}\n' > "$dir/drive.yaml"
-STRIDE_DEMO_NO_SETUP=1 STRIDE_BUILD_DIR="$build" timeout 150 "$root/tools/demo.sh" --viz \
+STRIDE_DEMO_NO_SETUP=1 STRIDE_BUILD_DIR="$build" timeout $((150 * scale)) "$root/tools/demo.sh" --viz \
   --viz-port "$port" --lockstep --commands "$dir/drive.yaml" --duration 8 --out "$dir/demo" \
   > "$dir/demo.txt" 2>&1 &
 demo=$!

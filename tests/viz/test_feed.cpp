@@ -295,6 +295,28 @@ TEST(Feed, StatusStringLengthsAreCheckedOnTheBytes) {
   EXPECT_EQ(feed.frame(FrameKind::Status)["gait"], "trot");
 }
 
+// Stamps are the sender's: a policy at either end of int64 is taken and a state framed with it
+// (the differences of stamps overflowed, undefined behaviour found by the message fuzzer).
+TEST(Feed, PoliciesStampedAtTheEndsOfInt64AreTakenAndFramed) {
+  const Channels ch;
+  for (const std::int64_t stamp :
+       {std::numeric_limits<std::int64_t>::min(), std::numeric_limits<std::int64_t>::max()}) {
+    Feed feed(Channels{}, quadSource());
+    take(feed, ch.horizon, encode(standingHorizon(1000, 20)));
+    policy_t p = constantPolicy(1000, 0.0);
+    p.utime = p.knot0_utime = stamp;
+    EXPECT_EQ(feed.take(ch.policy, encode(p).data(), static_cast<int>(encode(p).size())),
+              Feed::Took::Policy)
+        << stamp;
+    take(feed, ch.state, encode(standingState(2000)));
+    take(feed, ch.state, encode(standingState(3000)));  // frames the first with the policy
+    const Json state = feed.frame(FrameKind::State);
+    ASSERT_FALSE(state.is_null()) << stamp;
+    EXPECT_EQ(state["t"], 0.002) << stamp;
+    EXPECT_FALSE(feed.frame(FrameKind::Plan).is_null()) << stamp;
+  }
+}
+
 // Each refusal cause is said once, but a bus may carry any number of them (every model hash, every
 // robot name): the warnings stop at Feed::kMaxWarnings, the last saying so; the counts go on.
 TEST(Feed, WarningsAreBounded) {

@@ -261,7 +261,9 @@ Feed::Took Feed::takePolicy(const void* data, int size) {
   // The answer to the waiting state (policy_t.utime: the state it answers): in lock-step the robot
   // waited for it and applies it from that state on.
   if (m_->have_waiting && m_->policy.utime >= m_->waiting.utime) readyWaitingState(serial);
-  if (m_->policy.utime - m_->last_horizon_utime > kHorizonFreshUtime)
+  // Compared without a difference, which overflowed for a policy stamped near ±2^63 (a horizon's
+  // stamp is >= 0, or the initial -2^62: the sum cannot overflow).
+  if (m_->policy.utime > m_->last_horizon_utime + kHorizonFreshUtime)
     m_->plan = Messages::PlanFrom::Policy;
   return Took::Policy;
 }

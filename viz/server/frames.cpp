@@ -156,7 +156,10 @@ bool FrameBuilder::estimateForces(const robot_state_t& state, std::uint64_t poli
     const HeldPolicy& asked = policies_[(policy_serial - 1) % kPolicies];
     if (asked.serial == policy_serial) held = &asked;
   }
-  const double t = static_cast<double>(state.utime - held->knot0_utime) * 1e-6;
+  // In double: a policy's knot 0 may sit at any stamp, and the int64 difference overflowed for
+  // one near -2^63 (undefined behaviour; the same value for every real pair of stamps).
+  const double t =
+      (static_cast<double>(state.utime) - static_cast<double>(held->knot0_utime)) * 1e-6;
   if (evaluator_.evaluate(held->policy, t, q_, v_, u_) == sim::PolicyStatus::Invalid) {
     ++force_counts_.failed;
     return false;
