@@ -133,6 +133,8 @@ void Mpc::start(std::int64_t utime) {
   need_restart_ = true;
   have_previous_ = false;
   have_solved_ = false;
+  startup_again_ = false;
+  startup_resolves_ = 0;
 }
 
 bool Mpc::replan(double t) {
@@ -169,10 +171,20 @@ unsigned Mpc::knotMask(int k) const {
   return mask;
 }
 
-void Mpc::restartWarmStart(double t, double t_knot0) {
+void Mpc::restartWarmStart(double t, double t_knot0, bool startup) {
   t_warm_ = t_knot0;
   if (!replan(t)) return;
-  loco_->referenceWarmStart(*gen_, xs_warm_, us_warm_);
+  // The first solve starts where the robot is, held still: a controller started (or restarted)
+  // on a robot that stands anywhere but in the nominal posture -- feet where a stand-down left
+  // them, turned, at another height -- would otherwise start from the references' default joint
+  // angles, far from every state its contacts allow, and its first iterations must close those
+  // gaps (from a quadruped stood down on legs folded the wrong way, the references' warm start
+  // failed 19 solves in a row; this one converged). Later restarts, in the tick, allocate nothing
+  // and take the references.
+  if (startup)
+    loco_->measuredWarmStart(x_, xs_warm_, us_warm_);
+  else
+    loco_->referenceWarmStart(*gen_, xs_warm_, us_warm_);
   solver_->setWarmStart(xs_warm_, us_warm_);
   // After the start-up solve μ starts again at the ticks' trust region, not below it: from 1e-9 a
   // restart spent 14 ticks of line searches that took no step climbing back, and the quadruped
@@ -203,8 +215,10 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, bool late, SolveStatus
   ShootingProblem& problem = loco_->problem();
   const double dt = config_.locomotion.dt;
   // The first solve, before any policy went out, runs to convergence (no deadline); a restart
-  // after a failure gets the normal budget and converges over the following ticks.
-  const bool first = !have_solved_;
+  // after a failure gets the normal budget and converges over the following ticks. So does a
+  // start-up solve made again on a newer state (startup_again_), from the last one's solution.
+  const bool first = !have_solved_ || startup_again_;
+  startup_again_ = false;
   // The preparation serves while the state is less than a knot from the prepared knot 0: only
   // x0 changes, and the time between them stays a gap at x0 as after a shift. (Within half a knot
   // when ticks come on time; up to a period more after a late tick, when the loop skipped one.)
@@ -234,7 +248,7 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, bool late, SolveStatus
     // every impulse knot after each shift, and line searches that stall. (A restart re-plans for
     // its own warm start, at t.)
     if (need_restart_ || !shiftTo(t)) {
-      restartWarmStart(t, t);
+      restartWarmStart(t, t, first);
       if (need_restart_) return false;  // the references could not be planned
     } else if (!replan(t)) {
       return false;
@@ -348,6 +362,19 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
     status_.regularization = solver_->regularization();
     const int n_stats = solver_->statsCount();
     status_.step = n_stats > 0 ? solver_->stats()[n_stats - 1].step : 0.0;
+    // In real time a start-up solve that took longer than a period answers for a state that old
+    // (the humanoid's: 0.1-0.8 s): the robot has moved on (a stand-down, a push) and the
+    // policy's knots are behind its clock. It is not sent; the next tick solves again, to
+    // convergence, from this solution on the state then, which takes a few iterations.
+    const bool real_time = deadline != Clock::time_point::max();
+    if (ok && startup_tick_ && real_time && startup_resolves_ < kMaxStartupResolves &&
+        status_.solve_ms > 1e3 / config_.rate_hz) {
+      ++startup_resolves_;
+      ++counters_.startup_resolves;
+      startup_again_ = true;
+      finishStatus(tick_start, kPolicyNone);
+      return false;
+    }
     if (ok) {
       // A line search that takes no step, tick after tick, while μ climbs to its limit is stuck
       // on a warm start the new references broke (a sudden stand on a frozen robot lifted the
@@ -445,7 +472,7 @@ void Mpc::prepare(Clock::time_point deadline) {
       !restart && solver_->preparing() && std::abs(t_next - t_warm_) < config_.locomotion.dt;
   if (!resume) solver_->discardPreparation();
   if (restart) {
-    restartWarmStart(t_last_, t_next);
+    restartWarmStart(t_last_, t_next, false);
     if (need_restart_) return;  // the references could not be planned: the next tick tries
   } else if (!resume) {
     // For when the next state is expected; past the horizon the next tick restarts anyway.

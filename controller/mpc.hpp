@@ -55,6 +55,9 @@ struct MpcCounters {
   std::int64_t unprepared_solves = 0;  // ticks after start-up that solved without a preparation
   std::int64_t late_ticks = 0;         // started after their time (the last period's work ran over)
   std::int64_t stall_restarts = 0;     // warm starts made again after line searches stalled
+  // Start-up solves made again on a newer state, their own answer too old when it came (real
+  // time: a start-up solve that took longer than a period).
+  std::int64_t startup_resolves = 0;
   // Overload (a period's work ran past the next tick's start; controller/README.md, "Overload"):
   std::int64_t shed_line_searches = 0;   // late ticks whose line search tried the full step only
   std::int64_t shed_ticks = 0;           // ticks without preparation: the previous policy re-sent
@@ -128,6 +131,8 @@ class Mpc {
   }
   // The last tick made the first solve of a (re)built problem, which runs without deadline.
   bool startupTick() const { return startup_tick_; }
+  // Start-up solves made again on a newer state before one answer went out (real time).
+  static constexpr int kMaxStartupResolves = 3;
 
   // After a tick that solved (a fresh policy, not a fallback): the whole predicted horizon into a
   // horizon_t shaped by msg::shape(h, horizonKnots(), nq, contacts). Allocation-free. False when
@@ -154,8 +159,9 @@ class Mpc {
   // shed: when not null, a real-time tick without its preparation solves nothing and sets it.
   bool solveTick(double t, Clock::time_point deadline, bool late, SolveStatus& status, bool* shed);
   // The warm start made again from the references planned on the state x_ (at plan time t), with
-  // its knot 0 at t_knot0.
-  void restartWarmStart(double t, double t_knot0);
+  // its knot 0 at t_knot0; for a start-up solve (allocating), the measured state held instead
+  // (LocomotionProblem::measuredWarmStart).
+  void restartWarmStart(double t, double t_knot0, bool startup);
   unsigned knotMask(int k) const;  // the contacts knot k closes
   void writePolicy(std::int64_t utime, double t, std::int8_t status);
   bool previousPolicy(std::int64_t utime);
@@ -186,6 +192,10 @@ class Mpc {
   std::vector<unsigned> knot_masks_;                // and of their contacts (bit c: closed)
   bool need_restart_ = false;  // the last solve failed: start again from standing
   bool have_solved_ = false;   // a solve of this problem succeeded (else the next is the first)
+  // The last start-up solve's answer came too late to send: the next tick solves as a start-up
+  // again, from that solution on the newer state (bounded by kMaxStartupResolves).
+  bool startup_again_ = false;
+  int startup_resolves_ = 0;  // since start()
   bool startup_tick_ = false;
   bool solved_ = false;        // the last tick solved (prepare() may follow)
   bool fresh_policy_ = false;  // the last tick's policy came from its solve

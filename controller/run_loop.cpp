@@ -191,7 +191,8 @@ void writeSummary(const MpcNode& node, const std::string& path) {
       "%lld stale states, %lld failed solves, %lld unprepared solves, %lld plan updates\n"
       "stride-mpc: overload: %lld ticks with the full step only, %lld ticks re-sending the "
       "previous policy, at most %lld misses in a row (%lld without a host stall; %lld periods "
-      "stalled by the host); %lld stalled-solve restarts\n",
+      "stalled by the host); %lld stalled-solve restarts, %lld start-up solves made again on a "
+      "newer state\n",
       static_cast<long long>(c.ticks), static_cast<long long>(node.acceptedStates()),
       static_cast<long long>(node.rejected()), lat.p50.value_or(0.0), lat.p99.value_or(0.0),
       lat.max.value_or(0.0), lat.count, static_cast<long long>(c.deadline_misses),
@@ -201,7 +202,7 @@ void writeSummary(const MpcNode& node, const std::string& path) {
       static_cast<long long>(c.shed_line_searches), static_cast<long long>(c.shed_ticks),
       static_cast<long long>(c.max_misses_in_a_row),
       static_cast<long long>(c.max_own_misses_in_a_row), static_cast<long long>(c.host_stalls),
-      static_cast<long long>(c.stall_restarts));
+      static_cast<long long>(c.stall_restarts), static_cast<long long>(c.startup_resolves));
   const CommandCounters& cc = node.commands().counters();
   std::printf(
       "stride-mpc: commands: %lld accepted, %lld rejected, %lld clamped, %lld deadman timeouts\n",
@@ -239,6 +240,7 @@ void writeSummary(const MpcNode& node, const std::string& path) {
   j["unprepared_solves"] = c.unprepared_solves;
   j["ticks_without_state"] = c.ticks_without_state;
   j["stall_restarts"] = c.stall_restarts;
+  j["startup_resolves"] = c.startup_resolves;
   j["overload"] = {{"full_step_only", c.shed_line_searches},
                    {"previous_policy_ticks", c.shed_ticks},
                    {"max_misses_in_a_row", c.max_misses_in_a_row},

@@ -63,8 +63,9 @@ int main(int argc, char** argv) {
                  "the robot's joint PD (before the first policy, standing down) [Nm/rad] "
                  "(default: the robot YAML's joint_pd)");
   app.add_option("--hold-kd", node_options.hold_kd, "its damping [Nm s/rad]");
-  app.add_option("--stand-down-grace", node_options.stand_down.grace,
-                 "seconds past a policy's end before the robot stands down (0.05)");
+  app.add_option(
+      "--stand-down-grace", node_options.stand_down.grace,
+      "seconds past a policy's end, its last knot held, before the robot stands down (0)");
   app.add_option("--stand-down-ramp", node_options.stand_down.ramp,
                  "seconds from the robot as it is to the default posture (0.3)");
   app.add_option("--summary", summary, "write the run's summary as JSON here");

@@ -252,16 +252,19 @@ void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
   }
   if (legs_.empty()) return;
 
-  // The legs: where each foot belongs under a level base of the present heading.
+  // The legs: where each foot belongs under a level base placed over the feet on the ground.
   computeJointJacobians(model_, data_, q);
   const SE3& base = data_.oMi[freeFlyerJoint()];
-  const double yaw = std::atan2(base.R(1, 0), base.R(0, 0));
-  const Eigen::Matrix3d level = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  // Feet on the ground stay where they touched down. Each says where the base should be for it to
-  // be at its default place under the base; their mean is where the base goes: over its support,
-  // and one rigid displacement of the base for every planted leg (they never pull against each
-  // other through the ground).
-  Eigen::Vector2d base_xy = Eigen::Vector2d::Zero();
+  // Feet on the ground stay where they touched down. The base goes where the planted feet are
+  // each at their default place under it, as near as a rigid placement allows: the horizontal
+  // position and heading that fit the default feet onto the planted ones in the least-squares
+  // sense (two or more feet; one foot: the present heading). Every planted leg then moves with
+  // one rigid displacement of the base (they never pull against each other through the ground),
+  // and a base that turns away from its feet is turned back: at the present heading instead,
+  // nothing held the heading, and a quadruped stood down on four feet spun up to 4 rad/s and
+  // 87 degrees (a kill at 2.918 s of the trot at 0.5 m/s).
+  Eigen::Vector2d sum_anchor = Eigen::Vector2d::Zero(), sum_offset = Eigen::Vector2d::Zero();
+  double sum_dot = 0.0, sum_cross = 0.0;
   int planted = 0;
   for (std::size_t c = 0; c < legs_.size(); ++c) {
     Leg& leg = legs_[c];
@@ -269,11 +272,25 @@ void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
     if (down && !leg.latched) leg.anchor = updateFramePlacement(model_, data_, leg.frame).p;
     leg.latched = down;
     if (!down) continue;
-    base_xy += (leg.anchor - level * leg.base_to_foot.p).head<2>();
+    const Eigen::Vector2d a = leg.anchor.head<2>(), o = leg.base_to_foot.p.head<2>();
+    sum_anchor += a;
+    sum_offset += o;
+    sum_dot += o.dot(a);
+    sum_cross += o.x() * a.y() - o.y() * a.x();
     ++planted;
   }
-  const Eigen::Vector3d base_target(planted ? base_xy.x() / planted : base.p.x(),
-                                    planted ? base_xy.y() / planted : base.p.y(), base.p.z());
+  double yaw = std::atan2(base.R(1, 0), base.R(0, 0));
+  Eigen::Vector2d base_xy = base.p.head<2>();
+  if (planted > 0) {
+    const Eigen::Vector2d a_mean = sum_anchor / planted, o_mean = sum_offset / planted;
+    // The centred sums: Σ o'·a' and Σ o'×a' (2-D Procrustes: the rotation taking o' onto a').
+    const double dot = sum_dot - planted * o_mean.dot(a_mean);
+    const double cross = sum_cross - planted * (o_mean.x() * a_mean.y() - o_mean.y() * a_mean.x());
+    if (planted >= 2 && std::hypot(dot, cross) > 1e-9) yaw = std::atan2(cross, dot);
+    base_xy = a_mean - Eigen::Rotation2Dd(yaw) * o_mean;
+  }
+  const Eigen::Matrix3d level = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3d base_target(base_xy.x(), base_xy.y(), base.p.z());
   for (std::size_t c = 0; c < legs_.size(); ++c) {
     Leg& leg = legs_[c];
     const SE3& foot = updateFramePlacement(model_, data_, leg.frame);

@@ -90,23 +90,26 @@ struct HoldPolicy {
 };
 
 // What the robot does when its controller goes silent (sim/README.md, "Controller loss"): past
-// the last policy's end plus a grace period, a stand-down that levels the body over its feet, as
-// a robot's low level would with its IMU and joint encoders:
+// the last policy's end (plus a grace period, 0 by default), a stand-down that levels the body over
+// its feet, as a robot's low level would with its IMU and joint encoders:
 // - each leg (the joints that move one contact's frame, and no other) is given the joint angles
-//   that put its foot where it belongs under a LEVEL base of the present heading, at the default
-//   posture's depth below the base: a foot on the ground at the place where it is (latched at
-//   touch-down, so planted feet are not dragged across the ground against each other), a foot in
-//   the air under its hip (so it comes down where it supports the body). A tilted body then has
-//   its low side's legs extended and its high side's shortened: the body levels itself.
-//   Those angles are one damped least-squares step of the leg's inverse kinematics each physics
-//   step (the PD tracks a target that is recomputed as the robot moves);
+//   that put its foot where it belongs under a LEVEL base, placed (horizontal position and
+//   heading) where the planted feet are as near their default places under it as a rigid
+//   placement allows, at the default posture's depth below the base: a foot on the ground at the
+//   place where it is (latched at touch-down, so planted feet are not dragged across the ground
+//   against each other), a foot in the air under its hip (so it comes down where it supports the
+//   body). A tilted body then has its low side's legs extended and its high side's shortened: the
+//   body levels itself. Those angles are one damped least-squares step of the leg's inverse
+//   kinematics each physics step (the PD tracks a target that is recomputed as the robot moves);
 // - the other joints (arms, torso, joints shared by several contacts) move linearly to the default
 //   posture over `ramp` seconds;
 // - the last policy's feed-forward (the torques that carried the robot's weight) fades out over the
 //   same time while the PD takes the load.
 // Then the PD alone, leveling, until a controller is back.
 struct StandDownOptions {
-  double grace = 0.05;     // [s] past the policy's end: its last knot held (a late answer)
+  // [s] past the policy's end, its last knot held (feed-forward and feedback) before standing
+  // down. 0: that hold diverges within tens of ms (sim/README.md, "Controller loss").
+  double grace = 0.0;
   double ramp = 0.3;       // [s] for the feed-forward to fade and the other joints to reach default
   double max_step = 0.05;  // [m] (and rad): the largest foot error one IK step corrects
 };

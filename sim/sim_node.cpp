@@ -197,7 +197,7 @@ bool SimNode::advance(int steps) {
     PolicyStatus status = PolicyStatus::Invalid;
     if (have_policy_) status = evaluator_.evaluate(policy_, t, sim_.q(), sim_.v(), tau_);
     if (status == PolicyStatus::Exhausted) {
-      // A late answer: the last knot held for the grace period; longer, the controller is lost.
+      // Past the policy's end (by the grace, 0 by default: sim/README.md) the controller is lost.
       const double end = policy_.t0 + (policy_.knots - 1) * policy_.dt;
       if (!standing_down_ && t - end > options_.stand_down.grace) {
         const int last = policy_.knots - 1;

@@ -2,7 +2,7 @@
 // stride-sim's LCM side: publishes the mock robot's state estimates (with the configured noise,
 // delay and drops) and applies the newest valid policy at every physics step (ARCHITECTURE.md §1,
 // §6). Until the first policy arrives a joint PD holds the default posture; when the controller
-// goes silent (past a policy's end by a grace period) the robot stands down (StandDown,
+// goes silent (past a policy's end) the robot stands down (StandDown,
 // sim/README.md "Controller loss"); both counted. States carry the robot's model hash; a policy of
 // another model (hash, nq or nv: another robot's controller) is refused, counted, and each distinct
 // cause written to stderr once (controller/README.md, "Wire contract").

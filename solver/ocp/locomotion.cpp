@@ -324,4 +324,27 @@ void LocomotionProblem::referenceWarmStart(const GaitGenerator& reference,
   }
 }
 
+std::vector<Eigen::VectorXd> LocomotionProblem::holdingControlsOf(const Eigen::VectorXd& q) const {
+  return holdingTorques(model_, contacts_, q);
+}
+
+void LocomotionProblem::measuredWarmStart(const Eigen::VectorXd& x0,
+                                          std::vector<Eigen::VectorXd>& xs,
+                                          std::vector<Eigen::VectorXd>& us) const {
+  const int T = problem_->horizon(), nq = model_.nq;
+  const std::vector<Eigen::VectorXd> u_hold = holdingControlsOf(x0.head(nq));
+  Eigen::VectorXd rest = x0;
+  rest.tail(model_.nv).setZero();
+  xs.assign(T + 1, rest);
+  xs[0] = x0;
+  us.resize(T);
+  for (int k = 0; k < T; ++k) {
+    const ContactSet& set = static_cast<const KnotModel&>(problem_->knot(k)).contacts();
+    unsigned mask = 0;
+    for (int c = 0; c < set.size(); ++c)
+      if (set.isActive(c)) mask |= 1u << c;
+    us[k] = u_hold[mask];
+  }
+}
+
 }  // namespace stride

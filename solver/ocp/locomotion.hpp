@@ -122,6 +122,8 @@ class LocomotionProblem {
   // The torques that hold the nominal posture still on the contacts of `mask` (bit c: contact c
   // closed; minimum-norm forces); the joint gravity torques with no contact.
   const Eigen::VectorXd& holdingControl(unsigned mask) const { return u_hold_[mask]; }
+  // The same for posture q (configuration, size nq), one per mask. Allocates: for start-up.
+  std::vector<Eigen::VectorXd> holdingControlsOf(const Eigen::VectorXd& q) const;
   // The body-height postures a generator's references move through (GaitGenerator::
   // crouchPostures: joint positions for offsets spread evenly over [-max_height, max_height]):
   // each knot's control reference then holds the posture of its reference height instead of the
@@ -133,6 +135,11 @@ class LocomotionProblem {
   // (after update).
   void referenceWarmStart(const GaitGenerator& reference, std::vector<Eigen::VectorXd>& xs,
                           std::vector<Eigen::VectorXd>& us) const;
+  // A warm start that stays where the robot is: state x0 at knot 0, its posture at rest at every
+  // other knot, each knot's torques holding that posture on the knot's contacts (after update).
+  // Allocates (holdingControlsOf): for a controller's first solve.
+  void measuredWarmStart(const Eigen::VectorXd& x0, std::vector<Eigen::VectorXd>& xs,
+                         std::vector<Eigen::VectorXd>& us) const;
   // Control bounds for the box solver (size nu; ±infinity unless options.torque_limits).
   const Eigen::VectorXd& controlLower() const { return u_lower_; }
   const Eigen::VectorXd& controlUpper() const { return u_upper_; }

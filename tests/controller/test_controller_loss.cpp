@@ -49,9 +49,12 @@ Outcome killAndRestart(const ControllerConfig& config, const char* gait, double 
 }
 
 // Kills spread over one gait cycle (every phase of the feet), a restart 1 s after each: the
-// robot stands down without falling, the new controller is followed, and walks it forward again.
+// robot stands down without falling or tilting past max_tilt_deg, the new controller is followed,
+// and walks it forward again at three quarters of the command or better (min_progress over the last
+// after / 2 seconds: it went on at the commanded speed in 40 kills of the quadruped's trot and 10
+// of the humanoid's walk, sim/README.md "Controller loss").
 void kills(int n, const char* robot, const char* gait, double vx, double walk_at, double cycle,
-           double after, double min_progress) {
+           double after, double min_progress, double max_tilt_deg) {
   const ControllerConfig config = loadControllerConfig(controller_cases::configPath(robot));
   const double first_kill = walk_at + 1.5;  // walking at vx by then
   int falls = 0;
@@ -66,6 +69,7 @@ void kills(int n, const char* robot, const char* gait, double vx, double walk_at
         static_cast<long long>(s.stand_down_steps), static_cast<long long>(s.exhausted_steps));
     falls += o.fell;
     EXPECT_FALSE(o.fell) << "killed at " << kill;
+    EXPECT_LT(o.max_tilt, max_tilt_deg) << "killed at " << kill;
     EXPECT_EQ(o.run.controller_starts, 2);
     EXPECT_EQ(s.stand_downs, 1) << "killed at " << kill;         // lost once, and only then
     EXPECT_GT(s.stand_down_steps, 800) << "killed at " << kill;  // most of the silent second
@@ -80,17 +84,17 @@ void kills(int n, const char* robot, const char* gait, double vx, double walk_at
 // they take 10 and 15 minutes, so tools/test.sh --sanitize runs this one kill instead (label
 // sanitize_slow, tests/CMakeLists.txt; tests/README.md, "Sanitizers").
 TEST(ControllerLoss, QuadrupedTrottingSurvivesAKillAndRestart) {
-  kills(1, "stride_quad", "trot", 0.5, 1.0, 0.4, 4.0, 0.5);
+  kills(1, "stride_quad", "trot", 0.5, 1.0, 0.4, 4.0, 0.8, 10.0);
 }
 
 TEST(ControllerLoss, QuadrupedTrottingSurvivesTenKillsAndRestarts) {
   // stride_quad's trot: a 0.4 s cycle; 0.5 m/s forward.
-  kills(10, "stride_quad", "trot", 0.5, 1.0, 0.4, 4.0, 0.5);
+  kills(10, "stride_quad", "trot", 0.5, 1.0, 0.4, 4.0, 0.8, 10.0);
 }
 
 TEST(ControllerLoss, HumanoidWalkingSurvivesTenKillsAndRestarts) {
   // stride_humanoid's walk: see its controller YAML for the cycle; 0.2 m/s forward.
-  kills(10, "stride_humanoid", "walk", 0.2, 1.0, 1.0, 4.0, 0.15);
+  kills(10, "stride_humanoid", "walk", 0.2, 1.0, 1.0, 4.0, 0.3, 10.0);
 }
 
 }  // namespace

@@ -6,6 +6,8 @@
 // controller: test_closed_loop.cpp; drops, delay and noise: ClosedLoop.QuadrupedTrotsWith...
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <cmath>
 #include <limits>
 
@@ -104,10 +106,9 @@ TEST(Faults, AOneSecondGapInTheStatesIsSurvived) {
   EXPECT_GT(r.sim.stand_down_steps, 800);
   EXPECT_GT(r.sim.states_dropped, 190);  // 200 periods of 5 ms
   EXPECT_LT(maxTilt(r), 15.0);
-  // Trots on, slower than asked: 0.75 m in these 2 s (0.37 m/s, steady from 4.5 s on) since the
-  // stand-down levels the robot over its feet (sim/README.md); 1.0 m before, when planted legs
-  // held their angles. Why the controller then tracks 0.5 m/s at 0.37 is open (issue 19).
-  EXPECT_GT(progress(r, 6.0, 8.0), 0.6) << "trots on after the gap";
+  std::printf("after the gap: tilt max %.1f deg, %.3f m in the last 2 s\n", maxTilt(r),
+              progress(r, 6.0, 8.0));
+  EXPECT_GT(progress(r, 6.0, 8.0), 0.8) << "trots on after the gap";
 }
 
 // 1000 policies a second of another robot's sizes (5 each 5 ms period, 23 kB each) arrive on the

@@ -265,8 +265,13 @@ TEST(Mpc, DeadlineMissesCountAnswersAfterTheDeadline) {
   Mpc mpc(config);
   robot_state_t s = standingState(mpc.robot(), 0);
   const auto past = [] { return Mpc::Clock::now() - std::chrono::milliseconds(1); };
-  // The start-up solve runs to convergence before the first policy, without a deadline.
-  ASSERT_TRUE(mpc.tick(&s, 0.0, past()));
+  // The start-up solve runs to convergence before the first policy, without a deadline (made
+  // again on newer states while it takes longer than a period: ALongStartUpSolveIsMadeAgain...).
+  int startup_ticks = 1;
+  while (!mpc.tick(&s, 0.0, past())) {
+    ASSERT_LE(++startup_ticks, 1 + Mpc::kMaxStartupResolves);
+    s.utime += 5000;
+  }
   EXPECT_EQ(mpc.counters().deadline_misses, 0);
   ASSERT_TRUE(preparedTick(mpc, s, 5000));
   EXPECT_EQ(mpc.counters().deadline_misses, 0);
@@ -282,6 +287,60 @@ TEST(Mpc, DeadlineMissesCountAnswersAfterTheDeadline) {
   // A tick the loop skipped is a miss.
   mpc.countSkippedTick();
   EXPECT_EQ(mpc.counters().deadline_misses, 2);
+}
+
+// In real time the start-up solve (to convergence, 0.1-0.8 s for the humanoid) answers for a state
+// that old: its policy is not sent, and the next tick solves again, as a start-up, from that
+// solution on the newer state, until one takes less than a period (at most kMaxStartupResolves
+// times). In lock-step (no deadline) the first solve answers.
+TEST(Mpc, ALongStartUpSolveIsMadeAgainOnTheNewestState) {
+  const auto soon = [] { return Mpc::Clock::now() + std::chrono::milliseconds(5); };
+  // Ticks in real time (deadlines 5 ms ahead, stride_quad's period), the robot's clock 50 ms
+  // further at each; returns how many ticks it took to send a policy.
+  const auto startUp = [&](Mpc& mpc, robot_state_t& s) {
+    int ticks = 0;
+    for (;;) {
+      ++ticks;
+      const bool sent = mpc.tick(&s, 0.0, soon());
+      EXPECT_TRUE(mpc.startupTick()) << "no deadline, not a latency, not a miss";
+      EXPECT_EQ(mpc.counters().startup_resolves, sent ? ticks - 1 : ticks);
+      if (sent) return ticks;
+      EXPECT_EQ(mpc.status().policy_status, kPolicyNone);
+      if (ticks > Mpc::kMaxStartupResolves) return ticks;
+      s.utime += 50000;
+    }
+  };
+  {  // Every solve slowed down 20 times: each start-up solve takes longer than a period.
+    ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+    config.emulated_slowdown = 20.0;
+    Mpc mpc(config);
+    robot_state_t s = standingState(mpc.robot(), 1000000);
+    EXPECT_EQ(startUp(mpc, s), Mpc::kMaxStartupResolves + 1);  // then sent whatever it took
+    EXPECT_EQ(mpc.policy().status, kPolicySolved);
+    EXPECT_EQ(mpc.policy().utime, s.utime);  // for the newest state
+    EXPECT_EQ(mpc.counters().deadline_misses, 0);
+    EXPECT_EQ(mpc.counters().fallbacks, 0);
+  }
+  {  // At this host's speed: sent for the newest state, and the ticks go on as after any start.
+    ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+    Mpc mpc(config);
+    robot_state_t s = standingState(mpc.robot(), 1000000);
+    const int ticks = startUp(mpc, s);
+    EXPECT_LE(ticks, Mpc::kMaxStartupResolves + 1);
+    std::printf("stride_quad's start-up here: a policy at tick %d\n", ticks);
+    EXPECT_EQ(mpc.policy().status, kPolicySolved);
+    EXPECT_EQ(mpc.policy().utime, s.utime);
+    s.utime += 5000;
+    ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+    EXPECT_FALSE(mpc.startupTick());
+  }
+  {  // Lock-step (no deadline): the first solve answers.
+    ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+    Mpc mpc(config);
+    robot_state_t s = standingState(mpc.robot(), 1000000);
+    ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+    EXPECT_EQ(mpc.counters().startup_resolves, 0);
+  }
 }
 
 // Runs of missed periods: all of them count in max_misses_in_a_row, and those without a host

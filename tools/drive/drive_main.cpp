@@ -4,8 +4,10 @@
 //   stride-drive --config config/controller/solo12.yaml --commands config/commands/solo12.yaml
 //                [--robots-dir DIR] [--duration S] [--push START:DURATION:FX,FY,FZ]...
 //                [--log FILE] [--summary FILE.json] [--trace FILE.csv] [--settle S]
-//                [--check-tracking]
-//                [--lose-controller AT [--controller-back-after S]] [--stand-down-ramp S]
+//                [--check-tracking] [--noise-q S] [--noise-v S] [--delay N] [--drop P]
+//                [--seed N]
+//                [--lose-controller AT [--controller-back-after S]] [--stand-down-grace S]
+//                [--stand-down-ramp S]
 // Exit status: 0; 1 with --check-tracking when a segment missed its command or the robot fell;
 // 2 for bad arguments or files.
 
@@ -75,6 +77,17 @@ int main(int argc, char** argv) {
                  "kill the controller at this time [s] (the robot's fallback takes over)");
   app.add_option("--controller-back-after", options.controller_back_after,
                  "start a new controller this long after the kill [s] (1)");
+  app.add_option("--noise-q", options.sim.noise_q,
+                 "state estimates: joint and base position noise, standard deviation [rad, m]");
+  app.add_option("--noise-v", options.sim.noise_v,
+                 "state estimates: velocity noise, standard deviation [rad/s, m/s]");
+  app.add_option("--delay", options.sim.delay,
+                 "state estimates: published this many publications late (a latency in lock-step)");
+  app.add_option("--drop", options.sim.drop, "state estimates: the probability of dropping one");
+  app.add_option("--seed", options.sim.seed, "the noise's and the drops' random seed (1)");
+  app.add_option("--stand-down-grace", options.sim.stand_down.grace,
+                 "past a policy's end this long [s], the robot stands down (sim/README.md, "
+                 "\"Controller loss\")");
   app.add_option("--stand-down-ramp", options.sim.stand_down.ramp,
                  "the robot's stand-down ramp [s] (sim/README.md, \"Controller loss\")");
   app.add_flag("--check-tracking", check,
