@@ -6,6 +6,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/crba.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/jacobian.hpp"
@@ -212,6 +213,14 @@ StandDown::StandDown(const Model& model, const HoldPolicy& hold,
     leg.base_to_foot = base.actInv(data_.oMf[leg.frame]);
     legs_.push_back(std::move(leg));
   }
+  // Where the centre of mass stands over the feet in the default posture (base frame, horizontal):
+  // where the stand-down puts it back.
+  if (legs_.empty()) return;
+  Eigen::Vector2d feet = Eigen::Vector2d::Zero();
+  for (const Leg& leg : legs_) feet += leg.base_to_foot.p.head<2>();
+  const Eigen::Vector3d com =
+      base.R.transpose() * (centerOfMass(model, data_, hold.q_ref) - base.p);
+  com_over_feet_ = com.head<2>() - feet / static_cast<double>(legs_.size());
 }
 
 int StandDown::freeFlyerJoint() const {
@@ -256,38 +265,66 @@ void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
   computeJointJacobians(model_, data_, q);
   const SE3& base = data_.oMi[freeFlyerJoint()];
   // Feet on the ground stay where they touched down. The base goes where the planted feet are
-  // each at their default place under it, as near as a rigid placement allows: the horizontal
-  // position and heading that fit the default feet onto the planted ones in the least-squares
-  // sense (two or more feet; one foot: the present heading). Every planted leg then moves with
-  // one rigid displacement of the base (they never pull against each other through the ground),
-  // and a base that turns away from its feet is turned back: at the present heading instead,
-  // nothing held the heading, and a quadruped stood down on four feet spun up to 4 rad/s and
-  // 87 degrees (a kill at 2.918 s of the trot at 0.5 m/s).
+  // each at their default place under it, as near as a rigid placement allows: every planted leg
+  // then moves with one rigid displacement of the base (they never pull against each other
+  // through the ground), and a base that turns away from its feet is turned back. The heading:
+  // - planted soles say it by their own yaw (the mean of the headings each asks): two soles a
+  //   stride apart, fitted by their places alone, asked a humanoid to turn by up to ~25 degrees
+  //   and it fell backwards 3 s into the stand-down;
+  // - three or more planted point feet by their places: the least-squares fit of the default
+  //   feet onto them (2-D Procrustes). At the present heading nothing held it, and a quadruped
+  //   stood down on four feet spun up to 4 rad/s and 87 degrees (a kill at 2.918 s of the trot);
+  // - two point feet or fewer: the present heading (a trot's diagonal pair a stride apart gives a
+  //   poor fit; the feet in the air come down under the hips, and then there are four).
+  // The horizontal place: where the planted feet, each at its default place under a base of that
+  // heading, put it on average.
   Eigen::Vector2d sum_anchor = Eigen::Vector2d::Zero(), sum_offset = Eigen::Vector2d::Zero();
-  double sum_dot = 0.0, sum_cross = 0.0;
-  int planted = 0;
+  double sum_dot = 0.0, sum_cross = 0.0, sole_cos = 0.0, sole_sin = 0.0, sum_z = 0.0;
+  int planted = 0, soles = 0;
   for (std::size_t c = 0; c < legs_.size(); ++c) {
     Leg& leg = legs_[c];
     const bool down = c < 32 && (on_ground >> c & 1u);
-    if (down && !leg.latched) leg.anchor = updateFramePlacement(model_, data_, leg.frame).p;
+    if (down && !leg.latched) {
+      const SE3& foot = updateFramePlacement(model_, data_, leg.frame);
+      leg.anchor = foot.p;
+      const Eigen::Matrix3d base_of_foot = foot.R * leg.base_to_foot.R.transpose();
+      leg.anchor_heading = std::atan2(base_of_foot(1, 0), base_of_foot(0, 0));
+    }
     leg.latched = down;
     if (!down) continue;
     const Eigen::Vector2d a = leg.anchor.head<2>(), o = leg.base_to_foot.p.head<2>();
     sum_anchor += a;
+    sum_z += leg.anchor.z();
     sum_offset += o;
     sum_dot += o.dot(a);
     sum_cross += o.x() * a.y() - o.y() * a.x();
     ++planted;
+    if (leg.dim == 6) {
+      sole_cos += std::cos(leg.anchor_heading);
+      sole_sin += std::sin(leg.anchor_heading);
+      ++soles;
+    }
   }
   double yaw = std::atan2(base.R(1, 0), base.R(0, 0));
   Eigen::Vector2d base_xy = base.p.head<2>();
   if (planted > 0) {
     const Eigen::Vector2d a_mean = sum_anchor / planted, o_mean = sum_offset / planted;
-    // The centred sums: Σ o'·a' and Σ o'×a' (2-D Procrustes: the rotation taking o' onto a').
+    // The centred sums: Σ o'·a' and Σ o'×a' (the rotation taking o' onto a').
     const double dot = sum_dot - planted * o_mean.dot(a_mean);
     const double cross = sum_cross - planted * (o_mean.x() * a_mean.y() - o_mean.y() * a_mean.x());
-    if (planted >= 2 && std::hypot(dot, cross) > 1e-9) yaw = std::atan2(cross, dot);
-    base_xy = a_mean - Eigen::Rotation2Dd(yaw) * o_mean;
+    if (soles > 0)
+      yaw = std::atan2(sole_sin, sole_cos);
+    else if (planted >= 3 && std::hypot(dot, cross) > 1e-9)
+      yaw = std::atan2(cross, dot);
+    // Over the support: the base moves by what puts the capture point (the centre of mass ahead
+    // by its velocity times sqrt(h / g)) where the centre of mass stands over the feet in the
+    // default posture, here over the planted feet's centre. With the base merely where the feet's
+    // default places put it, a humanoid stood on two feet a stride apart leaned back, slowly and
+    // then faster, and fell 3 s into the stand-down (3 kills of 10).
+    const Eigen::Vector3d& com = centerOfMass(model_, data_, q, v);
+    const double h = std::max(com.z() - sum_z / planted, 0.05);
+    const Eigen::Vector2d capture = com.head<2>() + data_.vcom.head<2>() * std::sqrt(h / 9.81);
+    base_xy = base.p.head<2>() + (a_mean + Eigen::Rotation2Dd(yaw) * com_over_feet_ - capture);
   }
   const Eigen::Matrix3d level = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Vector3d base_target(base_xy.x(), base_xy.y(), base.p.z());

@@ -93,12 +93,13 @@ struct HoldPolicy {
 // the last policy's end (plus a grace period, 0 by default), a stand-down that levels the body over
 // its feet, as a robot's low level would with its IMU and joint encoders:
 // - each leg (the joints that move one contact's frame, and no other) is given the joint angles
-//   that put its foot where it belongs under a LEVEL base, placed (horizontal position and
-//   heading) where the planted feet are as near their default places under it as a rigid
-//   placement allows, at the default posture's depth below the base: a foot on the ground at the
-//   place where it is (latched at touch-down, so planted feet are not dragged across the ground
-//   against each other), a foot in the air under its hip (so it comes down where it supports the
-//   body). A tilted body then has its low side's legs extended and its high side's shortened: the
+//   that put its foot where it belongs under a LEVEL base at the default posture's depth: a foot
+//   on the ground at the place where it is (latched at touch-down, so planted feet are not dragged
+//   across the ground against each other), a foot in the air under its hip (so it comes down where
+//   it supports the body). The base's heading is the one the planted feet ask (soles: their yaw;
+//   three or more point feet: a least-squares fit of their places), its horizontal place the one
+//   that brings the capture point where the centre of mass stands over the feet in the default
+//   posture. A tilted body then has its low side's legs extended and its high side's shortened: the
 //   body levels itself. Those angles are one damped least-squares step of the leg's inverse
 //   kinematics each physics step (the PD tracks a target that is recomputed as the robot moves);
 // - the other joints (arms, torso, joints shared by several contacts) move linearly to the default
@@ -155,6 +156,7 @@ class StandDown {
     SE3 base_to_foot;          // the foot in the base frame at the default posture
     bool latched = false;      // on the ground since `anchor` was taken
     Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // where it touched down (world)
+    double anchor_heading = 0.0;  // a sole's: the base heading it asks, from its yaw then
   };
   const Model& model_;
   const HoldPolicy& hold_;
@@ -163,6 +165,7 @@ class StandDown {
   std::vector<char> in_leg_;  // per actuated joint: belongs to a leg
   Data data_;
   Matrix6Xd J_;
+  Eigen::Vector2d com_over_feet_ = Eigen::Vector2d::Zero();  // default posture, base frame
   double t0_ = 0.0;
   Eigen::VectorXd q_start_, u_start_;
 };

@@ -9,7 +9,7 @@
 #   tools/demo.sh [--robot NAME | --humanoid] [--commands FILE | --teleop] [--duration S]
 #                 [--realtime | --lockstep] [--robots-dir DIR]... [--check-tracking]
 #                 [--host-network] [--out DIR] [--summary FILE] [--spy] [--viz [--viz-port P]]
-#                 [--slow-host F] [--kill-controller T]
+#                 [--slow-host F] [--kill-controller T] [--flood RATE]
 #
 #   --robot NAME      stride_quad (default), solo12, anymal_c, stride_humanoid, talos_reduced:
 #                     config/controller/NAME.yaml; solo12, anymal_c and talos_reduced need
@@ -50,12 +50,16 @@
 #                     1 s later (issue 19: the robot stands down on its own meanwhile, sim/README.md
 #                     "Controller loss"; the new controller takes over); its output in
 #                     DIR/mpc-restarted.txt. tools/faults.sh runs it at 10 instants
+#   --flood RATE      also publish RATE policies per second of another robot (44 kB each, another
+#                     model hash) on the policy channel (stride-flood, on the side core at nice
+#                     10): every receiver must refuse them cheaply and the robot walk on (issue
+#                     19); stride-flood's line in DIR/flood.txt. tools/faults.sh --flood runs it
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
-spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller=""
+spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood=""
 robots_dirs=()
 args=("$@")
 need_value() { [ $# -ge 2 ] || { echo "demo.sh: $1 needs a value (--help)" >&2; exit 2; }; }
@@ -79,6 +83,7 @@ while [ $# -gt 0 ]; do
     --rss) rss=1; shift ;;
     --slow-host) need_value "$@"; slow_host="$2"; shift 2 ;;
     --kill-controller) need_value "$@"; kill_controller="$2"; shift 2 ;;
+    --flood) need_value "$@"; flood="$2"; shift 2 ;;
     -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown option '$1' (--help)" >&2; exit 2 ;;
   esac
@@ -297,6 +302,13 @@ if [ "$rss" = 1 ]; then
   pids+=($!)
 fi
 teleop_bin="$build/tools/stride-teleop"
+if [ -n "$flood" ]; then
+  # A rogue publisher on the robot's network: its own cost is small (it would run elsewhere);
+  # what counts is every subscriber's, the kernel's delivery and the refusal on the raw bytes.
+  timeout "$limit" nice -n 10 "${side[@]}" "$build/tools/stride-flood" --rate "$flood" \
+    > "$out/flood.txt" 2>&1 &
+  pids+=($!)
+fi
 if [ -n "$kill_controller" ]; then
   # The controller killed (no chance to say goodbye) while the robot walks, a new one started a
   # second later on the same core with the same arguments. Timed from here: the sim starts next.
@@ -388,6 +400,7 @@ if [ -n "$kill_controller" ]; then
   echo "demo: stride-mpc killed at $kill_controller s and restarted 1 s later; the restarted one:"
   grep -E '^stride-mpc:' "$out/mpc-restarted.txt" 2>/dev/null || echo "  (no output)"
 fi
+[ -n "$flood" ] && { grep -E '^stride-flood: .* sent' "$out/flood.txt" || echo "demo: stride-flood said nothing ($out/flood.txt)"; }
 [ -f "$out/teleop.txt" ] && grep -E '^stride-teleop: stopped' "$out/teleop.txt" || true
 [ "$sim_status" = 124 ] && echo "demo: the sim was stopped by the safety net after $limit s"
 echo

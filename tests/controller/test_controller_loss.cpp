@@ -80,6 +80,50 @@ void kills(int n, const char* robot, const char* gait, double vx, double walk_at
   EXPECT_EQ(falls, 0);
 }
 
+// The controller killed and never back (5 s): the stand-down alone holds the robot up for good,
+// level within max_tilt_deg, at every phase of the gait. (In real time a restarted controller
+// can take 2-3 s to take over; a humanoid whose stand-down leaned back slowly fell then.)
+void standDownsForGood(int n, const char* robot, const char* gait, double vx, double walk_at,
+                       double cycle, double max_tilt_deg) {
+  const ControllerConfig config = loadControllerConfig(controller_cases::configPath(robot));
+  const double first_kill = walk_at + 1.5;
+  for (int i = 0; i < n; ++i) {
+    const double kill = first_kill + cycle * i / n + 0.0013 * i;
+    drive::Options o;
+    o.duration = kill + 5.0;
+    o.controller_lost_at = kill;
+    o.controller_back_after = 100.0;  // never, in this run
+    o.script.resize(2);
+    o.script[1].at = walk_at;
+    o.script[1].gait = gait;
+    o.script[1].vx = vx;
+    const drive::Run r = drive::run(config, o);
+    double max_tilt = 0.0, tilt_last = 0.0;
+    for (const drive::Sample& s : r.samples) {
+      max_tilt = std::max(max_tilt, tiltDeg(s.q));
+      if (s.t > o.duration - 1.0) tilt_last = std::max(tilt_last, tiltDeg(s.q));
+    }
+    std::printf(
+        "%s killed at %.4f s, no controller for 5 s: %s, tilt max %.1f deg, %.1f in the "
+        "last second\n",
+        robot, kill, r.fell() ? "FELL" : "up", max_tilt, tilt_last);
+    EXPECT_FALSE(r.fell()) << "killed at " << kill;
+    EXPECT_LT(max_tilt, max_tilt_deg) << "killed at " << kill;
+    EXPECT_LT(tilt_last, 3.0) << "level at the end, killed at " << kill;
+    EXPECT_EQ(r.controller_starts, 1);
+    EXPECT_EQ(r.sim.stand_downs, 1);
+    EXPECT_GT(r.sim.stand_down_steps, 4800);
+  }
+}
+
+TEST(ControllerLoss, QuadrupedStandsDownForGoodAtTenKills) {
+  standDownsForGood(10, "stride_quad", "trot", 0.5, 1.0, 0.4, 10.0);
+}
+
+TEST(ControllerLoss, HumanoidStandsDownForGoodAtTenKills) {
+  standDownsForGood(10, "stride_humanoid", "walk", 0.2, 1.0, 1.0, 10.0);
+}
+
 // The ten-kill tests repeat the one-kill path at every phase of the feet: under the sanitizers
 // they take 10 and 15 minutes, so tools/test.sh --sanitize runs this one kill instead (label
 // sanitize_slow, tests/CMakeLists.txt; tests/README.md, "Sanitizers").

@@ -41,6 +41,17 @@ struct Trot {
 };
 
 // A few iterations of each solver from the standing warm start (the warm start's copy included).
+// The allocations of `iterations` solves from the trot's warm start, after one warm-up solve
+// (the first parallel region creates OpenMP's thread pool; the first solve sizes nothing else).
+long warmSolveAllocations(Solver& solver, const Trot& trot, int iterations) {
+  EXPECT_TRUE(solver.setWarmStart(trot.xs, trot.us));
+  solver.solve(1);
+  return allocations([&] {
+    solver.setWarmStart(trot.xs, trot.us);
+    solver.solve(iterations);
+  });
+}
+
 void solveNoAllocation(int threads) {
   Trot trot;
   trot.c.loco->problem().setThreads(threads);
@@ -51,13 +62,7 @@ void solveNoAllocation(int threads) {
       solver.setControlBounds(Eigen::VectorXd::Constant(nu, -1.0),
                               Eigen::VectorXd::Constant(nu, 1.0));
     }
-    // Warm-up: the first parallel region creates OpenMP's thread pool.
-    ASSERT_TRUE(solver.setWarmStart(trot.xs, trot.us));
-    solver.solve(1);
-    const long n = allocations([&] {
-      solver.setWarmStart(trot.xs, trot.us);
-      solver.solve(5);
-    });
+    const long n = warmSolveAllocations(solver, trot, 5);
     EXPECT_GT(solver.iterations(), 0);
     EXPECT_EQ(n, 0) << (kind == SolverKind::Fddp ? "Fddp, " : "BoxFddp, ") << threads
                     << " thread(s)";
@@ -86,12 +91,7 @@ TEST(SolverNoAllocation, BoxFddpWithOneFreeControl) {
   lower[0] = -inf;
   upper[0] = inf;
   solver.setControlBounds(lower, upper);
-  ASSERT_TRUE(solver.setWarmStart(trot.xs, trot.us));
-  solver.solve(1);
-  const long n = allocations([&] {
-    solver.setWarmStart(trot.xs, trot.us);
-    solver.solve(3);
-  });
+  const long n = warmSolveAllocations(solver, trot, 3);
   EXPECT_GT(solver.backwardPasses(), 0);
   EXPECT_EQ(n, 0);
 }

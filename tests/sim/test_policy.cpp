@@ -222,8 +222,8 @@ TEST(Policy, StandDownAtTheDefaultPostureOnlyFadesTheFeedForward) {
 // ground a tilted body shows as feet at unequal depths in the base frame, and equalizing them
 // levels it. FR's knee bent 0.3 rad further (its foot higher in the base frame, as under a body
 // rolled to the right) with all four feet down: FR's knee straightens, harder than anything else
-// moves. A foot in the air goes under its hip: FL bent the same way, off the ground, straightens;
-// the planted legs, at their default place, get (almost) nothing.
+// moves. A foot in the air goes under its hip: FL bent the same way, off the ground, straightens
+// hardest, while the three planted legs bring the centre of mass over their own centre.
 TEST(Policy, StandDownHoldsPlantedFeetAtTheDefaultDepthAndBringsTheOthersUnderTheHips) {
   const Robot& r = robot("stride_quad");
   sim::HoldPolicy hold(r.model, r.default_q, 10.0, 0.0);
@@ -243,7 +243,13 @@ TEST(Policy, StandDownHoldsPlantedFeetAtTheDefaultDepthAndBringsTheOthersUnderTh
   down.begin(0.0, q, Eigen::VectorXd::Zero(12));
   down.torque(1.0, q, v, 0b1110u, tau);
   EXPECT_GT(tau[2], 0.5);
-  EXPECT_LT(tau.tail(9).cwiseAbs().maxCoeff(), 1e-9);
+  tau.cwiseAbs().maxCoeff(&largest);
+  EXPECT_EQ(largest, 2);
+  // The planted legs carry the body toward their own centre (the tripod's, behind and to the
+  // right): about the same hip abduction torque on each of the three, moving the base sideways.
+  EXPECT_GT(std::abs(tau[3]), 0.5);
+  EXPECT_NEAR(tau[3], tau[6], 0.01);
+  EXPECT_NEAR(tau[3], tau[9], 0.01);
 }
 
 // ---------------------------------------------------------------------------------------------
