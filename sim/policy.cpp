@@ -264,10 +264,10 @@ void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
   // The legs: where each foot belongs under a level base placed over the feet on the ground.
   computeJointJacobians(model_, data_, q);
   const SE3& base = data_.oMi[freeFlyerJoint()];
-  // Feet on the ground stay where they touched down. The base goes where the planted feet are
-  // each at their default place under it, as near as a rigid placement allows: every planted leg
-  // then moves with one rigid displacement of the base (they never pull against each other
-  // through the ground), and a base that turns away from its feet is turned back. The heading:
+  // Feet on the ground stay where they touched down, and the base is placed over them: every
+  // planted leg then moves with one rigid displacement of the base (they never pull against each
+  // other through the ground), and a base that turns away from its feet is turned back. The
+  // heading:
   // - planted soles say it by their own yaw (the mean of the headings each asks): two soles a
   //   stride apart, fitted by their places alone, asked a humanoid to turn by up to ~25 degrees
   //   and it fell backwards 3 s into the stand-down;
@@ -276,8 +276,7 @@ void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
   //   stood down on four feet spun up to 4 rad/s and 87 degrees (a kill at 2.918 s of the trot);
   // - two point feet or fewer: the present heading (a trot's diagonal pair a stride apart gives a
   //   poor fit; the feet in the air come down under the hips, and then there are four).
-  // The horizontal place: where the planted feet, each at its default place under a base of that
-  // heading, put it on average.
+  // The horizontal place: below, by the capture point.
   Eigen::Vector2d sum_anchor = Eigen::Vector2d::Zero(), sum_offset = Eigen::Vector2d::Zero();
   double sum_dot = 0.0, sum_cross = 0.0, sole_cos = 0.0, sole_sin = 0.0, sum_z = 0.0;
   int planted = 0, soles = 0;
