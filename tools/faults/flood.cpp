@@ -8,6 +8,7 @@
 // Exit status: 0 after --duration (or SIGINT/SIGTERM); 1 LCM could not start; 2 bad arguments.
 #include <CLI/CLI.hpp>
 
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
