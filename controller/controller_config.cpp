@@ -283,9 +283,6 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   r.nonNegative(cmd.max_height, "command.max_body_height");
   for (double a : {cmd.accel_x, cmd.accel_y, cmd.accel_yaw, cmd.height_rate})
     r.positive(a, "command.acceleration / body_height_rate");
-  // The references ramp over the horizon as the command does between ticks.
-  gen.acceleration = Eigen::Vector3d(cmd.accel_x, cmd.accel_y, cmd.accel_yaw);
-  gen.height_rate = cmd.height_rate;
   gen.max_height = cmd.max_height;
   gen.horizon = 0.0;
   if (lo.grid.empty()) gen.horizon = lo.knots * lo.dt;

@@ -89,9 +89,8 @@ void Mpc::setPlan(const ContactPlan& plan, std::int64_t start_utime) {
   rebuild_ = true;
 }
 
-void Mpc::setCommand(const BodyCommand& now, const BodyCommand& target, int gait) {
-  command_ = now;
-  command_target_ = target;
+void Mpc::setCommand(const BodyCommand& command, int gait) {
+  command_ = command;
   if (gait >= 0 && gait < static_cast<int>(gaits_.size())) gait_ = gait;
 }
 
@@ -156,19 +155,11 @@ bool Mpc::replan(double t) {
   int j = 0;  // the last old knot at or before knot k's time
   for (int k = 0; k < T; ++k) {
     while (j + 1 < T && knot_times_[j + 1] <= times[k] + kPlanTimeEpsilon) ++j;
-    const unsigned mask = knotMask(k);
+    const unsigned mask = loco_->contactMask(k);
     if (knot_masks_[j] & ~mask) solver_->setControl(k, loco_->holdingControl(mask));
   }
-  for (int k = 0; k < T; ++k) knot_masks_[k] = knotMask(k);
+  for (int k = 0; k < T; ++k) knot_masks_[k] = loco_->contactMask(k);
   return true;
-}
-
-unsigned Mpc::knotMask(int k) const {
-  const auto& knot = static_cast<const KnotModel&>(loco_->problem().knot(k));
-  unsigned mask = 0;
-  for (int c = 0; c < knot.contacts().size(); ++c)
-    if (knot.contacts().isActive(c)) mask |= 1u << c;
-  return mask;
 }
 
 void Mpc::restartWarmStart(double t, double t_knot0, bool startup) {
@@ -313,7 +304,7 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   ContactTimeline& timeline = gen_->timeline();
   if (!have_plan_ && timeline.lastPattern() != gait_pattern_[gait_])
     timeline.switchTo(gait_pattern_[gait_], t);
-  gen_->setCommand(command_, command_target_);
+  gen_->setCommand(command_);
   status_.phase = static_cast<std::int32_t>(timeline.mask(t));
   const int in_force = timeline.patternAt(t);
   status_.gait = have_plan_ ? kPlanGait : gaits_[std::min<int>(in_force, gaits_.size() - 1)];
@@ -428,7 +419,7 @@ bool Mpc::writeHorizon(horizon_t& h) const {
     h.t[k] = times[k] - times[0];  // knot 0 is the state, as in the policy (knot0_utime = utime)
     std::copy(solver_->xs()[k].data(), solver_->xs()[k].data() + nq_, h.q[k].begin());
     h.impulse[k] = knot.mode() == KnotMode::Impulse ? 1 : 0;
-    h.contact_mask[k] = static_cast<std::int32_t>(knotMask(k));
+    h.contact_mask[k] = static_cast<std::int32_t>(loco_->contactMask(k));
     // forces(): the active contacts stacked in the set's order, each its dim (force part first).
     int row = 0;
     for (int c = 0; c < contacts.size() && c < h.ncontacts; ++c) {

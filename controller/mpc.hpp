@@ -91,9 +91,9 @@ class Mpc {
   // (the command still sets the velocity). Call between ticks; the next tick rebuilds the problem
   // and solves it to convergence, as at start-up (allocating then). Throws std::invalid_argument.
   void setPlan(const ContactPlan& plan, std::int64_t start_utime);
-  // The body command in force and its target (the node's CommandFilter), and the gait asked for
-  // (an index into gaits()). Takes effect at the next tick's re-planning.
-  void setCommand(const BodyCommand& now, const BodyCommand& target, int gait);
+  // The body command in force (the node's CommandFilter smooths it toward the one received), and
+  // the gait asked for (an index into gaits()). Takes effect at the next tick's re-planning.
+  void setCommand(const BodyCommand& command, int gait);
   // The gaits the robot walks with ("stand" first).
   const std::vector<std::string>& gaits() const { return gaits_; }
 
@@ -162,7 +162,6 @@ class Mpc {
   // its knot 0 at t_knot0; for a start-up solve (allocating), the measured state held instead
   // (LocomotionProblem::measuredWarmStart).
   void restartWarmStart(double t, double t_knot0, bool startup);
-  unsigned knotMask(int k) const;  // the contacts knot k closes
   void writePolicy(std::int64_t utime, double t, std::int8_t status);
   bool previousPolicy(std::int64_t utime);
   void holdPolicy(std::int64_t utime, double t);
@@ -183,7 +182,7 @@ class Mpc {
   std::unique_ptr<LocomotionProblem> loco_;
   std::unique_ptr<GaitGenerator> gen_;
   std::vector<int> gait_pattern_;  // timeline pattern of each gait
-  BodyCommand command_, command_target_;
+  BodyCommand command_;
   int gait_ = 0;
   std::unique_ptr<Solver> solver_;
   std::vector<Eigen::VectorXd> xs_warm_, us_warm_;  // warm start on the references (restarts)

@@ -267,7 +267,7 @@ void MpcNode::tick(Clock::time_point deadline) {
                          ? 0.0
                          : static_cast<double>(monotonicMicros() - newest_arrival_us_) * 1e-6;
   commands_.update(now());
-  mpc_.setCommand(commands_.command(), commands_.target(), commands_.gait());
+  mpc_.setCommand(commands_.command(), commands_.gait());
   const bool publish = mpc_.tick(state, age, deadline);
   new_state_ = false;
   if (have_state_) {

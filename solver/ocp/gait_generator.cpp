@@ -31,17 +31,6 @@ Eigen::Vector2d rotate(double yaw, double x, double y) {
   const double c = std::cos(yaw), s = std::sin(yaw);
   return {c * x - s * y, s * x + c * y};
 }
-
-// A value ramping from v0 to v1 at rate a: its value and its integral from 0 to tau.
-double ramp(double v0, double v1, double a, double tau) {
-  const double d = v1 - v0, step = a * tau;
-  return v0 + std::clamp(d, -step, step);
-}
-double rampIntegral(double v0, double v1, double a, double tau) {
-  const double d = v1 - v0, T = std::abs(d) / a;
-  if (tau <= T) return v0 * tau + (d >= 0.0 ? 0.5 : -0.5) * a * tau * tau;
-  return v0 * T + 0.5 * d * T + v1 * (tau - T);
-}
 }  // namespace
 
 GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
@@ -60,12 +49,11 @@ GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
     throw std::invalid_argument("GaitGenerator: x_nominal must be finite of size nq + nv");
   const GaitGeneratorOptions& o = options;
   if (!(o.horizon > 0.0) || !(o.sample_dt > 0.0) || !std::isfinite(o.horizon) ||
-      !(o.acceleration.minCoeff() > 0.0) || !o.acceleration.allFinite() || !(o.height_rate > 0.0) ||
       !std::isfinite(o.swing_height) || !std::isfinite(o.foothold_gain) ||
       !(o.max_foothold_correction >= 0.0))
     throw std::invalid_argument(
-        "GaitGenerator: horizon, sample_dt, accelerations and height rate must be positive, "
-        "the swing height, foothold gain and correction cap finite");
+        "GaitGenerator: horizon and sample_dt must be positive, the swing height, foothold gain "
+        "and correction cap finite");
   x_nominal_.segment<4>(3).normalize();
 
   const auto q = x_nominal_.head(model.nq);
@@ -159,14 +147,8 @@ void GaitGenerator::buildCrouches(const ContactSet& contacts) {
   }
 }
 
-void GaitGenerator::setCommand(const BodyCommand& now, const BodyCommand& target) {
-  now_ = now;
-  target_ = target;
-}
-
 void GaitGenerator::sampleBase(double t, const Eigen::Vector2d& p0, double yaw0) {
   const double h = options_.sample_dt;
-  const Eigen::Vector3d& a = options_.acceleration;
   t_anchor_ = t;
   n_samples_ = static_cast<int>(samples_.size());
   Eigen::Vector2d p = p0;
@@ -175,16 +157,14 @@ void GaitGenerator::sampleBase(double t, const Eigen::Vector2d& p0, double yaw0)
     Sample& s = samples_[i];
     s.x = p.x();
     s.y = p.y();
-    s.yaw = yaw0 + rampIntegral(now_.yaw_rate, target_.yaw_rate, a.z(), tau);
-    s.vx = ramp(now_.vx, target_.vx, a.x(), tau);
-    s.vy = ramp(now_.vy, target_.vy, a.y(), tau);
-    s.wz = ramp(now_.yaw_rate, target_.yaw_rate, a.z(), tau);
-    s.height = ramp(now_.height, target_.height, options_.height_rate, tau);
+    s.yaw = yaw0 + command_.yaw_rate * tau;
+    s.vx = command_.vx;
+    s.vy = command_.vy;
+    s.wz = command_.yaw_rate;
+    s.height = command_.height;
     // Midpoint rule: the heading turns while the base moves.
-    const double mid = tau + 0.5 * h;
-    const double yaw_mid = yaw0 + rampIntegral(now_.yaw_rate, target_.yaw_rate, a.z(), mid);
-    p += h * rotate(yaw_mid, ramp(now_.vx, target_.vx, a.x(), mid),
-                    ramp(now_.vy, target_.vy, a.y(), mid));
+    const double yaw_mid = yaw0 + command_.yaw_rate * (tau + 0.5 * h);
+    p += h * rotate(yaw_mid, command_.vx, command_.vy);
   }
 }
 
@@ -282,7 +262,7 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
   // of each foot moves by gain x that, capped.
   const Eigen::Quaterniond orientation(q[6] / n, q[3] / n, q[4] / n, q[5] / n);
   const Eigen::Vector3d v_world = orientation * x.segment<3>(nq);
-  Eigen::Vector2d correction = gain_ * (v_world.head<2>() - rotate(yaw, now_.vx, now_.vy));
+  Eigen::Vector2d correction = gain_ * (v_world.head<2>() - rotate(yaw, command_.vx, command_.vy));
   const double norm = correction.norm();
   if (norm > options_.max_foothold_correction)
     correction *= options_.max_foothold_correction / norm;

@@ -4,17 +4,21 @@
 // touch-down lands, the swing arcs between footholds, and the base's pose and twist over the
 // horizon. The locomotion problem (locomotion.hpp) reads them knot by knot.
 //
-// Body height: the base height offset ramps at its rate, and the joints' reference follows it: the
-// posture that keeps every foot on its nominal place with the base raised (or lowered) by the
-// offset, solved at construction for offsets across [-max_height, max_height] and interpolated.
+// Body height: the base is raised (or lowered) by the command's height offset, and the joints'
+// reference follows it: the posture that keeps every foot on its nominal place with the base at
+// that offset, solved at construction for offsets across [-max_height, max_height] and
+// interpolated.
 //
 // Base: from the last plan's reference at the state's time t, held within a leash of the measured
 // base (max_position_lead, max_yaw_lead), or, for a robot that stands for good, from the centre of
-// the feet it stands on; then integrated from the command: the velocity (vx, vy in the heading
-// frame, yaw rate) ramps from the command in force to the target command at the configured
-// accelerations (the body height offset at its rate), so the horizon already sees a change the
-// robot is heading into. Height and tilt are the nominal posture's (plus the height offset); the
-// base velocity reference is the command.
+// the feet it stands on; then integrated from the command in force (vx, vy in the heading frame,
+// yaw rate), held over the whole horizon. The controller smooths a new command tick by tick
+// (controller/command.hpp), so each re-plan moves the horizon by one tick's step of it. (A horizon
+// that ramped to the target command instead moved every touch-down of its tail at once when a
+// command changed: the swing costs of the warm start jumped 100-fold, one iteration per tick left
+// gaps for several ticks, and the torque-limited quadruped fell in 11 of 81 perturbed starts and
+// reversals that this passes; controller/README.md, "Commands".) Height and tilt are the nominal
+// posture's (plus the height offset); the base velocity reference is the command.
 //
 // Footholds (Raibert's heuristic, on the reference instead of the hip's current position): a
 // touch-down at t_td that lasts until lift-off t_lo lands under the foot's nominal stance position
@@ -62,9 +66,6 @@ struct GaitGeneratorOptions {
   // anchored at the measured base [m]: a robot that lags its reference is not asked to reach
   // beyond its legs.
   double max_foothold_lead = 0.05;
-  // The command's ramp over the horizon: vx, vy [m/s²], yaw rate [rad/s²]; height rate [m/s].
-  Eigen::Vector3d acceleration = Eigen::Vector3d(1.0, 1.0, 2.0);
-  double height_rate = 0.1;
   double max_height = 0.0;  // the largest |height offset| a command may ask for [m]
   // The longest span plan() is asked to cover (t_end - t_begin) [s], and the step of the base
   // trajectory's samples.
@@ -89,11 +90,9 @@ class GaitGenerator {
   // [-options.max_height, options.max_height] (empty without a body-height range).
   const std::vector<Eigen::VectorXd>& crouchPostures() const { return crouch_; }
 
-  // The command in force now and the one the controller is heading to (its smoothed command and
-  // its target): the base references ramp from one to the other.
-  void setCommand(const BodyCommand& now, const BodyCommand& target);
-  const BodyCommand& command() const { return now_; }
-  const BodyCommand& target() const { return target_; }
+  // The command in force (the controller's smoothed command), held over the horizon.
+  void setCommand(const BodyCommand& command) { command_ = command; }
+  const BodyCommand& command() const { return command_; }
 
   // Re-plans from the measured state x at plan time t for the window [t_begin, t_end] (at most
   // options.horizon long): anchors the base, latches the feet that are down at t, places every
@@ -160,7 +159,7 @@ class GaitGenerator {
   // Joint postures for height offsets spread evenly over [-max_height, max_height].
   std::vector<Eigen::VectorXd> crouch_;
   void buildCrouches(const ContactSet& contacts);
-  BodyCommand now_, target_;
+  BodyCommand command_;
 
   Data data_;  // forward kinematics of the measured state
   bool latched_any_ = false;

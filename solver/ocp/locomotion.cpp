@@ -338,13 +338,15 @@ void LocomotionProblem::measuredWarmStart(const Eigen::VectorXd& x0,
   xs.assign(T + 1, rest);
   xs[0] = x0;
   us.resize(T);
-  for (int k = 0; k < T; ++k) {
-    const ContactSet& set = static_cast<const KnotModel&>(problem_->knot(k)).contacts();
-    unsigned mask = 0;
-    for (int c = 0; c < set.size(); ++c)
-      if (set.isActive(c)) mask |= 1u << c;
-    us[k] = u_hold[mask];
-  }
+  for (int k = 0; k < T; ++k) us[k] = u_hold[contactMask(k)];
+}
+
+unsigned LocomotionProblem::contactMask(int k) const {
+  const ContactSet& set = static_cast<const KnotModel&>(problem_->knot(k)).contacts();
+  unsigned mask = 0;
+  for (int c = 0; c < set.size(); ++c)
+    if (set.isActive(c)) mask |= 1u << c;
+  return mask;
 }
 
 }  // namespace stride

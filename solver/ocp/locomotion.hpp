@@ -118,6 +118,8 @@ class LocomotionProblem {
   // The time knot k stands for after the last update (k = horizon(): the terminal knot).
   double knotTime(int k) const { return knot_time_[k]; }
   const std::vector<double>& knotTimes() const { return knot_time_; }  // T + 1
+  // The contacts knot k closes after the last update (bit c: contact c), k < horizon().
+  unsigned contactMask(int k) const;
 
   // The torques that hold the nominal posture still on the contacts of `mask` (bit c: contact c
   // closed; minimum-norm forces); the joint gravity torques with no contact.

@@ -166,7 +166,7 @@ TEST(Mpc, PlanKeepsTheCommandVelocity) {
   Mpc mpc(config);
   BodyCommand walk;
   walk.vx = 0.3;
-  mpc.setCommand(walk, walk, 3);  // and "pace", which the plan overrides
+  mpc.setCommand(walk, 3);  // and "pace", which the plan overrides
   robot_state_t s = standingState(mpc.robot(), 1000000);
   ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
   const GaitGenerator& ref = *mpc.reference();

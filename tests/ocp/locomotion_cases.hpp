@@ -202,7 +202,7 @@ inline Case make(Problem p, const std::string& shared,
   // The trot steps 5 cm per touch-down (a foot lands every 0.6 s); talos's step is 10 cm.
   if (p == Problem::SoloTrot) c.velocity.vx = 0.05 / 0.6;
   if (p == Problem::TalosStep) c.velocity.vx = 0.1 / 1.2;
-  c.ref->setCommand(c.velocity, c.velocity);
+  c.ref->setCommand(c.velocity);
   c.update(0.0);
   return c;
 }

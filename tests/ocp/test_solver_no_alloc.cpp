@@ -148,13 +148,12 @@ TEST(SolverNoAllocation, GaitGeneratorTicksWithGaitSwitches) {
       x.segment<4>(3) << 0.0, 0.0, std::sin(0.5 * yaw), std::cos(0.5 * yaw);
       x[nq] = 0.3;
       x[nq + 5] = 0.05;
-      BodyCommand now, target;
-      now.vx = 0.1 + 0.001 * (tick % 50);
-      now.yaw_rate = 0.2;
-      target.vx = 0.3;
-      target.vy = -0.05;
-      target.height = 0.01 * (tick % 3);
-      gen.setCommand(now, target);
+      BodyCommand command;
+      command.vx = 0.1 + 0.001 * (tick % 50);
+      command.vy = -0.05;
+      command.yaw_rate = 0.2;
+      command.height = 0.01 * (tick % 3);
+      gen.setCommand(command);
       if (tick % 37 == 36) {
         const double at = timeline.switchTo(patterns[switches % 5], t0);
         switches += at < ContactTimeline::kNever;

@@ -42,7 +42,7 @@ void referenceUpdate(benchmark::State& state, const char* robot, double speed) {
   BodyCommand command;
   command.vx = speed;
   command.yaw_rate = 0.2;
-  gen.setCommand(command, command);
+  gen.setCommand(command);
   const double period = 1.0 / config.rate_hz, dt = config.locomotion.dt;
   double t = 0.0;
   for (auto _ : state) {
