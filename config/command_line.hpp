@@ -5,6 +5,7 @@
 // defines STRIDE_VERSION from the CMake project's version.
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #ifndef STRIDE_VERSION
@@ -33,6 +34,24 @@ inline int parseCommandLine(CLI::App& app, int argc, char** argv) {
     std::fprintf(stderr, "%s", CLI::Formatter().make_usage(&app, app.get_name()).c_str());
     return 2;
   }
+}
+
+// The LCM URL a program opens: the one given (a flag, a YAML key), else LCM_DEFAULT_URL, else
+// empty. Empty must stop the program (noLcmUrl): LCM's own default is multicast on the host
+// network, where nothing of ours may send by accident (LCM-NOTES.md).
+inline std::string lcmUrl(const std::string& given) {
+  if (!given.empty()) return given;
+  const char* env = std::getenv("LCM_DEFAULT_URL");
+  return env != nullptr ? env : "";
+}
+
+// Says on stderr that no URL was given, and how to give one (`how`: the program's own ways, e.g.
+// "pass --url"); returns the usage-error status, 2.
+inline int noLcmUrl(const std::string& program, const std::string& how) {
+  std::fprintf(stderr,
+               "%s: no LCM URL: %s or set LCM_DEFAULT_URL (e.g. udpm://239.255.76.67:7667?ttl=0)\n",
+               program.c_str(), how.c_str());
+  return 2;
 }
 
 }  // namespace stride

@@ -20,11 +20,6 @@ std::atomic<bool> g_stop{false};
 void onSignal(int) {
   g_stop = true;
 }
-
-std::string defaultUrl() {
-  const char* env = std::getenv("LCM_DEFAULT_URL");
-  return env != nullptr ? env : "";
-}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -82,14 +77,10 @@ int main(int argc, char** argv) {
     }
     // LCM must never fall back to multicast on the host network by accident: a URL is explicit
     // (YAML, flag or LCM_DEFAULT_URL).
-    if (config.input_url.empty()) config.input_url = defaultUrl();
+    config.input_url = stride::lcmUrl(config.input_url);
     if (config.output_url.empty()) config.output_url = config.input_url;
-    if (config.input_url.empty()) {
-      std::fprintf(stderr,
-                   "stride-mpc: no LCM URL: set lcm.input in the YAML, --input-url, or "
-                   "LCM_DEFAULT_URL (e.g. udpm://239.255.76.67:7667?ttl=0)\n");
-      return 2;
-    }
+    if (config.input_url.empty())
+      return stride::noLcmUrl("stride-mpc", "set lcm.input in the YAML, pass --input-url,");
     lcm::LCM in(config.input_url);
     if (!in.good() && replaying) {
       std::fprintf(stderr, "stride-mpc: cannot read the log '%s'\n", replay.c_str());

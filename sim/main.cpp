@@ -96,12 +96,8 @@ int main(int argc, char** argv) {
       std::printf("%s", stride::describeModel(robot).c_str());
       return 0;
     }
-    if (url.empty() && std::getenv("LCM_DEFAULT_URL") != nullptr)
-      url = std::getenv("LCM_DEFAULT_URL");
-    if (url.empty()) {
-      std::fprintf(stderr, "stride-sim: no LCM URL: --url or LCM_DEFAULT_URL\n");
-      return 2;
-    }
+    url = stride::lcmUrl(url);
+    if (url.empty()) return stride::noLcmUrl("stride-sim", "pass --url");
     lcm::LCM lcm(url);
     if (!lcm.good()) {
       std::fprintf(stderr, "stride-sim: cannot open LCM '%s'\n", url.c_str());

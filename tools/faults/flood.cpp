@@ -56,14 +56,8 @@ int main(int argc, char** argv) {
   app.add_option("--nu", nu, "its control size (13)")->check(CLI::Range(1, 1000));
   app.add_option("--knots", knots, "its knots (10)")->check(CLI::Range(1, 1000));
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
-  if (url.empty()) {
-    const char* env = std::getenv("LCM_DEFAULT_URL");
-    if (env == nullptr || *env == '\0') {
-      std::fprintf(stderr, "stride-flood: no LCM URL: pass --url or set LCM_DEFAULT_URL\n");
-      return 2;
-    }
-    url = env;
-  }
+  url = stride::lcmUrl(url);
+  if (url.empty()) return stride::noLcmUrl("stride-flood", "pass --url");
 
   stride::policy_t foreign;
   stride::msg::shape(foreign, knots, nq, nv, nu);

@@ -349,16 +349,8 @@ int main(int argc, char** argv) {
   const GaitSet gaits = gaits_name == "biped" ? GaitSet::Biped : GaitSet::Quadruped;
 
   // LCM must never fall back to multicast on the host network by accident: the URL is explicit.
-  if (url.empty()) {
-    const char* env = std::getenv("LCM_DEFAULT_URL");
-    url = env != nullptr ? env : "";
-  }
-  if (url.empty()) {
-    std::fprintf(stderr,
-                 "stride-teleop: no LCM URL: pass --url or set LCM_DEFAULT_URL (e.g. "
-                 "udpm://239.255.76.67:7667?ttl=0)\n");
-    return 2;
-  }
+  url = stride::lcmUrl(url);
+  if (url.empty()) return stride::noLcmUrl("stride-teleop", "pass --url");
   std::vector<stride::ScriptedCommand> script;
   if (!commands.empty()) {
     try {
