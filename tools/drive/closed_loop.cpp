@@ -181,6 +181,8 @@ Run run(const ControllerConfig& config, const Options& options) {
       s.forward_passes = solver->forwardPasses();
     }
     s.solve_ms = status.solve_ms;
+    s.clamped_steps = sim->simulator().counters().clamped_steps;
+    s.tau = sim->simulator().appliedTorque();
     if (options.each) options.each(s);
     r.samples.push_back(std::move(s));
     if (!sim->advance(sim->stepsPerState())) break;  // fell or diverged

@@ -28,6 +28,10 @@ struct Sample {
   unsigned feet_mask = 0;                       // bit c: contact c carries load
   int backward_passes = 0, forward_passes = 0;  // of the tick's solve
   double solve_ms = 0.0;
+  // The mock robot's 1 kHz steps so far whose torque was clamped to the effort limits, and the
+  // torque applied in the last one (nu): a robot short of torque shows here first.
+  std::int64_t clamped_steps = 0;
+  Eigen::VectorXd tau = Eigen::VectorXd();
 };
 
 struct Options {

@@ -118,15 +118,17 @@ int main(int argc, char** argv) {
       }
       std::fprintf(trace,
                    "t,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz,tilt_deg,feet_down,feet_mask,"
-                   "policy_status,cost,gap,step,reg,k_max,solve_ms\n");
+                   "policy_status,cost,gap,step,reg,k_max,solve_ms,clamped_steps,tau_max\n");
       options.each = [trace](const stride::drive::Sample& s) {
         if (s.q.size() < 7 || s.v.size() < 6) return;  // a fixed-base arm: no base to trace
         std::fprintf(trace, "%.4f", s.t);
         for (int i = 0; i < 7; ++i) std::fprintf(trace, ",%.6f", s.q[i]);
         for (int i = 0; i < 6; ++i) std::fprintf(trace, ",%.5f", s.v[i]);
-        std::fprintf(trace, ",%.3f,%d,%u,%d,%.6g,%.4g,%.4g,%.4g,%.4g,%.3f\n",
+        std::fprintf(trace, ",%.3f,%d,%u,%d,%.6g,%.4g,%.4g,%.4g,%.4g,%.3f,%lld,%.3f\n",
                      stride::drive::tiltDeg(s.q), s.feet_down, s.feet_mask, s.policy_status, s.cost,
-                     s.gap, s.step, s.reg, s.k_max, s.solve_ms);
+                     s.gap, s.step, s.reg, s.k_max, s.solve_ms,
+                     static_cast<long long>(s.clamped_steps),
+                     s.tau.size() ? s.tau.cwiseAbs().maxCoeff() : 0.0);
       };
     }
     const stride::drive::Run run = stride::drive::run(config, options);
