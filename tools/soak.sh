@@ -54,7 +54,8 @@ grep -E '^(stride-mpc|stride-sim):|^session|^controller:|^lost:|^tracking|wall t
 # builds its problem. (The controller's tick latencies fill a reserved buffer, 4 B a tick: 0.5 MB
 # in 10 min at 200 Hz, bounded at 4 MB.)
 first=$(awk '$1 >= 10 { print; exit }' "$out/rss.txt" 2>/dev/null)
-last=$(tail -n 1 "$out/rss.txt" 2>/dev/null)
+# The last sample with both programs running (the one taken after the run may find one gone).
+last=$(awk '$2 > 0 && $3 > 0 { l = $0 } END { print l }' "$out/rss.txt" 2>/dev/null)
 read -r t0 mpc0 sim0 <<< "${first:-0 0 0}"
 read -r t1 mpc1 sim1 <<< "${last:-0 0 0}"
 echo "soak: $minutes min of $robot in real time; memory (VmRSS) stride-mpc ${mpc0:-0} -> ${mpc1:-0} kB," \
