@@ -9,7 +9,7 @@
 #   tools/demo.sh [--robot NAME | --humanoid] [--commands FILE | --teleop] [--duration S]
 #                 [--realtime | --lockstep] [--robots-dir DIR]... [--check-tracking]
 #                 [--host-network] [--out DIR] [--summary FILE] [--spy] [--viz [--viz-port P]]
-#                 [--slow-host F] [--kill-controller T] [--flood RATE]
+#                 [--slow-host F] [--kill-controller T] [--kill-sim T] [--flood RATE] [--rival]
 #
 #   --robot NAME      stride_quad (default), solo12, anymal_c, stride_humanoid, talos_reduced:
 #                     config/controller/NAME.yaml; solo12, anymal_c and talos_reduced need
@@ -54,12 +54,22 @@
 #                     model hash) on the policy channel (stride-flood, on the side core at nice
 #                     10): every receiver must refuse them cheaply and the robot walk on (issue
 #                     19); stride-flood's line in DIR/flood.txt. tools/faults.sh --flood runs it
+#   --kill-sim T      SIGKILL stride-sim (the mock robot) T seconds after it starts and start a new
+#                     one 1 s later, standing at the default posture at the origin, for the rest of
+#                     the duration: the controller must take the new robot over as it is (issue
+#                     19); its output in DIR/sim-restarted.txt. tools/faults.sh --kill-sim runs it
+#   --rival           also run a second stride-mpc on the robot's channels with another plan (its
+#                     commands from STRIDE_RIVAL_COMMAND, where nobody sends: it stands while the
+#                     robot walks; on the side core at nice 10): the robot must follow the first
+#                     controller, refuse the rival's policies and say so, and both controllers
+#                     must report the other (issue 19); its output in DIR/mpc-rival.txt.
+#                     tools/faults.sh --rival runs it
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
-spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood=""
+spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood="" kill_sim="" rival=0
 robots_dirs=()
 args=("$@")
 need_value() { [ $# -ge 2 ] || { echo "demo.sh: $1 needs a value (--help)" >&2; exit 2; }; }
@@ -84,6 +94,8 @@ while [ $# -gt 0 ]; do
     --slow-host) need_value "$@"; slow_host="$2"; shift 2 ;;
     --kill-controller) need_value "$@"; kill_controller="$2"; shift 2 ;;
     --flood) need_value "$@"; flood="$2"; shift 2 ;;
+    --kill-sim) need_value "$@"; kill_sim="$2"; shift 2 ;;
+    --rival) rival=1; shift ;;
     -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown option '$1' (--help)" >&2; exit 2 ;;
   esac
@@ -309,6 +321,24 @@ if [ -n "$flood" ]; then
     > "$out/flood.txt" 2>&1 &
   pids+=($!)
 fi
+if [ "$rival" = 1 ]; then
+  # The rival's YAML: the robot's, with the robot file's path made absolute (it is relative to the
+  # YAML) and the command channel moved where nobody sends.
+  rival_yaml="$out/rival.yaml"
+  config_dir=$(cd "$(dirname "$config")" && pwd)
+  robot_entry=$(sed -n 's/^robot: *//p' "$config")
+  case "$robot_entry" in /* | package://*) ;; *) robot_entry="$config_dir/$robot_entry" ;; esac
+  sed -e "s|^robot: .*|robot: $robot_entry|" -e '/^  command: /d' \
+    -e '/^lcm:/a\  command: STRIDE_RIVAL_COMMAND' "$config" > "$rival_yaml"
+  grep -q '^lcm:' "$rival_yaml" || printf 'lcm:\n  command: STRIDE_RIVAL_COMMAND\n' >> "$rival_yaml"
+  rival_args=(--config "$rival_yaml" "${dirs_args[@]}" --summary "$out/mpc-rival.json")
+  [ "$mode" = lockstep ] && rival_args+=(--lockstep)
+  timeout "$limit" nice -n 10 "${side[@]}" "$build/controller/stride-mpc" "${rival_args[@]}" \
+    > "$out/mpc-rival.txt" 2>&1 &
+  rival_pid=$!
+  pids+=($rival_pid)
+  started "$out/mpc-rival.txt" "^stride-mpc: .* mode" "$rival_pid" "stride-mpc (rival)"
+fi
 if [ -n "$kill_controller" ]; then
   # The controller killed (no chance to say goodbye) while the robot walks, a new one started a
   # second later on the same core with the same arguments. Timed from here: the sim starts next.
@@ -353,8 +383,30 @@ elif [ "$teleop" = 0 ]; then
   started "$out/teleop.txt" "waiting for states" "$teleop_pid" stride-teleop
   echo "demo: $robot, $mode, ${duration} s of robot time, commands from $commands; logging to $log"
   sim_status=0
-  timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 ||
-    sim_status=$?
+  if [ -n "$kill_sim" ]; then
+    # The mock robot killed while it walks and a new one started a second later for the rest of
+    # the duration: a robot whose state estimator restarted, found standing at the origin.
+    timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 &
+    sim_pid=$!
+    pids+=($sim_pid)
+    sleep "$kill_sim"
+    pkill -KILL -P "$sim_pid" -x stride-sim || true
+    wait "$sim_pid" 2>/dev/null || true
+    sleep 1
+    rest=$(awk -v d="$duration" -v k="$kill_sim" 'BEGIN { r = d - k - 1; printf "%.3f", (r > 1 ? r : 1) }')
+    restarted=() prev=""
+    for a in "${sim_args[@]}"; do
+      [ "$prev" = --duration ] && a="$rest"
+      [ "$prev" = --summary ] && a="$out/sim-restarted.json"
+      restarted+=("$a")
+      prev=$a
+    done
+    timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${restarted[@]}" \
+      > "$out/sim-restarted.txt" 2>&1 || sim_status=$?
+  else
+    timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 ||
+      sim_status=$?
+  fi
   kill -TERM "$teleop_pid" 2>/dev/null || true
   wait "$teleop_pid" 2>/dev/null || true
 else
@@ -390,6 +442,10 @@ if [ -n "$kill_controller" ]; then
   kill -TERM "$restart_pid" 2>/dev/null || true  # the restarted one's timeout passes it on
   wait "$restart_pid" 2>/dev/null || true
 fi
+if [ "$rival" = 1 ]; then
+  kill -TERM "$rival_pid" 2>/dev/null || true
+  wait "$rival_pid" 2>/dev/null || true
+fi
 sleep 0.2
 cleanup
 trap - EXIT
@@ -399,6 +455,14 @@ cat "$out/mpc.txt" "$out/sim.txt" | grep -E '^stride-(mpc|sim):' || true
 if [ -n "$kill_controller" ]; then
   echo "demo: stride-mpc killed at $kill_controller s and restarted 1 s later; the restarted one:"
   grep -E '^stride-mpc:' "$out/mpc-restarted.txt" 2>/dev/null || echo "  (no output)"
+fi
+if [ -n "$kill_sim" ]; then
+  echo "demo: stride-sim killed at $kill_sim s and restarted 1 s later; the restarted one:"
+  grep -E '^stride-sim:' "$out/sim-restarted.txt" 2>/dev/null || echo "  (no output)"
+fi
+if [ "$rival" = 1 ]; then
+  echo "demo: a rival stride-mpc ran on the same channels; the rival:"
+  grep -E '^stride-mpc:' "$out/mpc-rival.txt" 2>/dev/null || echo "  (no output)"
 fi
 [ -n "$flood" ] && { grep -E '^stride-flood: .* sent' "$out/flood.txt" || echo "demo: stride-flood said nothing ($out/flood.txt)"; }
 [ -f "$out/teleop.txt" ] && grep -E '^stride-teleop: stopped' "$out/teleop.txt" || true

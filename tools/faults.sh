@@ -4,24 +4,33 @@
 # one gait cycle (one run each), a new stride-mpc starting 1 s after each kill. The robot stands
 # down on its own meanwhile (sim/README.md, "Controller loss") and the new controller walks it on.
 # Prints one line per run and the falls; the lock-step version is ctest's ControllerLoss.*.
-# With --flood RATE the runs kill nothing: another robot's policies arrive on the policy channel
-# at RATE per second all along (tools/demo.sh --flood; lock-step: Faults.AFloodOf...).
-#   tools/faults.sh [--robot stride_quad|stride_humanoid] [--runs N] [--out DIR] [--flood RATE]
+# Instead of the controller kills, one other fault per run:
+#   --flood RATE   another robot's policies on the policy channel at RATE per second all along
+#                  (tools/demo.sh --flood; lock-step: Faults.AFloodOf...)
+#   --rival        a second stride-mpc on the same channels, standing while the robot walks
+#                  (tools/demo.sh --rival; lock-step: ClosedLoop.ARivalController...)
+#   --kill-sim     stride-sim killed at the same instants and a new one started 1 s later, the
+#                  robot standing at the origin (tools/demo.sh --kill-sim; lock-step:
+#                  Faults.TheMockRobotRestarted...)
+#   tools/faults.sh [--robot stride_quad|stride_humanoid] [--runs N] [--out DIR]
+#                   [--flood RATE | --rival | --kill-sim]
 #   --robot NAME   stride_quad (default: trots at 0.5 m/s) or stride_humanoid (walks at 0.2 m/s)
-#   --runs N       kills (or flooded runs), one run each (default 10)
-#   --out DIR      each run's demo folder (default build/faults/ROBOT, build/flood/ROBOT)
-#   --flood RATE   a flood of RATE foreign policies per second instead of the kills
+#   --runs N       kills (or runs with the other fault), one run each (default 10)
+#   --out DIR      each run's demo folder (default build/faults/ROBOT, build/flood/ROBOT,
+#                  build/rival/ROBOT, build/sim-restart/ROBOT)
 # Exit status: 0 no fall; 4 the robot fell in some run; 1 another failure.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
-robot=stride_quad runs=10 out="" flood=""
+robot=stride_quad runs=10 out="" flood="" fault=kill
 while [ $# -gt 0 ]; do
   case "$1" in
     --robot) robot="$2"; shift 2 ;;
     --runs) runs="$2"; shift 2 ;;
     --out) out="$2"; shift 2 ;;
-    --flood) flood="$2"; shift 2 ;;
+    --flood) flood="$2" fault=flood; shift 2 ;;
+    --rival) fault=rival; shift ;;
+    --kill-sim) fault=kill-sim; shift ;;
     -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;;
     *) echo "faults.sh: unknown option '$1' (--help)" >&2; exit 2 ;;
   esac
@@ -31,7 +40,12 @@ case "$robot" in
   stride_humanoid) gait=walk vx=0.2 cycle=1.0 ;;
   *) echo "faults.sh: --robot stride_quad or stride_humanoid" >&2; exit 2 ;;
 esac
-if [ -n "$flood" ]; then out="${out:-$build/flood/$robot}"; else out="${out:-$build/faults/$robot}"; fi
+case "$fault" in
+  kill) out="${out:-$build/faults/$robot}" ;;
+  flood) out="${out:-$build/flood/$robot}" ;;
+  rival) out="${out:-$build/rival/$robot}" ;;
+  kill-sim) out="${out:-$build/sim-restart/$robot}" ;;
+esac
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
 script="$out/commands.yaml"
@@ -45,34 +59,59 @@ for ((i = 0; i < runs; i++)); do
   duration=$(awk -v k="$kill_at" 'BEGIN { printf "%.1f", k + 1 + 4 }')
   dir="$out/run$i"
   status=0
-  fault=(--kill-controller "$kill_at")
-  [ -n "$flood" ] && fault=(--flood "$flood")
+  case "$fault" in
+    kill) args=(--kill-controller "$kill_at") ;;
+    flood) args=(--flood "$flood") ;;
+    rival) args=(--rival) ;;
+    kill-sim) args=(--kill-sim "$kill_at") ;;
+  esac
   "$root/tools/demo.sh" --robot "$robot" --commands "$script" --duration "$duration" --realtime \
-    "${fault[@]}" --out "$dir" > "$dir.txt" 2>&1 || status=$?
+    "${args[@]}" --out "$dir" > "$dir.txt" 2>&1 || status=$?
   # A flooded session's log holds every foreign policy (44 MB a second): the summaries are kept.
-  [ -n "$flood" ] && rm -f "$dir/session.lcmlog"
-  line=$(python3 - "$dir" <<'EOF'
-import json, sys
-d = sys.argv[1]
-s = json.load(open(d + "/sim.json"))
-print("fell" if s["fell"] else "up",
-      "tilt max %.1f deg, base %.3f..%.3f m, walked %.2f m; %d steps standing down, %d past a "
-      "policy's end, %d controller switches; %d policies taken, %d of another model refused"
-      % (s["max_tilt_deg"], s["base_height_min_m"], s["base_height_max_m"], s["distance_m"],
-      s["stand_down_steps"], s["exhausted_steps"], s["source_switches"], s["policies"],
-      s["policies_wrong_model"]))
+  [ "$fault" = flood ] && rm -f "$dir/session.lcmlog"
+  line=$(python3 - "$dir" "$fault" <<'EOF'
+import json, os, sys
+d, fault = sys.argv[1], sys.argv[2]
+def load(name):
+    return json.load(open(os.path.join(d, name)))
+if fault == "kill-sim":
+    # The killed mock robot wrote no summary: the session's (from the log, both robots) and the
+    # new robot's own.
+    g, n = load("summary.json"), load("sim-restarted.json")
+    print("fell" if g["fell"] or n["fell"] else "up",
+          "the session: tilt max %.1f deg, base %.3f..%.3f m; the new robot: %s, tilt max %.1f deg, "
+          "base %.3f..%.3f m, walked %.2f m, %d policies taken, %d steps on the hold PD before the "
+          "first" % (g["max_tilt_deg"], g["base_height_min_m"], g["base_height_max_m"],
+                     "fell" if n["fell"] else "up", n["max_tilt_deg"], n["base_height_min_m"],
+                     n["base_height_max_m"], n["distance_m"], n["policies"], n["waiting_steps"]))
+    sys.exit(0)
+s = load("sim.json")
+line = ("tilt max %.1f deg, base %.3f..%.3f m, walked %.2f m; %d steps standing down, %d past a "
+        "policy's end, %d controller switches; %d policies taken, %d of another model refused"
+        % (s["max_tilt_deg"], s["base_height_min_m"], s["base_height_max_m"], s["distance_m"],
+           s["stand_down_steps"], s["exhausted_steps"], s["source_switches"], s["policies"],
+           s["policies_wrong_model"]))
+fell = s["fell"]
+if fault == "rival":
+    m, r = load("mpc.json"), load("mpc-rival.json")
+    line += ("; %d of the rival refused; the controller saw %d of the rival's policies, the rival "
+             "%d of the controller's" % (s["policies_rival"], m["rival_policies"],
+                                         r["rival_policies"]))
+print("fell" if fell else "up", line)
 EOF
   ) || line="no summary (demo exit $status: see $dir.txt)"
   case "$line" in fell*|no\ summary*) falls=$((falls + 1)) ;; esac
-  if [ -n "$flood" ]; then
-    echo "faults: $robot run $i, $flood foreign policies/s: $line"
-  else
-    echo "faults: $robot run $i, stride-mpc killed at $kill_at s: $line"
-  fi
+  case "$fault" in
+    kill) echo "faults: $robot run $i, stride-mpc killed at $kill_at s: $line" ;;
+    flood) echo "faults: $robot run $i, $flood foreign policies/s: $line" ;;
+    rival) echo "faults: $robot run $i, a rival stride-mpc: $line" ;;
+    kill-sim) echo "faults: $robot run $i, stride-sim killed at $kill_at s: $line" ;;
+  esac
 done
-if [ -n "$flood" ]; then
-  echo "faults: $robot: $falls falls in $runs runs under $flood foreign policies/s (summaries in $out)"
-else
-  echo "faults: $robot: $falls falls in $runs kills and restarts (logs in $out)"
-fi
+case "$fault" in
+  kill) echo "faults: $robot: $falls falls in $runs kills and restarts (logs in $out)" ;;
+  flood) echo "faults: $robot: $falls falls in $runs runs under $flood foreign policies/s (summaries in $out)" ;;
+  rival) echo "faults: $robot: $falls falls in $runs runs with a rival controller (logs in $out)" ;;
+  kill-sim) echo "faults: $robot: $falls falls in $runs mock-robot kills and restarts (logs in $out)" ;;
+esac
 [ "$falls" = 0 ] || exit 4

@@ -16,8 +16,8 @@ private_netns "$@"
 dir=$(mktemp -d)
 port=18765
 trap 'kill $demo 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$dir"' EXIT
-# A trot at 0.3 m/s: what this test checks is the viewer's forward, not the walk. (The default
-# drive's forward start at 0.5 m/s falls in lock-step on some CPUs: issue 19's sag, open.)
+# A trot at 0.3 m/s: what this test checks is the viewer's forward, not the walk (the walks are
+# the closed-loop tests').
 printf -- '- {at: 0.0, gait: stand}\n- {at: 1.0, gait: trot, vx: 0.3}\n' > "$dir/drive.yaml"
 STRIDE_DEMO_NO_SETUP=1 STRIDE_BUILD_DIR="$build" timeout $((150 * scale)) "$root/tools/demo.sh" --viz \
   --viz-port "$port" --lockstep --commands "$dir/drive.yaml" --duration 8 --out "$dir/demo" \
