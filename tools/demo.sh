@@ -57,7 +57,8 @@
 #   --kill-sim T      SIGKILL stride-sim (the mock robot) T seconds after it starts and start a new
 #                     one 1 s later, standing at the default posture at the origin, for the rest of
 #                     the duration: the controller must take the new robot over as it is (issue
-#                     19); its output in DIR/sim-restarted.txt. tools/faults.sh --kill-sim runs it
+#                     19; real time, with a command script); its output in DIR/sim-restarted.txt.
+#                     tools/faults.sh --kill-sim runs it
 #   --rival           also run a second stride-mpc on the robot's channels with another plan (its
 #                     commands from STRIDE_RIVAL_COMMAND, where nobody sends: it stands while the
 #                     robot walks; on the side core at nice 10): the robot must follow the first
@@ -133,6 +134,16 @@ fi
 awk -v d="$duration" 'BEGIN { exit !(d == "" || d + 0 > 0) }' ||
   { echo "demo.sh: --duration must be a positive number of seconds" >&2; exit 2; }
 [ -z "$mode" ] && mode=realtime
+if [ -n "$kill_sim" ]; then
+  # A restarted mock robot in lock-step would stamp from 0 again, which the controller refuses as
+  # stamps going back; with the keyboard or no commands the demo does not run the sim itself.
+  { [ "$mode" = realtime ] && [ "$teleop" = 0 ] && [ "$commands" != none ]; } || {
+    echo "demo.sh: --kill-sim needs real time and a command script" >&2
+    exit 2
+  }
+  awk -v k="$kill_sim" -v d="$duration" 'BEGIN { exit !(k + 0 > 0 && k + 0 < d + 0) }' ||
+    { echo "demo.sh: --kill-sim T must be within the duration" >&2; exit 2; }
+fi
 out="${out:-$build/demo}"
 summary="${summary:-$out/summary.json}"
 
