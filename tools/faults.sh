@@ -91,13 +91,12 @@ line = ("tilt max %.1f deg, base %.3f..%.3f m, walked %.2f m; %d steps standing 
         % (s["max_tilt_deg"], s["base_height_min_m"], s["base_height_max_m"], s["distance_m"],
            s["stand_down_steps"], s["exhausted_steps"], s["source_switches"], s["policies"],
            s["policies_wrong_model"]))
-fell = s["fell"]
 if fault == "rival":
     m, r = load("mpc.json"), load("mpc-rival.json")
     line += ("; %d of the rival refused; the controller saw %d of the rival's policies, the rival "
              "%d of the controller's" % (s["policies_rival"], m["rival_policies"],
                                          r["rival_policies"]))
-print("fell" if fell else "up", line)
+print("fell" if s["fell"] else "up", line)
 EOF
   ) || line="no summary (demo exit $status: see $dir.txt)"
   case "$line" in fell*|no\ summary*) falls=$((falls + 1)) ;; esac
