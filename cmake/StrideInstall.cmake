@@ -7,6 +7,7 @@ include(CMakePackageConfigHelpers)
 # Libraries a user may link, by module: stride_<module> is Stride::<module> in both cases.
 set(STRIDE_EXPORTED_MODULES
   multibody contact ocp ddp   # solver/: the numerical core, free of I/O
+  terrain                     # terrain files, surface and contact queries, elevation grids
   config                      # robot YAML (+ URDF, SRDF) loader
   messages                    # LCM types and their validation
   controller                  # stride-mpc's library: the tick, the node, its configuration
@@ -28,7 +29,7 @@ set_target_properties(stride_solver PROPERTIES EXPORT_NAME solver)
 add_library(Stride::solver ALIAS stride_solver)
 # Stride::stride: everything.
 add_library(stride_all INTERFACE)
-target_link_libraries(stride_all INTERFACE stride_solver stride_config stride_messages
+target_link_libraries(stride_all INTERFACE stride_solver stride_terrain stride_config stride_messages
                       stride_controller stride_sim stride_sim_node stride_drive)
 set_target_properties(stride_all PROPERTIES EXPORT_NAME stride)
 add_library(Stride::stride ALIAS stride_all)
@@ -46,7 +47,7 @@ install(TARGETS ${_stride_targets} EXPORT StrideTargets
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 
 # Headers of the exported modules, at the paths they are included by ("solver/ocp/knot.hpp").
-foreach(_dir solver/multibody solver/contact solver/ocp solver/ddp config messages controller sim
+foreach(_dir solver/multibody solver/contact solver/ocp solver/ddp terrain config messages controller sim
              tools/log tools/drive)
   file(GLOB _headers CONFIGURE_DEPENDS ${STRIDE_ROOT}/${_dir}/*.hpp)
   install(FILES ${_headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/stride/${_dir})
@@ -64,6 +65,7 @@ install(DIRECTORY ${STRIDE_VIZ_WEB_DIR}/
 # controller YAML names its robot by a relative path (../robots/...), so the tree is kept as is.
 install(DIRECTORY ${STRIDE_ROOT}/config/robots ${STRIDE_ROOT}/config/controller
                   ${STRIDE_ROOT}/config/commands ${STRIDE_ROOT}/config/plans
+                  ${STRIDE_ROOT}/config/terrain
   DESTINATION ${CMAKE_INSTALL_DATADIR}/stride/config)
 
 # The package: targets, the config file that finds their dependencies, the version file.

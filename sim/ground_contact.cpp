@@ -32,12 +32,15 @@ std::vector<ContactPoint> contactPointsFromRobot(const Robot& robot) {
 
 void ContactGeometry::resize(int points, int nv) {
   position.setZero(3, points);
-  height.setZero(points);
   J.setZero(3 * points, nv);
+  count.assign(points, 1);
+  constraint.assign(static_cast<std::size_t>(kConstraintsPerPoint) * points, terrain::Contact{});
+  Jc.setZero(3 * kConstraintsPerPoint * points, nv);
 }
 
 void updateContactGeometry(const Model& model, const Data& data,
-                           const std::vector<ContactPoint>& points, const FlatGround& ground,
+                           const std::vector<ContactPoint>& points, const terrain::Terrain& terrain,
+                           const Eigen::VectorXd& v, double margin, double h,
                            ContactGeometry& geometry) {
   for (size_t i = 0; i < points.size(); ++i) {
     const ContactPoint& pt = points[i];
@@ -47,15 +50,32 @@ void updateContactGeometry(const Model& model, const Data& data,
     const Eigen::Vector3d p_joint = frame.placement.R * pt.offset + frame.placement.p;
     const Eigen::Vector3d p = oMj.R * p_joint + oMj.p;
     geometry.position.col(i) = p;
-    geometry.height[i] = ground.heightAbove(p);
     // data.J holds world-frame motion subspaces [velocity of the point at the world origin; w]:
     // the velocity of the point p is nu_o + w x p.
     const int row = 3 * static_cast<int>(i);
-    if (frame.parentJoint == 0) continue;
-    const Joint& jt = model.joints[frame.parentJoint];
-    for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
-      const Eigen::Vector3d nu = data.J.col(k).head<3>(), w = data.J.col(k).tail<3>();
-      geometry.J.block<3, 1>(row, k) = nu + w.cross(p);
+    if (frame.parentJoint != 0) {
+      const Joint& jt = model.joints[frame.parentJoint];
+      for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
+        const Eigen::Vector3d nu = data.J.col(k).head<3>(), w = data.J.col(k).tail<3>();
+        geometry.J.block<3, 1>(row, k) = nu + w.cross(p);
+      }
+    }
+    // Faces are looked for as far as the point can travel in this step, and the margin.
+    const double speed = (geometry.J.middleRows<3>(row) * v).norm();
+    const int slot0 = kConstraintsPerPoint * static_cast<int>(i);
+    const int n =
+        terrain.contacts(p, margin + h * speed, &geometry.constraint[slot0], kConstraintsPerPoint);
+    geometry.count[i] = n;
+    for (int k = 0; k < n; ++k) {
+      const terrain::Contact& c = geometry.constraint[slot0 + k];
+      auto rows = geometry.Jc.middleRows<3>(3 * (slot0 + k));
+      if (c.world_axes) {
+        rows = geometry.J.middleRows<3>(row);  // the flat ground's frame: the same bits as before
+      } else {
+        rows.row(0).noalias() = c.t1.transpose() * geometry.J.middleRows<3>(row);
+        rows.row(1).noalias() = c.t2.transpose() * geometry.J.middleRows<3>(row);
+        rows.row(2).noalias() = c.normal.transpose() * geometry.J.middleRows<3>(row);
+      }
     }
   }
 }

@@ -14,6 +14,7 @@
 #include "config/command_line.hpp"
 #include "config/describe_model.hpp"
 #include "sim/sim_node.hpp"
+#include "terrain/terrain_file.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -30,10 +31,9 @@ std::int64_t monotonicMicros() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{
-      "stride-sim: mock robot for stride-mpc (flat ground, unilateral contacts, friction)"};
+  CLI::App app{"stride-sim: mock robot for stride-mpc (terrain, unilateral contacts, friction)"};
   stride::commandLineConventions(app, "stride-sim");
-  std::string robot_yaml, url, summary;
+  std::string robot_yaml, url, summary, terrain_name;
   bool lockstep = false, print_model = false;
   std::vector<std::string> robots_dirs;
   double duration = 10.0, timeout = 5.0, drop_height = 0.0;
@@ -50,8 +50,24 @@ int main(int argc, char** argv) {
   app.add_option("--dt", sim.dt, "physics step [s]");
   app.add_option("--substeps", sim.substeps, "substeps per physics step");
   app.add_option("--mu", sim.friction, "ground friction coefficient");
-  app.add_option("--ground", sim.ground_height, "ground height [m]");
-  app.add_option("--drop-height", drop_height, "start this high above the ground [m]");
+  auto* terrain_option = app.add_option(
+      "--terrain", terrain_name,
+      "the world: a terrain file, or a name in config/terrain/ (stairs_anymal_c, ...); default: "
+      "flat ground at --ground (terrain/README.md)");
+  app.add_option("--ground", sim.ground_height,
+                 "height of the flat ground [m] (the robot starts standing on it)")
+      ->excludes(terrain_option);
+  app.add_option("--drop-height", drop_height, "start this high above standing on the terrain [m]");
+  app.add_option("--map-rate", node_options.map.rate_hz,
+                 "elevation maps (stride.terrain_t) per second of robot time; 0: none");
+  app.add_option("--map-size", node_options.map.size, "side of the square map around the base [m]");
+  app.add_option("--map-resolution", node_options.map.resolution, "the map's cell side [m]");
+  app.add_option("--map-noise", node_options.map.noise, "noise of each cell's height, std [m]");
+  app.add_option("--map-holes", node_options.map.holes,
+                 "probability that a cell is unknown (NaN) in a map");
+  app.add_option("--map-latency", node_options.map.latency,
+                 "a map shows the terrain around where the robot was this long ago [s]");
+  app.add_option("--map-channel", node_options.map.channel, "the maps' LCM channel");
   app.add_option("--noise-q", node_options.noise_q, "joint position noise std [rad]");
   app.add_option("--noise-v", node_options.noise_v, "velocity noise std");
   app.add_option("--delay", node_options.delay, "publish estimates this many periods late");
@@ -92,6 +108,11 @@ int main(int argc, char** argv) {
       node_options.pushes.pushes.push_back(push);
     }
     const stride::Robot robot = stride::loadRobot(robot_yaml, robots_dirs);
+    if (!terrain_name.empty())
+      sim.terrain = std::make_shared<const stride::terrain::Terrain>(
+          stride::terrain::loadTerrainFile(stride::terrain::findTerrainFile(
+              terrain_name, stride::terrain::terrainConfigDirs())));
+    node_options.map.seed = node_options.seed + 2;
     if (print_model) {
       std::printf("%s", stride::describeModel(robot).c_str());
       return 0;
@@ -107,12 +128,15 @@ int main(int argc, char** argv) {
     stride::LcmPublisher publisher(lcm);
     stride::sim::SimNode node(robot, sim, node_options, publisher);
     node.subscribe(lcm);
-    Eigen::VectorXd q = robot.default_q, v = Eigen::VectorXd::Zero(robot.model.nv);
-    if (robot.model.hasFreeFlyer()) q[2] += drop_height;
-    node.reset(q, v);
-    std::printf("stride-sim: %s, %s, %.0f Hz physics, estimates at %.0f Hz, %.1f s, '%s'\n",
-                robot.name.c_str(), lockstep ? "lock-step" : "real time", 1.0 / sim.dt,
-                node_options.state_rate_hz, duration, url.c_str());
+    // Standing on the terrain under its default place (sim/README.md, "Terrain").
+    const Eigen::VectorXd q =
+        stride::sim::startingPose(robot, node.simulator().terrain(), drop_height);
+    node.reset(q, Eigen::VectorXd::Zero(robot.model.nv));
+    std::printf(
+        "stride-sim: %s, %s, %.0f Hz physics, estimates at %.0f Hz, %.1f s, terrain '%s', '%s'\n",
+        robot.name.c_str(), lockstep ? "lock-step" : "real time", 1.0 / sim.dt,
+        node_options.state_rate_hz, duration, node.simulator().terrain().name().c_str(),
+        url.c_str());
     std::fflush(stdout);
 
     const int per_state = node.stepsPerState();

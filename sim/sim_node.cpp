@@ -4,10 +4,14 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "config/model_hash.hpp"
+#include "sim/ground_contact.hpp"
 #include "solver/contact/knot_dynamics.hpp"
+#include "solver/multibody/frames.hpp"
+#include "solver/multibody/kinematics.hpp"
 
 namespace stride::sim {
 
@@ -25,6 +29,26 @@ std::vector<StandDownContact> standDownContacts(const Robot& robot) {
 }
 }  // namespace
 
+Eigen::VectorXd startingPose(const Robot& robot, const terrain::Terrain& terrain,
+                             double drop_height) {
+  Eigen::VectorXd q = robot.default_q;
+  if (!robot.model.hasFreeFlyer()) return q;
+  // The default posture stands on z = 0: each contact point's lift is the terrain's height under
+  // it; the highest lift puts every point on or above the surface.
+  Data data(robot.model);
+  forwardKinematics(robot.model, data, q);
+  double lift = -std::numeric_limits<double>::infinity();
+  for (const ContactPoint& pt : contactPointsFromRobot(robot)) {
+    const Frame& frame = robot.model.frames[pt.frame];
+    const SE3& oMj = data.oMi[frame.parentJoint];
+    const Eigen::Vector3d p = oMj.R * (frame.placement.R * pt.offset + frame.placement.p) + oMj.p;
+    lift = std::max(lift, terrain.height(p.x(), p.y()));
+  }
+  if (!std::isfinite(lift)) lift = terrain.height(q[0], q[1]);  // no contacts: under the base
+  q[2] += lift + drop_height;
+  return q;
+}
+
 SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions& options,
                  Publisher& out)
     : robot_(robot),
@@ -35,6 +59,7 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
       hold_(robot.model, robot.default_q, holdGain(options.hold_kp, robot.joint_kp, 5.0),
             holdGain(options.hold_kd, robot.joint_kd, 0.1), sim.dt),
       stand_down_(robot.model, hold_, standDownContacts(robot), options.stand_down),
+      mapper_(sim_.terrain(), options.map, sim.dt),
       noise_(options.noise_q, options.noise_v, options.seed),
       delay_(robot.model.nq, robot.model.nv, options.delay),
       dropper_(options.drop, options.seed + 1) {
@@ -76,6 +101,8 @@ void SimNode::reset(const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
   stats_.x0 = q[0];
   stats_.y0 = q[1];
   stats_.z0 = q[2];
+  stats_.above0 = q[2] - baseTerrainHeight(q);
+  mapper_.reset();
   track();
 }
 
@@ -233,22 +260,36 @@ bool SimNode::advance(int steps) {
       return false;
     }
     track();
+    const Eigen::VectorXd& q = sim_.q();
+    if (robot_.model.hasFreeFlyer())
+      mapper_.step(sim_.time(), options_.utime_base, q[0], q[1], out_);
+    else
+      mapper_.step(sim_.time(), options_.utime_base, 0.0, 0.0, out_);
     if (stats_.fell) return false;
   }
   return true;
+}
+
+double SimNode::baseTerrainHeight(const Eigen::VectorXd& q) const {
+  return robot_.model.hasFreeFlyer() ? sim_.terrain().height(q[0], q[1]) : sim_.terrain().ground();
 }
 
 void SimNode::track() {
   const Eigen::VectorXd& q = sim_.q();
   stats_.z_min = std::min(stats_.z_min, q[2]);
   stats_.z_max = std::max(stats_.z_max, q[2]);
+  // Fallen is low over the ground under the base, not low in the world: a robot on a lower floor
+  // or down a flight of stairs is upright.
+  stats_.above = q[2] - baseTerrainHeight(q);
+  stats_.above_min = std::min(stats_.above_min, stats_.above);
   const double qx = q[3], qy = q[4];
   const double tilt =
       std::acos(std::clamp(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0)) * 180.0 / M_PI;
   stats_.max_tilt_deg = std::max(stats_.max_tilt_deg, tilt);
   for (int c = 0; c < static_cast<int>(robot_.contacts.size()); ++c)
     stats_.peak_normal_force = std::max(stats_.peak_normal_force, sim_.normalForce(c));
-  if (q[2] < options_.fall_height * stats_.z0 || tilt > options_.fall_tilt_deg) stats_.fell = true;
+  if (stats_.above < options_.fall_height * stats_.above0 || tilt > options_.fall_tilt_deg)
+    stats_.fell = true;
 }
 
 void SimNode::writeSummary(const std::string& path) const {
@@ -270,6 +311,13 @@ void SimNode::writeSummary(const std::string& path) const {
       static_cast<long long>(s.hold_steps), static_cast<long long>(s.exhausted_steps),
       static_cast<long long>(s.stand_down_steps), static_cast<long long>(s.stand_downs),
       static_cast<long long>(s.lockstep_timeouts));
+  const terrain::Terrain& terrain = sim_.terrain();
+  std::printf(
+      "stride-sim: terrain '%s'; final base (%.3f, %.3f, %.3f) m, %.3f m above the terrain under "
+      "it (lowest %.3f, start %.3f); %lld trips (a foot pushing on a vertical face); %lld terrain "
+      "maps published\n",
+      terrain.name().c_str(), q[0], q[1], q[2], s.above, s.above_min, s.above0,
+      static_cast<long long>(sim_.counters().trips), static_cast<long long>(mapper_.published()));
   if (path.empty()) return;
   nlohmann::ordered_json j;
   j["sim_time_s"] = sim_.time();
@@ -292,6 +340,12 @@ void SimNode::writeSummary(const std::string& path) const {
   j["stand_downs"] = s.stand_downs;
   j["stand_down_steps"] = s.stand_down_steps;
   j["lockstep_timeouts"] = s.lockstep_timeouts;
+  j["terrain"] = terrain.name();
+  j["final_base"] = {q[0], q[1], q[2]};
+  j["base_height_above_terrain_m"] = s.above;
+  j["base_height_above_terrain_min_m"] = s.above_min;
+  j["trips"] = sim_.counters().trips;
+  j["terrain_maps"] = mapper_.published();
   std::ofstream f(path);
   f << j.dump(2) << "\n";
   if (!f) std::fprintf(stderr, "stride-sim: cannot write the summary to '%s'\n", path.c_str());

@@ -22,6 +22,7 @@
 #include "sim/disturbances.hpp"
 #include "sim/policy.hpp"
 #include "sim/simulator.hpp"
+#include "sim/terrain_map.hpp"
 
 namespace stride::sim {
 
@@ -44,9 +45,18 @@ struct SimNodeOptions {
   double source_timeout = 0.2;
   // When the controller goes silent (sim/README.md, "Controller loss").
   StandDownOptions stand_down;
-  // Fallen: base below this fraction of its start height, or tilted more than this.
+  // Fallen: the base's height above the terrain under it below this fraction of its height above
+  // the terrain at the start, or tilted more than this.
   double fall_height = 0.5, fall_tilt_deg = 60.0;
+  // The elevation map the robot publishes (its perception's stand-in).
+  TerrainMapOptions map;
 };
+
+// The robot's default posture standing on the terrain at its default place: the base raised by the
+// terrain's height under its contact points (the highest of them, so that no foot starts inside a
+// step), plus drop_height. Fixed-base robots: the default posture as it is.
+Eigen::VectorXd startingPose(const Robot& robot, const terrain::Terrain& terrain,
+                             double drop_height = 0.0);
 
 struct SimNodeStats {
   std::int64_t states_published = 0, states_dropped = 0;
@@ -61,6 +71,8 @@ struct SimNodeStats {
   std::int64_t stand_downs = 0, stand_down_steps = 0;
   std::int64_t lockstep_timeouts = 0;
   double x0 = 0, y0 = 0, z0 = 0, z_min = 1e300, z_max = -1e300, max_tilt_deg = 0.0;
+  // The base's height above the terrain under it: at the start, lowest, at the end.
+  double above0 = 0.0, above_min = 1e300, above = 0.0;
   double peak_normal_force = 0.0;
   bool fell = false;
   bool diverged = false;  // the physics could not go on (singular M, non-finite state)
@@ -99,6 +111,7 @@ class SimNode {
   std::int64_t utime() const;
   const SimNodeStats& stats() const { return stats_; }
   void countLockstepTimeout() { ++stats_.lockstep_timeouts; }
+  const TerrainMapper& mapper() const { return mapper_; }
   int stepsPerState() const { return steps_per_state_; }
 
   // A human summary on stdout and, when path is not empty, JSON.
@@ -106,6 +119,8 @@ class SimNode {
 
  private:
   void track();
+  // The terrain's height under the base (the ground's for a fixed base).
+  double baseTerrainHeight(const Eigen::VectorXd& q) const;
   void noteWrongModel(const void* buf, int size, const std::string& channel);
   // False (and counted) for a rival controller's policy; follows a new source after a silence.
   bool followSource(std::int64_t source, const std::string& channel);
@@ -118,6 +133,7 @@ class SimNode {
   HoldPolicy hold_;
   StandDown stand_down_;
   bool standing_down_ = false;
+  TerrainMapper mapper_;
   StateNoise noise_;
   StateDelay delay_;
   MessageDropper dropper_;

@@ -48,12 +48,15 @@ void checkOptions(const SimOptions& o) {
 
 Simulator::Simulator(const Model& model, std::vector<ContactPoint> points,
                      const SimOptions& options)
-    : model_(model), options_(options), points_(std::move(points)), data_(model_) {
+    : model_(model),
+      options_(options),
+      points_(std::move(points)),
+      terrain_(options.terrain ? *options.terrain : terrain::Terrain(options.ground_height)),
+      data_(model_) {
   checkOptions(options_);
   for (const ContactPoint& p : points_)
     if (p.frame < 0 || p.frame >= model_.nframes() || !p.offset.allFinite())
       throw std::invalid_argument("Simulator: contact point '" + p.name + "' is invalid");
-  ground_.height = options_.ground_height;
   tau_first_ = model_.hasFreeFlyer() ? 6 : 0;
   nu_ = model_.nv - tau_first_;
 
@@ -64,17 +67,21 @@ Simulator::Simulator(const Model& model, std::vector<ContactPoint> points,
   rhs_.setZero(nv);
   v_free_.setZero(nv);
   q_prev_ = q_;
+  // Every constraint slot of every point may be active at once (ground_contact.hpp).
+  const int ns = kConstraintsPerPoint * np;
   geometry_.resize(np, nv);
-  active_.assign(np, 0);
-  Jc_.setZero(3 * np, nv);
-  MinvJt_.setZero(nv, 3 * np);
-  G_.setZero(3 * np, 3 * np);
-  c_.setZero(3 * np);
-  p_.setZero(3 * np);
-  warm_.setZero(3, np);
+  active_.assign(ns, 0);
+  Jc_.setZero(3 * ns, nv);
+  MinvJt_.setZero(nv, 3 * ns);
+  G_.setZero(3 * ns, 3 * ns);
+  c_.setZero(3 * ns);
+  p_.setZero(3 * ns);
+  warm_.setZero(3, ns);
   impulse_sum_.setZero(3, np);
   forces_.setZero(3, np);
   contacts_.assign(np, PointContact{});
+  on_wall_.assign(np, 0);
+  touching_wall_.assign(np, 0);
 }
 
 Simulator::Simulator(const Robot& robot, const SimOptions& options)
@@ -96,6 +103,7 @@ void Simulator::reset(const Eigen::Ref<const Eigen::VectorXd>& q,
   warm_.setZero();
   forces_.setZero();
   for (PointContact& c : contacts_) c = PointContact{};
+  std::fill(on_wall_.begin(), on_wall_.end(), 0);
   last_status_ = StepStatus::Ok;
 }
 
@@ -181,19 +189,26 @@ StepStatus Simulator::substep(double h) {
   solveMassMatrix(model_, data_, rhs_);
   v_free_ = v_ + h * rhs_;
 
-  // Detection from geometry. A point is a candidate when it is within the margin of the ground
-  // or would reach it during this substep at its contact-free velocity (so a fast fall cannot
-  // step over the margin and land deep inside).
-  updateContactGeometry(model_, data_, points_, ground_, geometry_);
+  // Detection from geometry. A constraint is a candidate when its point is within the margin of
+  // the surface or would reach it during this substep at its contact-free velocity (so a fast fall
+  // cannot step over the margin and land deep inside).
+  updateContactGeometry(model_, data_, points_, terrain_, v_free_, options_.contact_margin, h,
+                        geometry_);
   int na = 0;
   for (int i = 0; i < np; ++i) {
-    const double vz = geometry_.J.row(3 * i + 2).dot(v_free_);
-    const double reach = options_.contact_margin + h * std::max(0.0, -vz);
-    const bool candidate = geometry_.height[i] < reach;
-    if (candidate) active_[na++] = i;
+    bool candidate = false;
+    for (int k = 0; k < geometry_.count[i]; ++k) {
+      const int slot = kConstraintsPerPoint * i + k;
+      const double vn = geometry_.Jc.row(3 * slot + 2).dot(v_free_);
+      const double reach = options_.contact_margin + h * std::max(0.0, -vn);
+      if (geometry_.constraint[slot].distance < reach) {
+        active_[na++] = slot;
+        candidate = true;
+      }
+    }
     contacts_[i].candidate = candidate;
     contacts_[i].in_contact = false;
-    contacts_[i].height = geometry_.height[i];
+    contacts_[i].height = geometry_.height(i);
   }
 
   v_ = v_free_;
@@ -206,13 +221,29 @@ StepStatus Simulator::substep(double h) {
     const int m = 3 * na;
     v_.noalias() += MinvJt_.leftCols(m) * p_.head(m);
   }
-  // Points that left the candidate set start from zero when they come back.
+  // Constraints that left the candidate set start from zero when they come back.
   warm_.setZero();
+  for (int i = 0; i < np; ++i) touching_wall_[i] = 0;
   for (int a = 0; a < na; ++a) {
-    const int i = active_[a];
-    warm_.col(i) = p_.segment<3>(3 * a);
-    impulse_sum_.col(i) += p_.segment<3>(3 * a);
-    contacts_[i].in_contact = p_[3 * a + 2] > 0.0;
+    const int slot = active_[a];
+    const int i = slot / kConstraintsPerPoint;
+    const Eigen::Vector3d impulse = p_.segment<3>(3 * a);
+    warm_.col(slot) = impulse;
+    const terrain::Contact& c = geometry_.constraint[slot];
+    // Forces are reported in world axes: the impulse in the constraint's frame [t1 t2 n] turned.
+    if (c.world_axes)
+      impulse_sum_.col(i) += impulse;
+    else
+      impulse_sum_.col(i) += impulse.x() * c.t1 + impulse.y() * c.t2 + impulse.z() * c.normal;
+    if (impulse.z() > 0.0) {
+      contacts_[i].in_contact = true;
+      if (c.kind == terrain::Contact::Kind::Wall) touching_wall_[i] = 1;
+    }
+  }
+  // A trip: a point that starts pushing on a vertical face (a riser, a box's side).
+  for (int i = 0; i < np; ++i) {
+    if (touching_wall_[i] && !on_wall_[i]) ++counters_.trips;
+    on_wall_[i] = touching_wall_[i];
   }
 
   // q⁺ = q ⊕ h v⁺ (rhs_ is free again: it holds h v⁺).
@@ -235,7 +266,7 @@ StepStatus Simulator::substep(double h) {
 int Simulator::solveContacts(double h, int na) {
   const int m = 3 * na;
   auto J = Jc_.topRows(m);
-  for (int a = 0; a < na; ++a) J.middleRows<3>(3 * a) = geometry_.J.middleRows<3>(3 * active_[a]);
+  for (int a = 0; a < na; ++a) J.middleRows<3>(3 * a) = geometry_.Jc.middleRows<3>(3 * active_[a]);
   // M⁻¹ Jᵀ through the tree-sparse LᵀDL of M (no inverse formed), then G = J M⁻¹ Jᵀ.
   auto MinvJt = MinvJt_.leftCols(m);
   MinvJt = J.transpose();
@@ -247,7 +278,7 @@ int Simulator::solveContacts(double h, int na) {
   auto c = c_.head(m);
   c.noalias() = J * v_free_;
   for (int a = 0; a < na; ++a) {
-    const double height = geometry_.height[active_[a]];
+    const double height = geometry_.constraint[active_[a]].distance;
     double target;
     if (height >= 0.0) {
       // Above the ground: may approach by the remaining gap within this substep, no further.

@@ -4,7 +4,9 @@
 //
 //   M (v⁺ − v) = h (S τ − b(q, v) + J_extᵀ f_ext) + J_cᵀ p,    q⁺ = q ⊕ h v⁺,
 //
-// with, for each candidate point, the impulse p = (p_x, p_y, p_n) (world axes, ground normal +z):
+// with, for each candidate constraint (a point's support on the terrain, or a vertical face beside
+// it: terrain/terrain.hpp), the impulse p = (p_t1, p_t2, p_n) in the constraint's frame (the flat
+// ground's: world axes, normal +z):
 //   0 ≤ p_n  ⟂  v_n⁺ − v_target ≥ 0      (no penetration at the end of the step; v_target carries
 //                                          the distance still to close and the drift correction)
 //   |p_t| ≤ μ p_n, p_t opposing the sliding velocity (maximal dissipation, circular cone).
@@ -15,6 +17,7 @@
 // built at construction; step() allocates nothing and never throws.
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "config/robot_config.hpp"
@@ -26,7 +29,9 @@ namespace stride::sim {
 struct SimOptions {
   double dt = 1e-3;  // one step(); a step runs `substeps` substeps of dt / substeps
   int substeps = 1;
-  double ground_height = 0.0;
+  double ground_height = 0.0;  // the flat ground's height, when no terrain is given
+  // The world (terrain/terrain.hpp); null: the flat ground at ground_height.
+  std::shared_ptr<const terrain::Terrain> terrain;
   double friction = 0.8;         // Coulomb coefficient μ
   bool clamp_torques = true;     // clamp τ to the model's effort limits
   double contact_margin = 1e-3;  // a point is a candidate below this height (plus its fall in h)
@@ -59,6 +64,9 @@ struct SimCounters {
   std::int64_t nonfinite_states = 0;  // substeps whose result was not finite (state held)
   std::int64_t pgs_unconverged = 0;   // substeps where PGS hit pgs_max_iterations
   int last_pgs_iterations = 0;        // sweeps of the last substep with contacts
+  // Times a contact point started pushing on a vertical face of the terrain (a riser, a box's
+  // side): a foot that hit an obstacle instead of stepping onto it.
+  std::int64_t trips = 0;
 };
 
 // What one candidate point did in the last step.
@@ -99,6 +107,7 @@ class Simulator {
   double time() const { return time_; }
   const Model& model() const { return model_; }
   const SimOptions& options() const { return options_; }
+  const terrain::Terrain& terrain() const { return terrain_; }
   int nu() const { return nu_; }
   // The torque applied during the last step (after rejection and clamping).
   const Eigen::VectorXd& appliedTorque() const { return tau_applied_; }
@@ -124,7 +133,7 @@ class Simulator {
   Model model_;
   SimOptions options_;
   std::vector<ContactPoint> points_;
-  FlatGround ground_;
+  terrain::Terrain terrain_;
   Data data_;
   int nu_ = 0;
   int tau_first_ = 0;  // first actuated velocity index (6 for a free-flyer)
@@ -140,16 +149,18 @@ class Simulator {
   Eigen::VectorXd v_free_;       // nv: velocity without contact impulses
   Eigen::VectorXd q_prev_;       // nq: kept to hold the state on a non-finite result
   ContactGeometry geometry_;
-  std::vector<int> active_;  // indices of the candidate points of this substep
-  Eigen::MatrixXd Jc_;       // 3P x nv: rows of the active points, compacted
-  RowMatrixXd MinvJt_;       // nv x 3P: M⁻¹ Jcᵀ (row-major: the LᵀDL solve runs on rows)
-  Eigen::MatrixXd G_;        // 3P x 3P Delassus matrix
-  Eigen::VectorXd c_;        // 3P: contact velocity without impulses minus its target
-  Eigen::VectorXd p_;        // 3P: impulses of the active points
-  Eigen::Matrix3Xd warm_;    // 3 x P: last impulse of each point (warm start), per point
+  // S = kConstraintsPerPoint * P constraint slots (ground_contact.hpp).
+  std::vector<int> active_;  // the candidate slots of this substep
+  Eigen::MatrixXd Jc_;       // 3S x nv: rows of the active slots, compacted
+  RowMatrixXd MinvJt_;       // nv x 3S: M⁻¹ Jcᵀ (row-major: the LᵀDL solve runs on rows)
+  Eigen::MatrixXd G_;        // 3S x 3S Delassus matrix
+  Eigen::VectorXd c_;        // 3S: contact velocity without impulses minus its target
+  Eigen::VectorXd p_;        // 3S: impulses of the active slots, each in its frame [t1 t2 n]
+  Eigen::Matrix3Xd warm_;    // 3 x S: last impulse of each slot (warm start)
   Eigen::Matrix3Xd impulse_sum_;  // 3 x P: impulses summed over the substeps of this step
   Eigen::Matrix3Xd forces_;       // 3 x P
   std::vector<PointContact> contacts_;
+  std::vector<char> on_wall_, touching_wall_;  // per point: pushing on a face (trips)
 
   SimCounters counters_;
   StepStatus last_status_ = StepStatus::Ok;

@@ -10,12 +10,18 @@
 #                 [--realtime | --lockstep] [--robots-dir DIR]... [--check-tracking]
 #                 [--host-network] [--out DIR] [--summary FILE] [--spy] [--viz [--viz-port P]]
 #                 [--slow-host F] [--kill-controller T] [--kill-sim T] [--flood RATE] [--rival]
+#                 [--terrain NAME|FILE]
 #
 #   --robot NAME      stride_quad (default), solo12, anymal_c, stride_humanoid, talos_reduced:
 #                     config/controller/NAME.yaml; solo12, anymal_c and talos_reduced need
 #                     example-robot-data (--robots-dir, ROS_PACKAGE_PATH, or build/robot_packages,
 #                     which the build makes from ../shared)
 #   --humanoid        short for --robot stride_humanoid
+#   --terrain T       the world the robot walks in: a terrain file, or NAME for
+#                     config/terrain/NAME.yaml (stairs_anymal_c, ramp_solo12, rough_stride_quad,
+#                     step_talos_reduced, ...; format in terrain/README.md); default flat ground.
+#                     The mock robot publishes elevation maps of it on STRIDE_TERRAIN (--viz
+#                     draws them)
 #   --commands FILE   the command script stride-teleop plays on the robot's clock (default
 #                     config/commands/NAME.yaml; format in tools/README.md, "stride-teleop");
 #                     `--commands none`: no command source, the robot stands until you send
@@ -71,6 +77,7 @@ build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
 spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood="" kill_sim="" rival=0
+terrain=""
 robots_dirs=()
 args=("$@")
 need_value() { [ $# -ge 2 ] || { echo "demo.sh: $1 needs a value (--help)" >&2; exit 2; }; }
@@ -78,6 +85,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --robot) need_value "$@"; robot="$2"; shift 2 ;;
     --humanoid) robot=stride_humanoid; shift ;;
+    --terrain) need_value "$@"; terrain="$2"; shift 2 ;;
     --commands) need_value "$@"; commands="$2"; shift 2 ;;
     --teleop) teleop=1; shift ;;
     --duration) need_value "$@"; duration="$2"; shift 2 ;;
@@ -107,6 +115,17 @@ if [ ! -f "$config" ]; then
   echo "demo.sh: no robot '$robot' (config/controller/$robot.yaml); the robots:" \
     $(cd "$root/config/controller" && ls *.yaml | sed 's/\.yaml$//') >&2
   exit 2
+fi
+if [ -n "$terrain" ]; then
+  if [ -f "$terrain" ]; then
+    terrain=$(cd "$(dirname "$terrain")" && echo "$(pwd)/$(basename "$terrain")")
+  elif [ -f "$root/config/terrain/$terrain.yaml" ]; then
+    terrain="$root/config/terrain/$terrain.yaml"
+  else
+    echo "demo.sh: no terrain '$terrain' (a file, or config/terrain/NAME.yaml); the terrains:" \
+      $(cd "$root/config/terrain" && ls *.yaml | sed 's/\.yaml$//') >&2
+    exit 2
+  fi
 fi
 if [ "$teleop" = 1 ]; then
   [ -n "$commands" ] && { echo "demo.sh: --teleop or --commands, not both" >&2; exit 2; }
@@ -290,6 +309,8 @@ mpc_args=(--config "$config" "${dirs_args[@]}" --summary "$out/mpc.json")
 [ -n "$slow_host" ] && mpc_args+=(--emulate-slow-host "$slow_host")
 sim_args=(--robot "$robot_yaml" "${dirs_args[@]}" --duration "$sim_duration"
   --summary "$out/sim.json")
+[ -n "$terrain" ] && sim_args+=(--terrain "$terrain")
+rm -f "$out/sim.json" "$out/sim-restarted.json"
 if [ "$mode" = lockstep ]; then
   mpc_args+=(--lockstep)
   sim_args+=(--lockstep --rate "$rate")
@@ -481,6 +502,10 @@ fi
 echo
 echo "== summary (from the log) =="
 summary_args=("$log" --summary "$summary")
+# The mock robot's own verdict (its terrain, trips, and a fall the logger may not have read).
+sim_json="$out/sim.json"
+[ -n "$kill_sim" ] && sim_json="$out/sim-restarted.json"
+[ -f "$sim_json" ] && summary_args+=(--sim-summary "$sim_json")
 [ "$check" = 1 ] && summary_args+=(--check-tracking)
 status=0
 "$build/tools/stride-log-summary" "${summary_args[@]}" || status=$?

@@ -59,9 +59,12 @@ Run run(const ControllerConfig& config, const Options& options) {
   std::unique_ptr<sim::SimNode> sim;
   auto startSim = [&](std::int64_t utime_base) {
     o.utime_base = utime_base;
-    sim = std::make_unique<sim::SimNode>(robot, sim::SimOptions{}, o, publisher);
+    sim::SimOptions physics;
+    physics.terrain = options.terrain;
+    sim = std::make_unique<sim::SimNode>(robot, physics, o, publisher);
     sim->subscribe(lcm);
-    sim->reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
+    sim->reset(sim::startingPose(robot, sim->simulator().terrain(), options.drop_height),
+               Eigen::VectorXd::Zero(robot.model.nv));
     if (options.state_fault) sim->setStateFault(options.state_fault);
   };
   startSim(o.utime_base);
@@ -171,6 +174,7 @@ Run run(const ControllerConfig& config, const Options& options) {
              status.step,
              status.regularization,
              0};
+    if (robot.model.hasFreeFlyer()) s.ground = sim->simulator().terrain().height(s.q[0], s.q[1]);
     for (int c = 0; c < static_cast<int>(robot.contacts.size()); ++c)
       if (sim->simulator().normalForce(c) > 0.0) {
         ++s.feet_down;
@@ -195,6 +199,7 @@ Run run(const ControllerConfig& config, const Options& options) {
     fallen.t = t_offset + sim->simulator().time();
     fallen.q = sim->simulator().q();
     fallen.v = sim->simulator().v();
+    fallen.ground = sim->simulator().terrain().height(fallen.q[0], fallen.q[1]);
     r.samples.push_back(std::move(fallen));
   }
   drain(lcm);
@@ -206,6 +211,9 @@ Run run(const ControllerConfig& config, const Options& options) {
   r.rejected = rejected;
   r.rival_policies = rival_policies;
   r.q_end = sim->simulator().q();
+  r.terrain = sim->simulator().terrain().name();
+  r.trips = sim->simulator().counters().trips;
+  r.base_above_terrain = sim->stats().above;
   return r;
 }
 
@@ -217,6 +225,7 @@ std::vector<logs::BaseSample> Run::baseSamples() const {
     b.t = s.t;
     for (int i = 0; i < 7; ++i) b.q[i] = s.q[i];
     for (int i = 0; i < 6; ++i) b.v[i] = s.v[i];
+    b.ground = s.ground;
     out.push_back(b);
   }
   return out;

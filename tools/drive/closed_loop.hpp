@@ -7,6 +7,7 @@
 
 #include <functional>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,7 @@ struct Sample {
   double k_max;  // largest |K| entry of the policy's first knot
   double step, reg;
   int feet_down;                                // robot contacts carrying load (sim)
+  double ground = 0.0;                          // the terrain's height under the base
   unsigned feet_mask = 0;                       // bit c: contact c carries load
   int backward_passes = 0, forward_passes = 0;  // of the tick's solve
   double solve_ms = 0.0;
@@ -58,6 +60,10 @@ struct Options {
   // new one starts, the robot standing at the default posture at the origin. Negative: never.
   double sim_lost_at = -1.0, sim_back_after = 1.0;
   int flood_per_period = 0;
+  // The world (terrain/terrain.hpp): null, the flat ground at z = 0. The robot starts standing on
+  // it at its default place, drop_height above (sim::startingPose).
+  std::shared_ptr<const terrain::Terrain> terrain;
+  double drop_height = 0.0;
 };
 
 struct Run {
@@ -72,6 +78,11 @@ struct Run {
   int sim_starts = 1;                    // 2 after a restart (Options::sim_lost_at)
   sim::SimNodeStats sim_before_restart;  // the first mock robot's figures, if restarted
   Eigen::VectorXd q_end;
+  // The mock robot's terrain, its feet's trips on vertical faces, and the base's height above the
+  // terrain under it at the end.
+  std::string terrain = "flat";
+  std::int64_t trips = 0;
+  double base_above_terrain = 0.0;
   bool fell() const { return sim.fell; }
   // The base states for segments (t: sim time).
   std::vector<logs::BaseSample> baseSamples() const;

@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "config/command_line.hpp"
+#include "terrain/terrain_file.hpp"
 #include "tools/drive/closed_loop.hpp"
 
 namespace {
@@ -29,6 +30,10 @@ void writeJson(const std::string& path, const stride::drive::Run& run,
   j["tracked"] = tracked;
   j["fallbacks"] = run.mpc.fallbacks;
   j["failed_solves"] = run.mpc.failed_solves;
+  j["terrain"] = run.terrain;
+  if (run.q_end.size() >= 3) j["final_base"] = {run.q_end[0], run.q_end[1], run.q_end[2]};
+  j["base_height_above_terrain_m"] = run.base_above_terrain;
+  j["trips"] = run.trips;
   j["segments"] = nlohmann::ordered_json::array();
   for (const stride::logs::Segment& s : segments) {
     nlohmann::ordered_json segment;
@@ -52,7 +57,8 @@ void writeJson(const std::string& path, const stride::drive::Run& run,
 int main(int argc, char** argv) {
   CLI::App app{"stride-drive: drive a robot with a command script, in one process, in lock-step"};
   stride::commandLineConventions(app, "stride-drive");
-  std::string config_path, script_path, summary, trace_path;
+  std::string config_path, script_path, summary, trace_path, terrain_name;
+  double ground = 0.0;
   std::vector<std::string> robots_dirs, pushes;
   stride::drive::Options options;
   options.duration = 0.0;
@@ -90,6 +96,19 @@ int main(int argc, char** argv) {
                  "\"Controller loss\")");
   app.add_option("--stand-down-ramp", options.sim.stand_down.ramp,
                  "the robot's stand-down ramp [s] (sim/README.md, \"Controller loss\")");
+  auto* terrain_option =
+      app.add_option("--terrain", terrain_name,
+                     "the world: a terrain file, or a name in config/terrain/ (terrain/README.md); "
+                     "default: flat ground at --ground");
+  app.add_option("--ground", ground, "height of the flat ground [m] (the robot starts on it)")
+      ->excludes(terrain_option);
+  app.add_option("--drop-height", options.drop_height,
+                 "start this high above standing on the terrain [m]");
+  app.add_option("--map-rate", options.sim.map.rate_hz,
+                 "elevation maps (stride.terrain_t) per second; 0: none");
+  app.add_option("--map-noise", options.sim.map.noise, "the maps' cell height noise, std [m]");
+  app.add_option("--map-holes", options.sim.map.holes, "probability of an unknown map cell");
+  app.add_option("--map-latency", options.sim.map.latency, "the maps' latency [s]");
   app.add_flag("--check-tracking", check,
                "exit 1 when a segment of 2 s or more misses its command by more than max(15%, "
                "0.05 m/s, 0.1 rad/s), or the robot fell");
@@ -99,6 +118,13 @@ int main(int argc, char** argv) {
     stride::ControllerConfig config = stride::loadControllerConfig(config_path);
     config.robots_dirs = robots_dirs;
     options.script = stride::loadCommandScript(script_path);
+    if (!terrain_name.empty())
+      options.terrain = std::make_shared<const stride::terrain::Terrain>(
+          stride::terrain::loadTerrainFile(stride::terrain::findTerrainFile(
+              terrain_name, stride::terrain::terrainConfigDirs())));
+    else if (ground != 0.0)
+      options.terrain = std::make_shared<const stride::terrain::Terrain>(ground);
+    options.sim.map.seed = options.sim.seed + 2;
     if (options.duration <= 0.0) options.duration = options.script.back().at + 4.0;
     for (const std::string& p : pushes) {
       stride::sim::Push push;
@@ -140,6 +166,12 @@ int main(int argc, char** argv) {
                 options.duration, run.fell() ? "FELL" : "no fall",
                 static_cast<long long>(run.mpc.fallbacks),
                 static_cast<long long>(run.mpc.failed_solves));
+    if (run.q_end.size() >= 7)
+      std::printf(
+          "  terrain '%s': final base (%.3f, %.3f, %.3f) m, %.3f m above the terrain under it, "
+          "%lld trips\n",
+          run.terrain.c_str(), run.q_end[0], run.q_end[1], run.q_end[2], run.base_above_terrain,
+          static_cast<long long>(run.trips));
     if (options.controller_lost_at >= 0.0)
       std::printf(
           "  controller killed at %.3f s, %s; the robot: %lld steps past a policy's end, %lld on "

@@ -4,6 +4,9 @@
 // commands, tools/log/segments.hpp). Reads the state, status and command channels; prints a summary
 // and optionally writes JSON.
 //   stride-log-summary session.lcmlog [--summary summary.json] [--windows 5] [--check-tracking]
+//                      [--sim-summary sim.json]
+// Heights are taken above the terrain under the base where the log has an elevation map
+// (stride.terrain_t) there, as the mock robot takes them.
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -22,6 +25,8 @@
 #include "messages/validate.hpp"
 #include "stride/mpc_status_t.hpp"
 #include "stride/robot_state_t.hpp"
+#include "stride/terrain_t.hpp"
+#include "terrain/elevation_map.hpp"
 #include "tools/log/segments.hpp"
 
 namespace {
@@ -181,9 +186,9 @@ int main(int argc, char** argv) {
       "stride-log-summary: distance, base height, falls, controller timing and command tracking of "
       "a log"};
   stride::commandLineConventions(app, "stride-log-summary");
-  std::string log_path, summary_path, state_channel = "STRIDE_STATE",
-                                      status_channel = "STRIDE_STATUS",
-                                      command_channel = "STRIDE_COMMAND";
+  std::string log_path, summary_path,
+      state_channel = "STRIDE_STATE", status_channel = "STRIDE_STATUS",
+      command_channel = "STRIDE_COMMAND", terrain_channel = "STRIDE_TERRAIN", sim_summary_path;
   double fall_height = 0.5, fall_tilt_deg = 60.0, window = 0.0;
   stride::logs::TrackingTolerance tolerance;
   stride::logs::SegmentOptions segment_options;
@@ -194,6 +199,12 @@ int main(int argc, char** argv) {
   app.add_option("--state-channel", state_channel);
   app.add_option("--status-channel", status_channel);
   app.add_option("--command-channel", command_channel);
+  app.add_option("--terrain-channel", terrain_channel,
+                 "elevation maps: heights are taken above the terrain under the base");
+  app.add_option("--sim-summary", sim_summary_path,
+                 "the mock robot's own summary (stride-sim --summary): its terrain, trips and "
+                 "verdict go into this one; a fall it saw is a fall here, whatever the log holds")
+      ->check(CLI::ExistingFile);
   app.add_option("--fall-height", fall_height,
                  "fallen: base below this fraction of its first height");
   app.add_option("--fall-tilt", fall_tilt_deg, "fallen: base tilted more than this [deg]");
@@ -241,7 +252,7 @@ int main(int argc, char** argv) {
   }
   long states = 0, statuses = 0, bad = 0;
   bool fell = false, policy_seen = false;
-  double x0 = 0, y0 = 0, x1 = 0, y1 = 0, z_first = 0, z_min = INFINITY, z_max = -INFINITY;
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0, z1 = 0, z_first = 0, z_min = INFINITY, z_max = -INFINITY;
   double max_tilt = 0.0, t_first = 0.0, t_last = 0.0;
   std::vector<double> latency_ms, solve_ms, prepare_ms;
   long prepared = 0, full_steps = 0, short_steps = 0, no_steps = 0;
@@ -250,6 +261,11 @@ int main(int argc, char** argv) {
   std::int64_t status_t0 = -1;
   std::int64_t state_utime0 = 0;
   std::vector<stride::logs::BaseSample> base_samples;  // t from the first state's stamp
+  // The newest elevation map, and the terrain's height under the base from it (0 where unknown).
+  stride::terrain::ElevationMap map;
+  long maps = 0, bad_maps = 0;
+  double ground_last = 0.0;
+  bool ground_known = false;
   CommandReader command_reader;
   // Lost messages: each status carries its tick number (+1 per tick; a restarted controller
   // starts again from 1), and the estimator publishes at a fixed rate, so a missing tick or a
@@ -268,7 +284,15 @@ int main(int argc, char** argv) {
       if (last_state_utime >= 0 && s.utime > last_state_utime)
         state_gaps_us.push_back(s.utime - last_state_utime);
       last_state_utime = s.utime;
-      const double z = s.q[2];
+      // The terrain under the base, from the newest map that covers it (else the last known, or 0).
+      if (maps > 0) {
+        const double h = map.heightAt(s.q[0], s.q[1]);
+        if (std::isfinite(h)) {
+          ground_last = h;
+          ground_known = true;
+        }
+      }
+      const double z = s.q[2] - ground_last;
       if (states == 0) {
         x0 = s.q[0];
         y0 = s.q[1];
@@ -279,6 +303,7 @@ int main(int argc, char** argv) {
       stride::logs::BaseSample b;
       b.t = static_cast<double>(s.utime - state_utime0) / 1e6;
       std::copy(s.q.begin(), s.q.begin() + 7, b.q.begin());
+      b.ground = ground_last;
       // Velocities feed the segments' averages: one NaN would spoil a whole segment.
       if (s.nv >= 6 && stride::msg::checkState(s, true) == stride::msg::Reject::None) {
         std::copy(s.v.begin(), s.v.begin() + 6, b.v.begin());
@@ -286,6 +311,7 @@ int main(int argc, char** argv) {
       }
       x1 = s.q[0];
       y1 = s.q[1];
+      z1 = s.q[2];
       t_last = s.utime * 1e-6;
       z_min = std::min(z_min, z);
       z_max = std::max(z_max, z);
@@ -293,6 +319,30 @@ int main(int argc, char** argv) {
       max_tilt = std::max(max_tilt, stride::logs::tilt(b.q) * 180.0 / M_PI);
       if (stride::logs::fallen(b, z_first, segment_options.fall)) fell = true;
       ++states;
+    } else if (e->channel == terrain_channel) {
+      stride::terrain_t m;
+      if (m.decode(e->data, 0, static_cast<int>(e->datalen)) < 0 || m.rows < 1 || m.cols < 1 ||
+          static_cast<int>(m.height.size()) != m.rows || !(m.resolution > 0.0) ||
+          !std::isfinite(m.resolution) || !std::isfinite(m.origin_x) ||
+          !std::isfinite(m.origin_y)) {
+        ++bad_maps;
+        continue;
+      }
+      map.origin_x = m.origin_x;
+      map.origin_y = m.origin_y;
+      map.resolution = m.resolution;
+      map.resize(m.rows, m.cols);
+      bool sizes = true;
+      for (int r = 0; r < m.rows && sizes; ++r) {
+        sizes = static_cast<int>(m.height[r].size()) == m.cols;
+        for (int c = 0; sizes && c < m.cols; ++c) map.at(r, c) = m.height[r][c];
+      }
+      if (!sizes) {
+        ++bad_maps;
+        map.resize(0, 0);
+        continue;
+      }
+      ++maps;
     } else if (e->channel == command_channel) {
       command_reader.read(*e);
     } else if (e->channel == status_channel) {
@@ -418,6 +468,35 @@ int main(int argc, char** argv) {
   if (!windows.empty())
     printWindows(windows, window, last_status.deadline_misses, last_status.late_ticks);
   if (bad > 0) std::printf("log: %ld undecodable events skipped\n", bad);
+  // The mock robot's verdict: it checks the fall on every physics step, the log only holds what the
+  // logger read before it was stopped.
+  json sim_summary;
+  if (!sim_summary_path.empty()) {
+    std::ifstream in(sim_summary_path);
+    try {
+      sim_summary = json::parse(in);
+    } catch (const json::exception& e) {
+      std::fprintf(stderr, "stride-log-summary: cannot read '%s': %s\n", sim_summary_path.c_str(),
+                   e.what());
+      return 1;
+    }
+    if (sim_summary.value("fell", false) && !fell) {
+      std::printf("robot: the mock robot fell (%s), after the log's last state\n",
+                  sim_summary_path.c_str());
+      fell = true;
+    }
+  }
+  const std::string terrain_name =
+      sim_summary.contains("terrain") && sim_summary["terrain"].is_string()
+          ? sim_summary["terrain"].get<std::string>()
+          : (maps > 0 ? "(from the log's maps)" : "flat");
+  if (states > 0)
+    std::printf(
+        "terrain '%s': final base (%.3f, %.3f, %.3f) m, %.3f m above the terrain under it%s; %ld "
+        "elevation maps%s\n",
+        terrain_name.c_str(), x1, y1, z1, z1 - ground_last,
+        ground_known || maps == 0 ? "" : " (no map covered it: above z = 0)", maps,
+        bad_maps > 0 ? (", " + std::to_string(bad_maps) + " refused").c_str() : "");
   bool tracked = true;
   if (commands.empty()) {
     std::printf("commands: none on '%s'%s\n", command_channel.c_str(),
@@ -454,6 +533,11 @@ int main(int argc, char** argv) {
     j["base_height_max_m"] = robot(z_max);
     j["max_tilt_deg"] = robot(max_tilt);
     j["fell"] = fell;
+    j["terrain"] = terrain_name;
+    j["final_base"] = states > 0 ? json::array({x1, y1, z1}) : json(nullptr);
+    j["base_height_above_terrain_m"] = robot(z1 - ground_last);
+    j["trips"] = sim_summary.contains("trips") ? sim_summary["trips"] : json(nullptr);
+    j["terrain_maps"] = maps;
     j["tick_latency"] = timingJson(latency);
     j["solve_time"] = timingJson(solve);
     j["deadline_misses"] = controller(last_status.deadline_misses);

@@ -50,7 +50,7 @@ std::array<double, 3> headingVelocity(const BaseSample& s) {
 }
 
 bool fallen(const BaseSample& s, double first_height, const FallLimits& limits) {
-  return s.q[2] < limits.height_fraction * first_height ||
+  return s.q[2] - s.ground < limits.height_fraction * first_height ||
          tilt(s.q) * 180.0 / M_PI > limits.max_tilt_deg;
 }
 
@@ -77,7 +77,7 @@ std::vector<Segment> segmentCommands(const std::vector<CommandSample>& commands,
     segments[k].t1 = std::max(segments[k].t0, k + 1 < segments.size() ? segments[k + 1].t0 : t_end);
   if (states.empty()) return segments;
 
-  const double first_height = states.front().q[2];
+  const double first_height = states.front().q[2] - states.front().ground;
   for (std::size_t k = 0; k < segments.size(); ++k) {
     Segment& s = segments[k];
     const bool last = k + 1 == segments.size();

@@ -21,6 +21,9 @@ struct BaseSample {
   double t = 0.0;
   std::array<double, 7> q{0, 0, 0, 0, 0, 0, 1};
   std::array<double, 6> v{};
+  // The terrain's height under the base when it is known (an elevation map in the log, the mock
+  // robot's terrain), else 0: heights for the fall criterion are taken above it.
+  double ground = 0.0;
 };
 
 // One command as sent: t [s] on the same clock as the states.
@@ -40,8 +43,9 @@ std::array<double, 3> headingVelocity(const BaseSample& s);
 double yaw(const std::array<double, 7>& q);
 double tilt(const std::array<double, 7>& q);
 
-// The fall criterion stride-log-summary has always used: the base below height_fraction of its
-// first height, or tilted more than max_tilt_deg.
+// The fall criterion, the mock robot's (sim/README.md): the base's height above the terrain under
+// it below height_fraction of the first sample's, or tilted more than max_tilt_deg. first_height:
+// the first sample's q[2] - ground.
 struct FallLimits {
   double height_fraction = 0.5;
   double max_tilt_deg = 60.0;

@@ -1,0 +1,33 @@
+#pragma once
+// Terrain files, config/terrain/*.yaml: the one documented format (terrain/README.md).
+//
+//   ground: 0.0                 # height of the flat ground around everything [m]
+//   boxes:  [{center: [x, y], size: [sx, sy], height: h, yaw: 0.0}]
+//   ramps:  [{from: [x0, y0], to: [x1, y1], width: w, rise: r}]
+//   stairs: [{start: [x, y], yaw: 0.0, steps: n, rise: r, run: d, width: w, landing: l}]
+//   rough:  [{min: [x0, y0], max: [x1, y1], cell: c, amplitude: a, seed: s}]
+//
+// Every error (a file that does not parse, an unknown key, a missing one, a negative size, a cell
+// of 0) is a ConfigError naming the file and the key.
+
+#include <string>
+#include <vector>
+
+#include "terrain/terrain.hpp"
+
+namespace stride::terrain {
+
+// Reads and checks a terrain file; the spec's name is the file's stem ("stairs_anymal_c").
+TerrainSpec loadTerrainFile(const std::string& path);
+// The same from YAML text; `source` names it in errors and gives the name.
+TerrainSpec parseTerrain(const std::string& yaml, const std::string& source);
+
+// A terrain by file path, or by name in <config_dir>/terrain/<name>.yaml (the first folder that
+// has it). Throws ConfigError listing where it looked.
+std::string findTerrainFile(const std::string& name_or_path,
+                            const std::vector<std::string>& config_dirs);
+// Where the programs look for terrains by name: the source tree's config/ (a build tree) and the
+// installed share/stride/config beside the running program's bin/.
+std::vector<std::string> terrainConfigDirs();
+
+}  // namespace stride::terrain
