@@ -264,6 +264,7 @@ int main(int argc, char** argv) {
   // The newest elevation map, and the terrain's height under the base from it (0 where unknown).
   stride::terrain::ElevationMap map;
   long maps = 0, bad_maps = 0;
+  double map_top = -INFINITY;  // the highest known cell of any map
   double ground_last = 0.0;
   bool ground_known = false;
   CommandReader command_reader;
@@ -335,7 +336,10 @@ int main(int argc, char** argv) {
       bool sizes = true;
       for (int r = 0; r < m.rows && sizes; ++r) {
         sizes = static_cast<int>(m.height[r].size()) == m.cols;
-        for (int c = 0; sizes && c < m.cols; ++c) map.at(r, c) = m.height[r][c];
+        for (int c = 0; sizes && c < m.cols; ++c) {
+          map.at(r, c) = m.height[r][c];
+          if (std::isfinite(m.height[r][c])) map_top = std::max<double>(map_top, m.height[r][c]);
+        }
       }
       if (!sizes) {
         ++bad_maps;
@@ -538,6 +542,7 @@ int main(int argc, char** argv) {
     j["base_height_above_terrain_m"] = robot(z1 - ground_last);
     j["trips"] = sim_summary.contains("trips") ? sim_summary["trips"] : json(nullptr);
     j["terrain_maps"] = maps;
+    j["terrain_map_top_m"] = std::isfinite(map_top) ? json(map_top) : json(nullptr);
     j["tick_latency"] = timingJson(latency);
     j["solve_time"] = timingJson(solve);
     j["deadline_misses"] = controller(last_status.deadline_misses);
