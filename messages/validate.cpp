@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 
 namespace stride::msg {
 
@@ -57,6 +58,8 @@ bool readInt64(const void* buf, int size, long at, std::int64_t& out) {
 constexpr long kStateHashAt = kHash + 8, kStateNqAt = kHash + 16;
 constexpr long kPolicyHashAt = kHash + 8, kPolicySourceAt = kHash + 16,
                kPolicyCountsAt = kHash + 56;
+// terrain_t is utime, origin_x, origin_y, resolution, then rows and cols.
+constexpr long kTerrainRowsAt = kHash + 32, kTerrainHeader = kTerrainRowsAt + 8;
 
 template <typename Vec>
 bool allFinite(const Vec& v) {
@@ -79,6 +82,10 @@ int stateWireSize(int nq, int nv, int ncontacts) {
 int policyWireSize(int knots, int nq, int nv, int nu) {
   const long per_knot = 8L * ((nq + nv) + nu + static_cast<long>(nu) * 2 * nv);
   return static_cast<int>(kHash + 7 * 8 + 7 * 4 + knots * per_knot + 4 + 1);
+}
+
+long terrainWireSize(int rows, int cols) {
+  return kTerrainHeader + 4L * rows * cols;
 }
 
 bool readStateClaim(const void* buf, int size, WireClaim& claim) {
@@ -197,6 +204,18 @@ Reject checkStatusWire(const void* buf, int size) {
   return at == size ? Reject::None : Reject::WrongSize;
 }
 
+Reject checkTerrainWire(const void* buf, int size, int max_cells) {
+  std::int64_t type = 0;
+  std::int32_t rows, cols;
+  if (!readInt64(buf, size, 0, type) || type != terrain_t::getHash()) return Reject::Undecodable;
+  if (!readInt32(buf, size, kTerrainRowsAt, rows) ||
+      !readInt32(buf, size, kTerrainRowsAt + 4, cols))
+    return Reject::Undecodable;
+  // Divided, not multiplied: rows * cols of two counts near 2^31 overflows int.
+  if (rows < 1 || cols < 1 || rows > max_cells / cols) return Reject::WrongSize;
+  return size == terrainWireSize(rows, cols) ? Reject::None : Reject::WrongSize;
+}
+
 Reject checkState(const robot_state_t& m, bool floating_base) {
   if (m.nq != static_cast<int>(m.q.size()) || m.nv != static_cast<int>(m.v.size()) ||
       m.ncontacts != static_cast<int>(m.contact.size()))
@@ -246,6 +265,19 @@ Reject checkCommand(const command_t& m) {
   return m.utime >= 0 ? Reject::None : Reject::BadField;
 }
 
+Reject checkTerrain(const terrain_t& m) {
+  if (m.rows < 1 || m.cols < 1 || static_cast<int>(m.height.size()) != m.rows)
+    return Reject::WrongSize;
+  for (const std::vector<float>& row : m.height) {
+    if (static_cast<int>(row.size()) != m.cols) return Reject::WrongSize;
+    for (float h : row)
+      if (std::isinf(h)) return Reject::NonFinite;  // NaN is an unknown cell, infinity nothing
+  }
+  if (!std::isfinite(m.origin_x) || !std::isfinite(m.origin_y)) return Reject::NonFinite;
+  if (!std::isfinite(m.resolution) || m.resolution <= 0.0) return Reject::BadField;
+  return m.utime >= 0 ? Reject::None : Reject::BadField;
+}
+
 bool decode(const void* buf, int size, robot_state_t& m) {
   if (m.decode(buf, 0, size) < 0) return false;
   // Shrinking, or growing within the capacity shape() reserved: no allocation.
@@ -287,6 +319,12 @@ void shape(horizon_t& m, int knots, int nq, int ncontacts) {
   m.contact_mask.assign(knots, 0);
   m.impulse.assign(knots, 0);
   m.force.assign(knots, std::vector<double>(m.nf, 0.0));
+}
+
+void shape(terrain_t& m, int rows, int cols) {
+  m.rows = rows;
+  m.cols = cols;
+  m.height.assign(rows, std::vector<float>(cols, std::numeric_limits<float>::quiet_NaN()));
 }
 
 }  // namespace stride::msg

@@ -17,6 +17,7 @@
 #include "stride/mpc_status_t.hpp"
 #include "stride/policy_t.hpp"
 #include "stride/robot_state_t.hpp"
+#include "stride/terrain_t.hpp"
 
 namespace stride::msg {
 
@@ -76,6 +77,10 @@ Reject checkCommandWire(const void* buf, int size);
 // NUL-terminated, and the exact size they imply. It has no counts: this is all that keeps lcm-gen's
 // decoder from reading past the buffer.
 Reject checkStatusWire(const void* buf, int size);
+// An elevation map: terrain_t's type fingerprint (a map is 40 kB of floats: another type's bytes
+// must not pass for one), rows and cols >= 1 with rows * cols <= max_cells (compared without
+// overflow), and the exact size they imply.
+Reject checkTerrainWire(const void* buf, int size, int max_cells);
 
 // Content checks on decoded messages. floating_base: q[3..7) is a quaternion (x y z w).
 Reject checkState(const robot_state_t& m, bool floating_base);
@@ -85,11 +90,15 @@ Reject checkPlan(const contact_plan_t& m);
 // Finite numbers, a stamp >= 0. The gait name and the limits are the receiver's (its robot's gaits,
 // its configuration's limits).
 Reject checkCommand(const command_t& m);
+// Finite origin, a finite resolution > 0, a stamp >= 0, the arrays of the counts' sizes; heights
+// NaN (unknown cells) or finite, never infinite.
+Reject checkTerrain(const terrain_t& m);
 
-// The encoded size of a state / policy with these dimensions (hash included): what a publisher
-// preallocates its buffer for.
+// The encoded size of a state / policy / map with these dimensions (hash included): what a
+// publisher preallocates its buffer for.
 int stateWireSize(int nq, int nv, int ncontacts);
 int policyWireSize(int knots, int nq, int nv, int nu);
+long terrainWireSize(int rows, int cols);
 
 // Decodes a buffer that passed checkStateWire, and trims the arrays to their counts: lcm-gen's
 // decoder skips an array whose count is 0, which would leave a reused object's old entries.
@@ -100,5 +109,6 @@ bool decode(const void* buf, int size, robot_state_t& m);
 void shape(robot_state_t& m, int nq, int nv, int ncontacts);
 void shape(policy_t& m, int knots, int nq, int nv, int nu);
 void shape(horizon_t& m, int knots, int nq, int ncontacts);
+void shape(terrain_t& m, int rows, int cols);  // every height NaN (unknown)
 
 }  // namespace stride::msg

@@ -36,6 +36,7 @@
 #include "stride/policy_t.hpp"
 #include "stride/robot_model_t.hpp"
 #include "stride/robot_state_t.hpp"
+#include "stride/terrain_t.hpp"
 
 namespace stride::fuzz {
 namespace {
@@ -230,6 +231,28 @@ class Corpus {
     add(Channel::VizStatus, "gait_length_past_end",
         poke32(trot_status, trot_status.size() - 4 * 8 - 5 - 4, 1000));
     add(Channel::VizCommand, "trot", encode(command(2000000, "trot", 0.5)));
+    // Elevation maps (stamps increasing in the files' name order: a map older than the last one
+    // accepted is refused): a box step with unknown cells, and the cases the checks exist for.
+    constexpr std::size_t rows_at = 8 + 8 + 3 * 8;
+    add(Channel::VizTerrain, "box_step", encode(terrain(1000000, 12, 16)));
+    add(Channel::VizTerrain, "box_step_older", encode(terrain(999000, 12, 16)));
+    add(Channel::VizTerrain, "cols_2e31",
+        poke32(encode(terrain(1001000, 12, 16)), rows_at + 4, kHuge));
+    add(Channel::VizTerrain, "cols_zero", poke32(encode(terrain(1001000, 12, 16)), rows_at + 4, 0));
+    terrain_t t = terrain(1001000, 12, 16);
+    t.height[5][7] = std::numeric_limits<float>::infinity();
+    add(Channel::VizTerrain, "inf_height", encode(t));
+    t = terrain(1001000, 12, 16);
+    t.resolution = 0.0;
+    add(Channel::VizTerrain, "resolution_zero", encode(t));
+    add(Channel::VizTerrain, "rows_2e31", poke32(encode(terrain(1001000, 12, 16)), rows_at, kHuge));
+    // 65536 x 65536 cells wrap to 0 in 32 bits: a size check by that product would take the
+    // header alone (a 1 x 1 map without its cell) for a map of no cells.
+    const Bytes one = encode(terrain(1001000, 1, 1));
+    add(Channel::VizTerrain, "rows_cols_wrapping",
+        poke32(poke32(Bytes(one.begin(), one.end() - 4), rows_at, 65536), rows_at + 4, 65536));
+    const Bytes map = encode(terrain(1001000, 12, 16));
+    add(Channel::VizTerrain, "truncated", Bytes(map.begin(), map.end() - 3));
     return files;
   }
 
@@ -302,6 +325,22 @@ class Corpus {
       m.impulse[k] = k == 4 ? 1 : 0;
       for (int c = 0; c < nc_; ++c) m.force[k][3 * c + 2] = 6.25;
     }
+    return m;
+  }
+
+  // 1/64 m cells around the origin (exact in binary), a 6.25 cm box where x > 0.0625 m, a row of
+  // unknown cells.
+  static terrain_t terrain(std::int64_t utime, int rows, int cols) {
+    terrain_t m;
+    msg::shape(m, rows, cols);
+    m.utime = utime;
+    m.resolution = 0.015625;
+    m.origin_x = -0.125;
+    m.origin_y = -0.09375;
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c)
+        m.height[r][c] = r == 2 ? std::numeric_limits<float>::quiet_NaN()
+                                : (m.origin_x + c * m.resolution > 0.0625 ? 0.0625f : 0.0f);
     return m;
   }
 

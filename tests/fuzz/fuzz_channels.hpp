@@ -14,20 +14,21 @@ enum class Channel : std::uint8_t {
   MpcCommand,  // MpcNode::onCommand
   MpcPolicy,   // MpcNode::onPolicy (a rival controller on the policy channel)
   SimPolicy,   // SimNode::onPolicy (stride-sim), then one physics step
-  VizModel,    // viz::Feed::take on each of stride-viz's six channels, then its frames
+  VizModel,    // viz::Feed::take on each of stride-viz's seven channels, then its frames
   VizState,
   VizPolicy,
   VizHorizon,
   VizStatus,
   VizCommand,
+  VizTerrain,  // last: the corpus's channel bytes of the others stay what they were
 };
-constexpr int kFuzzChannels = static_cast<int>(Channel::VizCommand) + 1;
+constexpr int kFuzzChannels = static_cast<int>(Channel::VizTerrain) + 1;
 
 // The corpus files' names start with it ("mpc_state-standing").
 inline const char* name(Channel c) {
   constexpr const char* kNames[kFuzzChannels] = {
-      "mpc_state", "mpc_plan",   "mpc_command", "mpc_policy", "sim_policy", "viz_model",
-      "viz_state", "viz_policy", "viz_horizon", "viz_status", "viz_command"};
+      "mpc_state", "mpc_plan",   "mpc_command", "mpc_policy", "sim_policy",  "viz_model",
+      "viz_state", "viz_policy", "viz_horizon", "viz_status", "viz_command", "viz_terrain"};
   return kNames[static_cast<int>(c)];
 }
 

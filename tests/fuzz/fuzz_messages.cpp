@@ -6,7 +6,7 @@
 //                names), onCommand, onPolicy (a rival controller on the policy channel);
 //   stride-sim   SimNode::onPolicy, then one physics step, so that a policy that got through the
 //                checks is applied to the robot;
-//   stride-viz   viz::Feed::take on its six channels, then every frame the feed has ready (the
+//   stride-viz   viz::Feed::take on its seven channels, then every frame the feed has ready (the
 //                JSON the page gets, serialized as the server does).
 // The nodes are built once (stride_quad, on an in-process memq:// LCM, nothing on a network;
 // stride-viz has heard the controller's model) and keep their state from one input to the next, as
@@ -149,6 +149,9 @@ void toViz(Harness& h, Channel channel, const void* data, int size) {
     case Channel::VizCommand:
       name = &ch.command;
       break;
+    case Channel::VizTerrain:
+      name = &ch.terrain;
+      break;
     default:
       break;
   }
@@ -162,7 +165,8 @@ void toViz(Harness& h, Channel channel, const void* data, int size) {
       (void)frame.dump(-1, ' ', false, viz::Json::error_handler_t::replace).size();
   };
   if (took == viz::Feed::Took::Model) send(feed.modelFrame());
-  for (viz::FrameKind kind : {viz::FrameKind::State, viz::FrameKind::Plan, viz::FrameKind::Status})
+  for (viz::FrameKind kind : {viz::FrameKind::State, viz::FrameKind::Plan, viz::FrameKind::Status,
+                              viz::FrameKind::Terrain})
     send(feed.frame(kind));
 }
 

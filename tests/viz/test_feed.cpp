@@ -5,7 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <map>
@@ -94,6 +97,13 @@ TEST(Feed, MalformedMessagesOnEveryChannelAreCountedAndDropped) {
   command_t cmd{};
   cmd.vx = std::numeric_limits<double>::quiet_NaN();
   take(feed, ch.command, encode(cmd));
+  // A map claiming 2^31 rows, one with an infinite height.
+  std::vector<unsigned char> map = encode(boxStepMap(1000, 20, 20));
+  poke32(map, 8 + 32, std::numeric_limits<std::int32_t>::max());
+  take(feed, ch.terrain, map);
+  terrain_t steep = boxStepMap(1000, 20, 20);
+  steep.height[0][0] = std::numeric_limits<float>::infinity();
+  take(feed, ch.terrain, encode(steep));
 
   for (const std::string& c : ch.all()) EXPECT_EQ(feed.accepted(c), 0) << c;
   EXPECT_EQ(feed.rejected(ch.state), 2 + 4);
@@ -101,6 +111,7 @@ TEST(Feed, MalformedMessagesOnEveryChannelAreCountedAndDropped) {
   EXPECT_EQ(feed.rejected(ch.horizon), 2 + 3);
   EXPECT_EQ(feed.rejected(ch.status), 2 + 2);
   EXPECT_EQ(feed.rejected(ch.command), 2 + 1);
+  EXPECT_EQ(feed.rejected(ch.terrain), 2 + 2);
   const Json counters = feed.counters()["channels"];
   EXPECT_EQ(counters[ch.state]["rejected"]["another robot's model (hash or sizes)"], 1);
   EXPECT_EQ(counters[ch.state]["rejected"]["base quaternion not unit"], 1);
@@ -108,6 +119,7 @@ TEST(Feed, MalformedMessagesOnEveryChannelAreCountedAndDropped) {
   EXPECT_TRUE(feed.frame(FrameKind::State).is_null());
   EXPECT_TRUE(feed.frame(FrameKind::Plan).is_null());
   EXPECT_TRUE(feed.frame(FrameKind::Status).is_null());
+  EXPECT_TRUE(feed.frame(FrameKind::Terrain).is_null());
 
   // Good messages still go through after all that.
   take(feed, ch.model, encode(quadModel()));
@@ -367,6 +379,135 @@ TEST(Feed, RatesOfZeroKeepEveryFrameOfTheLog) {
   EXPECT_GE(all.at("plan"), horizons);  // and the policies' plans between horizons
   const auto decimated = count({}, counters);
   EXPECT_LT(decimated.at("state"), states);
+}
+
+// An elevation map (terrain_t) becomes one terrain frame: its numbers as the page draws them,
+// heights row-major, null for unknown cells; it needs no robot.
+TEST(Feed, ATerrainMapBecomesATerrainFrame) {
+  RobotSource none;
+  none.config_dirs = {"/nonexistent"};
+  Feed feed(Channels{}, none);
+  const std::string& ch = Channels{}.terrain;
+  const terrain_t map = boxStepMap(2500000, 100, 100, 1.0, -0.5);
+  EXPECT_EQ(feed.take(ch, encode(map).data(), static_cast<int>(encode(map).size())),
+            Feed::Took::Terrain);
+  EXPECT_EQ(feed.pendingUtime(FrameKind::Terrain), 2500000);
+  const Json f = feed.frame(FrameKind::Terrain);
+  ASSERT_FALSE(f.is_null());
+  EXPECT_EQ(f["type"], "terrain");
+  EXPECT_DOUBLE_EQ(f["t"].get<double>(), 2.5);
+  EXPECT_DOUBLE_EQ(f["origin_x"].get<double>(), 0.01);
+  EXPECT_DOUBLE_EQ(f["origin_y"].get<double>(), -1.49);
+  EXPECT_DOUBLE_EQ(f["resolution"].get<double>(), 0.02);
+  EXPECT_EQ(f["rows"], 100);
+  EXPECT_EQ(f["cols"], 100);
+  const Json& h = f["heights"];
+  ASSERT_EQ(h.size(), 100u * 100u);
+  int unknown = 0, step = 0;
+  for (int r = 0; r < 100; ++r)
+    for (int c = 0; c < 100; ++c) {
+      const Json& cell = h[static_cast<std::size_t>(r) * 100 + c];
+      if (std::isnan(map.height[r][c])) {
+        EXPECT_TRUE(cell.is_null()) << r << " " << c;
+        ++unknown;
+        continue;
+      }
+      ASSERT_TRUE(cell.is_number()) << r << " " << c;
+      EXPECT_EQ(cell.get<double>(), map.height[r][c] != 0.0f ? 0.05 : 0.0) << r << " " << c;
+      step += map.height[r][c] != 0.0f;
+    }
+  EXPECT_EQ(unknown, 25);
+  // x > 0.3 m: columns 15..99 (x from 0.01 m).
+  EXPECT_EQ(step, 100 * 85);
+  EXPECT_TRUE(feed.frame(FrameKind::Terrain).is_null());  // framed once
+  EXPECT_EQ(feed.pendingUtime(FrameKind::Terrain), -1);
+  EXPECT_EQ(feed.accepted(ch), 1);
+  EXPECT_EQ(feed.counters()["channels"][ch]["accepted"], 1);
+}
+
+// Malformed maps are refused, counted by reason, and change nothing: the next frame is of the last
+// good map.
+TEST(Feed, MalformedMapsAreRefusedAndCounted) {
+  Feed feed(Channels{}, quadSource());
+  const std::string& ch = Channels{}.terrain;
+  const auto takeMap = [&](const std::vector<unsigned char>& b) {
+    return feed.take(ch, b.data(), static_cast<int>(b.size()));
+  };
+  ASSERT_EQ(takeMap(encode(boxStepMap(2000000, 30, 40))), Feed::Took::Terrain);
+  std::vector<unsigned char> b = encode(boxStepMap(2100000, 30, 40));
+  b.resize(b.size() - 4);  // a cell short
+  EXPECT_EQ(takeMap(b), Feed::Took::None);
+  b = encode(boxStepMap(2100000, 30, 40));
+  poke32(b, 8 + 32, 600);  // 600 x 40 cells claimed, 30 x 40 sent
+  EXPECT_EQ(takeMap(b), Feed::Took::None);
+  EXPECT_EQ(takeMap(encode(boxStepMap(2100000, 513, 512))), Feed::Took::None);  // over 512 x 512
+  terrain_t bad = boxStepMap(2100000, 30, 40);
+  bad.resolution = 0.0;
+  EXPECT_EQ(takeMap(encode(bad)), Feed::Took::None);
+  bad.resolution = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(takeMap(encode(bad)), Feed::Took::None);
+  bad = boxStepMap(2100000, 30, 40);
+  bad.height[3][4] = -std::numeric_limits<float>::infinity();
+  EXPECT_EQ(takeMap(encode(bad)), Feed::Took::None);
+  bad = boxStepMap(-1, 30, 40);
+  EXPECT_EQ(takeMap(encode(bad)), Feed::Took::None);
+  EXPECT_EQ(takeMap(encode(boxStepMap(1900000, 30, 40))), Feed::Took::None);  // older
+  // Another type on the channel.
+  std::vector<unsigned char> state = encode(standingState(2100000));
+  EXPECT_EQ(takeMap(state), Feed::Took::None);
+
+  EXPECT_EQ(feed.accepted(ch), 1);
+  EXPECT_EQ(feed.rejected(ch), 9);
+  const Json r = feed.counters()["channels"][ch]["rejected"];
+  EXPECT_EQ(r[msg::describe(msg::Reject::WrongSize)], 3) << r;
+  EXPECT_EQ(r[msg::describe(msg::Reject::BadField)], 3) << r;
+  EXPECT_EQ(r[msg::describe(msg::Reject::NonFinite)], 1) << r;
+  EXPECT_EQ(r[msg::describe(msg::Reject::OutOfOrder)], 1) << r;
+  EXPECT_EQ(r[msg::describe(msg::Reject::Undecodable)], 1) << r;
+  const Json f = feed.frame(FrameKind::Terrain);
+  ASSERT_FALSE(f.is_null());
+  EXPECT_DOUBLE_EQ(f["t"].get<double>(), 2.0);
+  EXPECT_EQ(f["rows"], 30);
+  // A map stamped more than a second before the last is a restarted robot's: followed.
+  EXPECT_EQ(takeMap(encode(boxStepMap(500000, 30, 40))), Feed::Took::Terrain);
+}
+
+// From a log, maps are framed at most kTerrainFrameRate a second of log time (10 Hz maps for 3 s:
+// the ones at 0, 0.5, ..., 2.5 s), whatever --all-frames does to the other kinds.
+TEST(Feed, LogMapsAreFramedTwiceASecond) {
+  char dir[] = "/tmp/stride-viz-terrain-XXXXXX";
+  ASSERT_NE(::mkdtemp(dir), nullptr);
+  const std::string path = std::string(dir) + "/maps.lcmlog";
+  {
+    lcm::LogFile log(path, "w");
+    ASSERT_TRUE(log.good());
+    for (int i = 0; i < 30; ++i) {
+      const std::vector<unsigned char> bytes =
+          encode(boxStepMap(100000 * i, 20, 25, 0.01 * i, 0.0));
+      lcm::LogEvent e{};
+      e.eventnum = i;
+      e.timestamp = 100000 * i;
+      e.channel = Channels{}.terrain;
+      e.datalen = static_cast<std::int32_t>(bytes.size());
+      e.data = const_cast<unsigned char*>(bytes.data());
+      ASSERT_EQ(log.writeEvent(&e), 0);
+    }
+  }
+  for (const LogOptions& options : {LogOptions{}, LogOptions{0.0, 0.0, 0.0}}) {
+    Feed feed(Channels{}, quadSource());
+    const LogDocument doc = readLog(path, feed, options, Json::object());
+    std::vector<double> times;
+    for (const Json& f : doc.document["frames"]) {
+      ASSERT_EQ(f["type"], "terrain");
+      times.push_back(f["t"].get<double>());
+      const int i = static_cast<int>(std::lround(f["t"].get<double>() * 10));
+      EXPECT_NEAR(f["origin_x"].get<double>(), 0.01 * i - 0.24, 1e-9);
+      EXPECT_EQ(f["heights"].size(), 20u * 25u);
+    }
+    EXPECT_EQ(times, (std::vector<double>{0.0, 0.5, 1.0, 1.5, 2.0, 2.5}));
+    EXPECT_EQ(feed.accepted(Channels{}.terrain), 30);
+  }
+  std::filesystem::remove_all(dir);
 }
 
 TEST(RobotFiles, TheUrdfNamesOnlyTheServersUrls) {

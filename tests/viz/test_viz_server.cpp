@@ -335,5 +335,69 @@ TEST_F(Live, FramesFlowToAReadingBrowserAndBadMessagesAreCounted) {
   ::close(ws);
 }
 
+// Maps published at 100 Hz reach a browser at most kTerrainFrameRate a second, each the newest
+// one with its numbers; a malformed one is counted; a browser that comes later gets the newest
+// map right after the model, without waiting for the next one (a map may come rarely).
+TEST_F(Live, MapsReachTheBrowserTwiceASecondAndLaterBrowsersGetTheNewest) {
+  const robot_model_t model = quadModel();
+  lcm.publish("STRIDE_MODEL", &model);
+  const int ws = openWebSocket(server->port());
+  ASSERT_GE(ws, 0);
+  const std::vector<unsigned char> garbage(100, 0xab);
+  lcm.publish("STRIDE_TERRAIN", garbage.data(), static_cast<unsigned>(garbage.size()));
+  std::vector<Json> maps;
+  std::int64_t utime = 1000000;
+  const auto start = Clock::now();
+  const auto end = start + std::chrono::milliseconds(2200);
+  while (Clock::now() < end) {
+    utime += 10000;
+    const terrain_t map = boxStepMap(utime, 100, 100, 1e-6 * utime, 0.0);
+    lcm.publish("STRIDE_TERRAIN", &map);
+    // A frame once one begins to come (read whole: a timeout inside a 50 kB frame would lose the
+    // stream's framing), else the next map.
+    pollfd readable{ws, POLLIN, 0};
+    if (::poll(&readable, 1, 10) <= 0) continue;
+    const std::string text = readWebSocketText(ws, 10.0);
+    ASSERT_FALSE(text.empty());
+    if (Json::parse(text)["type"] == "terrain") maps.push_back(Json::parse(text));
+  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  std::printf("%zu terrain frames in %.2f s of maps at 100 Hz\n", maps.size(), seconds);
+  // One at once, then one every 0.5 s; the last may still be on its way.
+  EXPECT_GE(maps.size(), 2u);
+  EXPECT_LE(maps.size(), static_cast<std::size_t>(seconds * kTerrainFrameRate) + 1);
+  for (std::size_t i = 0; i < maps.size(); ++i) {
+    const Json& m = maps[i];
+    EXPECT_EQ(m["rows"], 100);
+    EXPECT_EQ(m["cols"], 100);
+    ASSERT_EQ(m["heights"].size(), 10000u);
+    EXPECT_TRUE(m["heights"][10 * 100 + 10].is_null());
+    // Centred on x = t: the origin 0.99 m behind.
+    EXPECT_NEAR(m["origin_x"].get<double>(), m["t"].get<double>() - 0.99, 1e-6);
+    if (i > 0) {
+      EXPECT_GE(m["t"].get<double>() - maps[i - 1]["t"].get<double>(), 0.3);
+    }
+  }
+  ASSERT_FALSE(maps.empty());
+  // A browser that comes after the last map: info, model, then that map.
+  std::this_thread::sleep_for(std::chrono::milliseconds(600));
+  const int late = openWebSocket(server->port());
+  ASSERT_GE(late, 0);
+  Json map;
+  for (int i = 0; i < 3 && map.is_null(); ++i) {
+    const std::string text = readWebSocketText(late, 2.0);
+    ASSERT_FALSE(text.empty());
+    const Json frame = Json::parse(text);
+    if (frame["type"] == "terrain") map = frame;
+  }
+  ASSERT_FALSE(map.is_null());
+  EXPECT_NEAR(map["t"].get<double>(), 1e-6 * utime, 1e-9) << "the newest map";
+  const Json messages = info()["messages"]["channels"]["STRIDE_TERRAIN"];
+  EXPECT_EQ(messages["rejected"][msg::describe(msg::Reject::Undecodable)], 1) << messages;
+  EXPECT_GT(messages["accepted"].get<long>(), 100);
+  ::close(ws);
+  ::close(late);
+}
+
 }  // namespace
 }  // namespace stride::viz

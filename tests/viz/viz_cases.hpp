@@ -16,6 +16,7 @@
 #include "stride/horizon_t.hpp"
 #include "stride/mpc_status_t.hpp"
 #include "stride/robot_model_t.hpp"
+#include "stride/terrain_t.hpp"
 
 namespace stride::viz::test {
 
@@ -66,6 +67,24 @@ inline horizon_t standingHorizon(std::int64_t utime, int knots) {
     for (int c = 0; c < nc; ++c) h.force[k][3 * c + 2] = 6.0 + k;
   }
   return h;
+}
+
+// An elevation map as the mock robot publishes one: rows x cols cells of 2 cm centred on (cx, cy),
+// a 5 cm box step where x > 0.3 m (world), unknown cells in a 5 x 5 square at rows and cols 10-14.
+inline terrain_t boxStepMap(std::int64_t utime, int rows, int cols, double cx = 0.0,
+                            double cy = 0.0) {
+  terrain_t m;
+  msg::shape(m, rows, cols);
+  m.utime = utime;
+  m.resolution = 0.02;
+  m.origin_x = cx - 0.5 * m.resolution * (cols - 1);
+  m.origin_y = cy - 0.5 * m.resolution * (rows - 1);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      const bool hole = r >= 10 && r < 15 && c >= 10 && c < 15;
+      m.height[r][c] = hole ? std::nanf("") : m.origin_x + c * m.resolution > 0.3 ? 0.05f : 0.0f;
+    }
+  return m;
 }
 
 inline std::string sessionLog() {

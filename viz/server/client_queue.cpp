@@ -6,7 +6,8 @@ namespace stride::viz {
 
 namespace {
 bool isStreamed(FrameKind kind) {
-  return kind == FrameKind::State || kind == FrameKind::Plan || kind == FrameKind::Status;
+  return kind == FrameKind::State || kind == FrameKind::Plan || kind == FrameKind::Status ||
+         kind == FrameKind::Terrain;
 }
 }  // namespace
 
@@ -22,6 +23,8 @@ const char* toString(FrameKind kind) {
       return "plan";
     case FrameKind::Status:
       return "status";
+    case FrameKind::Terrain:
+      return "terrain";
   }
   return "?";
 }

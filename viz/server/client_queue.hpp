@@ -3,9 +3,9 @@
 // (a background tab, a slow link, a client that never reads) must cost the server a bounded amount
 // of memory and nothing else: the queue holds at most `max_frames` frames and `max_bytes` bytes,
 // and an offer beyond either limit drops the oldest queued frame of the same kind (a newer state
-// supersedes an older one), else the oldest state, plan or status of the kind most queued, else the
-// oldest frame. Dropped frames are counted: the server reports them to the browser (info frames)
-// and at exit.
+// supersedes an older one), else the oldest state, plan, status or terrain of the kind most queued,
+// else the oldest frame. Dropped frames are counted: the server reports them to the browser (info
+// frames) and at exit.
 //
 // Not thread-safe: the server guards each client's queue with that client's mutex.
 
@@ -18,8 +18,8 @@
 namespace stride::viz {
 
 // What a frame is (viz/README.md, "Frames"): the queue drops by kind.
-enum class FrameKind : std::uint8_t { Info, Model, State, Plan, Status };
-constexpr int kFrameKinds = 5;
+enum class FrameKind : std::uint8_t { Info, Model, State, Plan, Status, Terrain };
+constexpr int kFrameKinds = 6;
 const char* toString(FrameKind kind);
 
 // A frame's text is shared by every client it goes to.

@@ -54,6 +54,9 @@ struct Feed::Messages {
   bool status_pending = false;
   command_t command, command_in;
   bool have_command = false;
+  terrain_t terrain, terrain_in;
+  bool terrain_pending = false;
+  std::int64_t last_terrain_utime = -1;
   std::set<std::string> refused_claims;  // each wrong-model cause is said once
   std::string model_warning;
 };
@@ -127,6 +130,8 @@ Feed::Took Feed::take(const std::string& channel, const void* data, int size) {
     took = takeStatus(data, size);
   else if (channel == channels_.command)
     took = takeCommand(data, size);
+  else if (channel == channels_.terrain)
+    took = takeTerrain(data, size);
   else
     return Took::None;
   if (took != Took::None) ++counts_[channel].accepted;
@@ -310,6 +315,25 @@ Feed::Took Feed::takeCommand(const void* data, int size) {
   return Took::Command;
 }
 
+Feed::Took Feed::takeTerrain(const void* data, int size) {
+  terrain_t& in = m_->terrain_in;
+  msg::Reject r = msg::checkTerrainWire(data, size, kMaxTerrainCells);
+  if (r == msg::Reject::None && in.decode(data, 0, size) != size) r = msg::Reject::Undecodable;
+  if (r == msg::Reject::None) r = msg::checkTerrain(in);
+  // Maps come in stamp order (terrain_t.lcm: non-decreasing); one far behind is a restarted robot.
+  if (r == msg::Reject::None && in.utime < m_->last_terrain_utime &&
+      in.utime > m_->last_terrain_utime - kRestartUtime)
+    r = msg::Reject::OutOfOrder;
+  if (r != msg::Reject::None) {
+    reject(channels_.terrain, msg::describe(r));
+    return Took::None;
+  }
+  m_->last_terrain_utime = in.utime;
+  std::swap(m_->terrain, in);
+  m_->terrain_pending = true;
+  return Took::Terrain;
+}
+
 void Feed::readyWaitingState(std::uint64_t policy) {
   std::swap(m_->state, m_->waiting);
   m_->state_policy = policy;
@@ -327,6 +351,8 @@ std::int64_t Feed::pendingUtime(FrameKind kind) const {
       return -1;
     case FrameKind::Status:
       return m_->status_pending ? m_->status.utime : -1;
+    case FrameKind::Terrain:
+      return m_->terrain_pending ? m_->terrain.utime : -1;
     default:
       return -1;
   }
@@ -349,6 +375,10 @@ Json Feed::frame(FrameKind kind) {
       if (!m_->status_pending) return nullptr;
       m_->status_pending = false;
       return FrameBuilder::status(m_->status, m_->have_command ? &m_->command : nullptr);
+    case FrameKind::Terrain:
+      if (!m_->terrain_pending) return nullptr;
+      m_->terrain_pending = false;
+      return FrameBuilder::terrain(m_->terrain);
     default:
       return nullptr;
   }

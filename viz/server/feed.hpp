@@ -6,7 +6,8 @@
 //
 // The robot is the one given (--robot), or the one the first robot_model_t names, found as
 // <config dir>/robots/<name>/<name>.yaml. Until a robot is known, states, policies and horizons
-// cannot be checked or drawn: they are counted as "before the robot" and dropped.
+// cannot be checked or drawn: they are counted as "before the robot" and dropped. Terrain maps
+// (terrain_t) need no robot: they are taken from the first.
 //
 // Not thread-safe: one thread feeds it and asks for frames (the LCM thread, or the log reader).
 
@@ -29,8 +30,11 @@ class FrameBuilder;
 
 struct Channels {
   std::string state = "STRIDE_STATE", policy = "STRIDE_POLICY", status = "STRIDE_STATUS",
-              model = "STRIDE_MODEL", command = "STRIDE_COMMAND", horizon = "STRIDE_HORIZON";
-  std::vector<std::string> all() const { return {state, policy, status, model, command, horizon}; }
+              model = "STRIDE_MODEL", command = "STRIDE_COMMAND", horizon = "STRIDE_HORIZON",
+              terrain = "STRIDE_TERRAIN";
+  std::vector<std::string> all() const {
+    return {state, policy, status, model, command, horizon, terrain};
+  }
 };
 
 struct RobotSource {
@@ -41,6 +45,10 @@ struct RobotSource {
 
 // Limits on what a message may claim (beyond them it is refused as WrongSize).
 constexpr int kMaxKnots = 10000;
+constexpr int kMaxTerrainCells = 512 * 512;  // messages/terrain_t.lcm: 1 MB of floats
+// Terrain frames per second, at most, live (wall clock) and from a log (log time): a 100 x 100
+// map is ~50 kB of JSON, and it changes slowly under a walking robot.
+constexpr double kTerrainFrameRate = 2.0;
 
 class Feed {
  public:
@@ -54,7 +62,7 @@ class Feed {
 
   // One message from the bus or a log, by channel; returns what it was taken as (None: refused,
   // unknown channel, or before the robot).
-  enum class Took : std::uint8_t { None, Model, State, Policy, Horizon, Status, Command };
+  enum class Took : std::uint8_t { None, Model, State, Policy, Horizon, Status, Command, Terrain };
   Took take(const std::string& channel, const void* data, int size);
 
   // The stamp [us] of the newest message not yet framed of that kind, -1 when there is none: the
@@ -63,8 +71,8 @@ class Feed {
   // that its forces use the torque the robot applied there: viz/README.md, "How forces are
   // estimated").
   std::int64_t pendingUtime(FrameKind kind) const;
-  // The frame of the newest message of that kind not yet framed (State, Plan, Status), then that
-  // message counts as framed; a null Json when there is none.
+  // The frame of the newest message of that kind not yet framed (State, Plan, Status, Terrain),
+  // then that message counts as framed; a null Json when there is none.
   Json frame(FrameKind kind);
 
   // The model frame (with a "warning" when the bus's model is not the loaded robot's); null until
@@ -95,6 +103,7 @@ class Feed {
   Took takeHorizon(const void* data, int size);
   Took takeStatus(const void* data, int size);
   Took takeCommand(const void* data, int size);
+  Took takeTerrain(const void* data, int size);
   // The waiting state becomes the one to frame, estimated with the policy of that serial.
   void readyWaitingState(std::uint64_t policy);
 

@@ -300,4 +300,28 @@ Json FrameBuilder::status(const mpc_status_t& s, const command_t* requested) {
   return frame;
 }
 
+Json FrameBuilder::terrain(const terrain_t& map) {
+  // Millimetres: a map's cells are centimetres wide and its heights no finer than its sensor, and
+  // short numbers keep a 100 x 100 map's frame near 50 kB (it goes to every browser twice a
+  // second). n / 1000, not n * 0.001: the double nearest n / 1000 prints as the short decimal.
+  const double per_metre = std::round(1.0 / kTerrainHeightStep);
+  Json heights = Json::array();
+  heights.get_ref<Json::array_t&>().reserve(static_cast<std::size_t>(map.rows) * map.cols);
+  for (const std::vector<float>& row : map.height)
+    for (const float h : row) {
+      if (std::isnan(h))
+        heights.push_back(nullptr);
+      else
+        heights.push_back(std::round(static_cast<double>(h) * per_metre) / per_metre);
+    }
+  return {{"type", "terrain"},
+          {"t", r6(static_cast<double>(map.utime) * 1e-6)},
+          {"origin_x", r6(map.origin_x)},
+          {"origin_y", r6(map.origin_y)},
+          {"resolution", r6(map.resolution)},
+          {"rows", map.rows},
+          {"cols", map.cols},
+          {"heights", std::move(heights)}};
+}
+
 }  // namespace stride::viz

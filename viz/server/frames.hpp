@@ -19,6 +19,7 @@
 #include "stride/policy_t.hpp"
 #include "stride/robot_model_t.hpp"
 #include "stride/robot_state_t.hpp"
+#include "stride/terrain_t.hpp"
 
 namespace stride::viz {
 
@@ -63,6 +64,10 @@ class FrameBuilder {
   Json plan(const policy_t& policy);
   // {"type":"status",...}; `requested`: the newest command_t seen, if any.
   static Json status(const mpc_status_t& status, const command_t* requested);
+  // {"type":"terrain","t","origin_x","origin_y","resolution","rows","cols","heights"}: heights
+  // row-major (rows along world y), rounded to kTerrainHeightStep, null where unknown (NaN).
+  static constexpr double kTerrainHeightStep = 1e-3;
+  static Json terrain(const terrain_t& map);
 
   const ForceCounts& forceCounts() const { return force_counts_; }
 

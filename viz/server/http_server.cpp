@@ -131,7 +131,7 @@ class HttpServer::Impl {
 
   mutable std::mutex mutex;  // guards what follows, shared with the source's thread
   std::shared_ptr<const RobotFiles> files;
-  FrameText model;
+  FrameText model, terrain;
   std::shared_ptr<const std::string> log_document;
   Json source = Json::object();
   std::vector<std::shared_ptr<WsSession>> clients;
@@ -498,15 +498,17 @@ void HttpServer::Impl::armInfoTimer() {
 }
 
 void HttpServer::Impl::addClient(const std::shared_ptr<WsSession>& session) {
-  FrameText model_text;
+  FrameText model_text, terrain_text;
   {
     std::lock_guard<std::mutex> lock(mutex);
     clients.push_back(session);
     model_text = model;
+    terrain_text = terrain;
   }
   ++clients_served;
   session->offer(FrameKind::Info, infoFrame(*session));
   if (model_text) session->offer(FrameKind::Model, model_text);
+  if (terrain_text) session->offer(FrameKind::Terrain, terrain_text);
 }
 
 void HttpServer::Impl::removeClient(const WsSession* session) {
@@ -630,6 +632,15 @@ void HttpServer::setModel(const Json& model) {
     impl_->model = text;
   }
   broadcast(FrameKind::Model, text);
+}
+
+void HttpServer::setTerrain(const Json& terrain) {
+  const FrameText text = frameText(terrain);
+  {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    impl_->terrain = text;
+  }
+  broadcast(FrameKind::Terrain, text);
 }
 
 void HttpServer::setLogDocument(std::shared_ptr<const std::string> document) {

@@ -67,6 +67,9 @@ class HttpServer {
   void setRobotFiles(std::shared_ptr<const RobotFiles> files);
   // The model frame: sent to every client now and to each new one first.
   void setModel(const Json& model);
+  // The newest terrain frame: sent to every client now and to each new one after the model (a map
+  // may come rarely, or no more).
+  void setTerrain(const Json& terrain);
   void setLogDocument(std::shared_ptr<const std::string> document);
   // The source's counters and warnings, shown in /api/info ({"messages": ..., "warnings": [...]});
   // the warnings also go into the info frames.

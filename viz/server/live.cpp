@@ -37,7 +37,7 @@ void LiveSource::onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& ch
   feed_.take(channel, rbuf->data, static_cast<int>(rbuf->data_size));
 }
 
-void LiveSource::emit() {
+void LiveSource::emit(std::chrono::steady_clock::time_point now) {
   if (feed_.modelVersion() != model_version_) {
     model_version_ = feed_.modelVersion();
     server_.setRobotFiles(feed_.robotFiles());
@@ -47,6 +47,14 @@ void LiveSource::emit() {
   for (const FrameKind kind : {FrameKind::State, FrameKind::Plan, FrameKind::Status}) {
     const Json frame = feed_.frame(kind);
     if (!frame.is_null()) server_.broadcast(kind, frameText(frame));
+  }
+  // The newest map, when the last one went out long enough ago (the maps in between are not
+  // framed: the newest supersedes them). Kept by the server for the browsers that come later.
+  if (now >= next_terrain_ && feed_.pendingUtime(FrameKind::Terrain) >= 0) {
+    const Json terrain = feed_.frame(FrameKind::Terrain);
+    if (!terrain.is_null()) server_.setTerrain(terrain);
+    next_terrain_ = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                              std::chrono::duration<double>(1.0 / kTerrainFrameRate));
   }
 }
 
@@ -60,7 +68,7 @@ bool LiveSource::run(const std::atomic<bool>& stop) {
   while (!stop) {
     const auto now = Clock::now();
     if (now >= next_emit) {
-      emit();
+      emit(now);
       next_emit += period;
       if (next_emit < now) next_emit = now + period;  // behind: skip, never catch up in a burst
     }

@@ -2,9 +2,11 @@
 // Live mode: the Stride channels of an LCM bus, through a Feed, to the server's clients. Runs on a
 // thread of its own: it is one more subscriber on the bus, never waits for a browser (the server's
 // queues do the dropping), and builds frames at most `rate` times a second from the newest
-// messages (newest wins: a frame is never made of a message a newer one superseded).
+// messages (newest wins: a frame is never made of a message a newer one superseded); terrain maps
+// at most kTerrainFrameRate a second.
 
 #include <atomic>
+#include <chrono>
 #include <lcm/lcm-cpp.hpp>
 
 #include "viz/server/feed.hpp"
@@ -26,13 +28,14 @@ class LiveSource {
 
  private:
   void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
-  void emit();
+  void emit(std::chrono::steady_clock::time_point now);
 
   lcm::LCM& lcm_;
   Feed& feed_;
   HttpServer& server_;
   double period_;
   int model_version_ = 0;
+  std::chrono::steady_clock::time_point next_terrain_{};
   std::vector<lcm::Subscription*> subscriptions_;
 };
 

@@ -55,15 +55,18 @@ LogDocument readLog(const std::string& path, Feed& feed, const LogOptions& optio
     Decimator decimator;
   } streams[] = {{FrameKind::State, Decimator(options.state_rate)},
                  {FrameKind::Plan, Decimator(options.plan_rate)},
-                 {FrameKind::Status, Decimator(options.status_rate)}};
+                 {FrameKind::Status, Decimator(options.status_rate)},
+                 {FrameKind::Terrain, Decimator(options.terrain_rate)}};
   openLog(path, log);
   for (const lcm::LogEvent* e = log->readNextEvent(); e != nullptr; e = log->readNextEvent()) {
     ++out.events;
     if (feed.take(e->channel, e->data, e->datalen) == Feed::Took::None) continue;
     for (Stream& s : streams) {
       const std::int64_t utime = feed.pendingUtime(s.kind);
-      // A status stamped 0 answered no state yet: it has no place on the robot's timeline.
-      if (utime <= 0 || !s.decimator.due(utime)) continue;
+      // A status stamped 0 answered no state yet: it has no place on the robot's timeline. A map
+      // stamped 0 is one measured at the start of a clock that starts at 0.
+      const std::int64_t first = s.kind == FrameKind::Terrain ? 0 : 1;
+      if (utime < first || !s.decimator.due(utime)) continue;
       Json frame = feed.frame(s.kind);
       if (frame.is_null()) continue;
       s.decimator.kept(utime);

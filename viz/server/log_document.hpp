@@ -2,8 +2,8 @@
 // Log mode: an lcm-logger log read whole at start into the one JSON document the page plays
 // client-side (GET /api/log): {"info": {...}, "model": {...}, "frames": [...sorted by t...]}.
 // States are decimated to at most `state_rate` per second of log time, plans and statuses to
-// `plan_rate` and `status_rate`: the page interpolates nothing, and 100 states a second are
-// smoother than a browser draws.
+// `plan_rate` and `status_rate`, terrain maps to `terrain_rate`: the page interpolates nothing,
+// and 100 states a second are smoother than a browser draws.
 
 #include <nlohmann/json.hpp>
 #include <string>
@@ -17,6 +17,7 @@ struct LogOptions {
   double state_rate = 100.0;  // per second of log time
   double plan_rate = 20.0;
   double status_rate = 20.0;
+  double terrain_rate = kTerrainFrameRate;  // ~50 kB each: a minute of 10 Hz maps would be 30 MB
 };
 
 struct LogDocument {

@@ -106,7 +106,8 @@ int main(int argc, char** argv) {
   bool all_frames = false;
   app.add_flag("--all-frames", all_frames,
                "log: every state, plan and status of the log becomes a frame (default: at most "
-               "100 states, 20 plans and 20 statuses per second of log time)")
+               "100 states, 20 plans and 20 statuses per second of log time; terrain maps stay "
+               "at 2 per second)")
       ->needs("--log");
   app.add_option("--queue-frames", server_options.queue.max_frames,
                  "frames queued for one browser, at most (then the oldest are dropped)")
@@ -125,6 +126,8 @@ int main(int argc, char** argv) {
   app.add_option("--model-channel", channels.model);
   app.add_option("--command-channel", channels.command);
   app.add_option("--horizon-channel", channels.horizon);
+  app.add_option("--terrain-channel", channels.terrain,
+                 "the elevation maps (terrain_t) drawn under the robot");
   app.footer(
       "Prints 'stride-viz: http://ADDR:PORT/ (live URL | log FILE)' once it serves. Exit status: 0 "
       "stopped (SIGINT, SIGTERM, --duration); 1 an error: the robot, the log, the address, LCM "
@@ -160,7 +163,9 @@ int main(int argc, char** argv) {
       // Decimation keeps a long session's document small; a short log whose every knot matters
       // (the paper's snapshots: a plan per state) asks for all of them.
       stride::viz::LogOptions log_options;
-      if (all_frames) log_options = {0.0, 0.0, 0.0};
+      // Maps stay at kTerrainFrameRate: each is ~50 kB, and a snapshot needs the one under the
+      // robot, not every one.
+      if (all_frames) log_options = {0.0, 0.0, 0.0, stride::viz::kTerrainFrameRate};
       stride::viz::LogDocument log = stride::viz::readLog(log_path, feed, log_options, info);
       server.setLogDocument(std::make_shared<const std::string>(
           log.document.dump(-1, ' ', false, Json::error_handler_t::replace)));

@@ -6,6 +6,7 @@ import * as THREE from 'three';
 import { SceneView } from './scene.js';
 import { loadRobot } from './robot.js';
 import { Overlays, COLORS, contactColor, cssColor } from './overlays.js';
+import { TerrainView } from './terrain.js';
 import { Charts, WINDOW } from './charts.js';
 import { Track } from './track.js';
 import { connect, wsUrl } from './live.js';
@@ -16,11 +17,13 @@ import { installHook } from './hook.js';
 const LIVE_SECONDS = WINDOW; // live mode keeps the last 30 s of frames
 const LIVE_MAX_FRAMES = 20000; // and never more than this many of one type
 const CHART_PERIOD_MS = 250; // charts redrawn at most 4 times a second while time runs
+const LIVE_MAX_MAPS = 4; // live mode draws the newest map: a few kept (each ~50 kB of numbers)
 
 class Viewer {
   constructor() {
     this.view = new SceneView(document.getElementById('view'));
     this.overlays = new Overlays(this.view.scene);
+    this.terrain = new TerrainView(this.view.scene);
     this.charts = new Charts(document.getElementById('charts'));
     this.status = new StatusLine();
     this.mode = null;
@@ -40,6 +43,7 @@ class Viewer {
     this.states = new Track(bounds);
     this.plans = new Track(bounds);
     this.statuses = new Track(bounds);
+    this.terrains = new Track(bounds);
     this.player = null;
     this.bindOptions();
     paintLegend();
@@ -56,6 +60,7 @@ class Viewer {
     check('opt-follow', (on) => { this.view.follow = on; });
     check('opt-plan', (on) => { this.overlays.showPlan = on; });
     check('opt-forces', (on) => { this.overlays.showForces = on; });
+    check('opt-terrain', (on) => { this.terrain.show = on; });
   }
 
   async start() {
@@ -85,6 +90,7 @@ class Viewer {
     this.states.setAll(frames.filter((f) => f.type === 'state'));
     this.plans.setAll(frames.filter((f) => f.type === 'plan'));
     this.statuses.setAll(frames.filter((f) => f.type === 'status'));
+    this.terrains.setAll(frames.filter((f) => f.type === 'terrain'));
     const model = doc.model ?? frames.find((f) => f.type === 'model');
     if (!model) throw new Error('the log has no robot model');
     await this.setModel(model);
@@ -119,6 +125,7 @@ class Viewer {
     this.states = new Track(bounds);
     this.plans = new Track(bounds);
     this.statuses = new Track(bounds);
+    this.terrains = new Track({ maxAge: LIVE_SECONDS, maxCount: LIVE_MAX_MAPS });
     this.status.message('connecting…');
     connect(wsUrl('ws'), {
       onFrame: (f) => this.onLiveFrame(f),
@@ -152,6 +159,13 @@ class Viewer {
         this.statuses.push(f);
         this.chartsDirty = true;
         break;
+      case 'terrain':
+        // Drawn at the view's time like the rest; not a reason to move that time (a map may come
+        // before any state, or after the robot stopped).
+        this.terrains.push(f);
+        if (this.time === null) this.time = f.t;
+        this.dirty = true;
+        return;
       default:
         return; // a frame type this page does not know: ignored
     }
@@ -216,6 +230,13 @@ class Viewer {
     const state = this.states.shownAt(t);
     const plan = this.plans.at(t);
     const status = this.statuses.at(t);
+    // The map at t: the newest at or before t, else the first (the ground was there before it was
+    // measured).
+    this.terrain.set(this.terrains.shownAt(t));
+    this.view.setGroundHole(this.terrain.footprint());
+    const legend = document.getElementById('legend-terrain');
+    legend.textContent = this.terrain.legendText() ?? '';
+    legend.hidden = legend.textContent === '';
     this.shown = state;
     if (this.robot && state) {
       this.robot.apply(state.q);
@@ -270,6 +291,7 @@ class Viewer {
       plan_t: plan ? plan.t : null,
       planned_forces: plan?.forces ?? [],
       force_scale: this.overlays.scaleText(),
+      terrain: this.terrain.describe(),
     };
   }
 

@@ -1,5 +1,6 @@
-// The 3D view: renderer, a z-up world (the robot's: x forward, z up), lights, the ground grid,
-// the camera with OrbitControls, framing the robot and following it.
+// The 3D view: renderer, a z-up world (the robot's: x forward, z up), lights, the ground grid
+// (cut out where an elevation map is drawn), the camera with OrbitControls, framing the robot and
+// following it.
 
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -40,8 +41,13 @@ export class SceneView {
     this.ground = new THREE.Group();
     const fine = makeGrid(10, 100, 0xc3c9cf, 0xd3d8dd);
     const coarse = makeGrid(40, 40, 0x8f99a3, 0xa7b0b8);
+    // Where an elevation map is drawn (terrain.js), the flat grid is not the ground: its
+    // fragments inside the map's footprint (world x0, y0, x1, y1; empty when x0 > x1) are
+    // discarded, so the map's holes show nothing rather than a floor that may not be there.
+    this.groundHole = { value: new THREE.Vector4(1, 1, -1, -1) };
     for (const g of [fine, coarse]) {
       g.material.depthWrite = false;
+      cutOut(g.material, this.groundHole);
       this.ground.add(g);
     }
     fine.position.z = -0.0005;
@@ -124,9 +130,29 @@ export class SceneView {
     this.followTarget = new THREE.Vector3(p.x, p.y, p.z);
   }
 
+  /** The flat grid leaves out this rectangle ({x0, y0, x1, y1} world [m]; null: none). */
+  setGroundHole(rect) {
+    if (rect) this.groundHole.value.set(rect.x0, rect.y0, rect.x1, rect.y1);
+    else this.groundHole.value.set(1, 1, -1, -1);
+  }
+
   render() {
     this.renderer.render(this.scene, this.camera);
   }
+}
+
+/** Makes `material` (a LineBasicMaterial) discard its fragments whose world x, y lie inside
+ *  `hole.value` (x0, y0, x1, y1). */
+function cutOut(material, hole) {
+  material.onBeforeCompile = (shader) => {
+    shader.uniforms.groundHole = hole;
+    shader.vertexShader = `varying vec2 vGroundXY;\n${shader.vertexShader.replace(
+      '#include <project_vertex>',
+      '#include <project_vertex>\n  vGroundXY = (modelMatrix * vec4(transformed, 1.0)).xy;')}`;
+    shader.fragmentShader = `uniform vec4 groundHole;\nvarying vec2 vGroundXY;\n${shader.fragmentShader.replace(
+      'void main() {',
+      'void main() {\n  if (all(greaterThan(vGroundXY, groundHole.xy)) && all(lessThan(vGroundXY, groundHole.zw))) discard;')}`;
+  };
 }
 
 /** A grid on z = 0 like THREE.GridHelper's (size, divisions, centre-line colour, line colour),

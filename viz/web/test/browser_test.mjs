@@ -14,7 +14,15 @@
 //     at or before t (the frames of GET /api/log), a state of the log (same stamp), at most
 //     MAX_AGE old, and the joint angles the URDF robot holds equal that state's q in the log
 //     (index idx_q of robot_model_t) within 1e-6;
-// and saves a screenshot (OUT_DIR/viewer.png, at 50 %) and the snapshots (OUT_DIR/viewer.json).
+//   - when the log holds elevation maps (terrain_t on STRIDE_TERRAIN; browser_test.sh adds them):
+//     GET /api/log's terrain frames are at most 2 per second of log time and none is missed, each
+//     is a map of the log with its numbers (origin, resolution, counts; heights within 0.5 mm,
+//     null where the log's are NaN); at each seek the page draws the newest terrain frame at or
+//     before t (the first before them all) as a mesh of one vertex per known cell of that map,
+//     the triangles of its squares with at most one unknown corner, spanning the known cells'
+//     x, y and heights (window.stride.snapshot().terrain);
+// and saves screenshots (OUT_DIR/viewer.png at 50 %; OUT_DIR/viewer-terrain.png, the map from
+// above, when there is one) and the snapshots (OUT_DIR/viewer.json).
 //
 // Environment: STRIDE_VIZ_NODE_MODULES, the node_modules with playwright-core (the build's
 // npm install; nothing is installed in the source tree); CHROMIUM, the browser (/usr/bin/chromium).
@@ -26,6 +34,8 @@ import { startViz as launchViz } from './start_viz.mjs';
 import { readSession, hashHex } from './lcmlog.mjs';
 
 const TOLERANCE = 1e-6; // rad (or m for a prismatic joint)
+const TERRAIN_RATE = 2; // terrain frames per second of log time, at most (viz/README.md)
+const HEIGHT_STEP = 1e-3; // m: the terrain frames' rounding of heights
 const MAX_AGE = 0.03; // s: a state at most this much older than the seek time (log decimation)
 const READY_TIMEOUT_MS = 60000;
 const TOTAL_TIMEOUT_MS = 170000;
@@ -70,6 +80,42 @@ console.log(`browser_test: ${logPath}: ${model.robot} (hash ${hashHex(model.mode
             `${logStates.length} states from ${logStates[0].t} to ${logStates.at(-1).t} s`);
 check('log: states in time order', logStates.every((s, i) => i === 0 || s.t > logStates[i - 1].t));
 check('log: every state of the model', logStates.every((s) => s.nq === model.nq && s.model_hash === model.model_hash));
+const logMaps = session.terrains;
+if (logMaps.length > 0) {
+  console.log(`browser_test: ${logMaps.length} maps (${logMaps[0].rows} x ${logMaps[0].cols}) ` +
+              `from ${logMaps[0].t} to ${logMaps.at(-1).t} s`);
+}
+
+/** The log's map with this stamp [s], or null. */
+function logMapAt(t) {
+  return logMaps.find((m) => Math.abs(m.t - t) < 0.5e-6) ?? null;
+}
+
+/** What the page must draw of a map: its known cells, the triangles of the squares of four
+ *  neighbouring cells with at most one unknown, their x, y, z bounds. */
+function expectedMesh(m) {
+  const known = (r, c) => Number.isFinite(m.height[r][c]);
+  let vertices = 0;
+  let triangles = 0;
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
+  for (let r = 0; r < m.rows; ++r) {
+    for (let c = 0; c < m.cols; ++c) {
+      if (!known(r, c)) continue;
+      vertices += 1;
+      const p = [m.origin_x + c * m.resolution, m.origin_y + r * m.resolution, m.height[r][c]];
+      p.forEach((x, i) => { lo[i] = Math.min(lo[i], x); hi[i] = Math.max(hi[i], x); });
+    }
+  }
+  for (let r = 0; r + 1 < m.rows; ++r) {
+    for (let c = 0; c + 1 < m.cols; ++c) {
+      const corners = [[r, c], [r, c + 1], [r + 1, c], [r + 1, c + 1]];
+      const missing = corners.filter(([a, b]) => !known(a, b)).length;
+      triangles += missing === 0 ? 2 : missing === 1 ? 1 : 0;
+    }
+  }
+  return { vertices, triangles, lo, hi };
+}
 
 /** The log's state with this stamp [s] (frames carry t = utime * 1e-6), or null. */
 function logStateAt(t) {
@@ -82,6 +128,31 @@ function logStateAt(t) {
     if (d < 0) lo = mid + 1; else hi = mid - 1;
   }
   return null;
+}
+
+/** The page draws the map it must at `target`: the newest terrain frame at or before it (the
+ *  first before them all), as the mesh expectedMesh() says of the log's map of that stamp. */
+function checkTerrain(label, drawn, frames, target) {
+  const before = frames.filter((f) => f.t <= target);
+  const want = before.length > 0 ? before.at(-1) : frames[0];
+  if (!check(`${label}: draws the terrain frame at or before t`,
+             drawn !== null && drawn !== undefined && drawn.visible && drawn.t === want.t,
+             `draws ${JSON.stringify(drawn && { t: drawn.t, visible: drawn.visible })}, frame ${want.t}`)) {
+    return;
+  }
+  const m = logMapAt(drawn.t);
+  if (!check(`${label}: a map of the log has that stamp`, m !== null, `${drawn.t}`)) return;
+  const e = expectedMesh(m);
+  check(`${label}: terrain mesh of ${e.vertices} vertices (known cells), ${e.triangles} triangles`,
+        drawn.rows === m.rows && drawn.cols === m.cols && drawn.vertices === e.vertices &&
+        drawn.triangles === e.triangles,
+        `page ${drawn.rows} x ${drawn.cols}, ${drawn.vertices} vertices, ${drawn.triangles} triangles`);
+  const [lo, hi] = drawn.bounds ?? [[NaN, NaN, NaN], [NaN, NaN, NaN]];
+  const tol = [1e-5, 1e-5, HEIGHT_STEP / 2 + 1e-6]; // float32 positions; heights rounded to 1 mm
+  const off = [0, 1, 2].map((i) => Math.max(Math.abs(lo[i] - e.lo[i]) / tol[i], Math.abs(hi[i] - e.hi[i]) / tol[i]));
+  check(`${label}: terrain mesh spans the map's known cells (z ${e.lo[2].toFixed(3)} to ${e.hi[2].toFixed(3)} m)`,
+        off.every((x) => x <= 1),
+        `page ${JSON.stringify(drawn.bounds)}, log ${JSON.stringify([e.lo, e.hi])}`);
 }
 
 // ---- stride-viz ----
@@ -155,6 +226,35 @@ async function main() {
     check('page: duration() spans the log\'s frames',
           Math.abs(duration - (t1 - t0)) < 1e-9, `${duration}`);
     const stateTimes = doc.frames.filter((f) => f.type === 'state').map((f) => f.t);
+    const terrainFrames = doc.frames.filter((f) => f.type === 'terrain');
+    if (logMaps.length > 0) {
+      const gaps = terrainFrames.slice(1).map((f, i) => f.t - terrainFrames[i].t);
+      check(`api/log: terrain frames at most ${TERRAIN_RATE} per second of log time`,
+            terrainFrames.length > 0 && gaps.every((g) => g >= 1 / TERRAIN_RATE - 1e-6),
+            `${terrainFrames.length} frames, gaps ${JSON.stringify(gaps)}`);
+      const span = logMaps.at(-1).t - logMaps[0].t;
+      check('api/log: no terrain frame missed', terrainFrames.length >= Math.floor(span * TERRAIN_RATE),
+            `${terrainFrames.length} frames over ${span.toFixed(3)} s of maps`);
+      let worst = 0;
+      const wrong = [];
+      for (const f of terrainFrames) {
+        const m = logMapAt(f.t);
+        if (!m || f.rows !== m.rows || f.cols !== m.cols || Math.abs(f.origin_x - m.origin_x) > 1e-6 ||
+            Math.abs(f.origin_y - m.origin_y) > 1e-6 || Math.abs(f.resolution - m.resolution) > 1e-6 ||
+            f.heights.length !== m.rows * m.cols) {
+          wrong.push(`t ${f.t}: ${m ? 'origin, resolution or counts' : 'no map of the log'}`);
+          continue;
+        }
+        f.heights.forEach((h, i) => {
+          const want = m.height[Math.floor(i / m.cols)][i % m.cols];
+          if (Number.isNaN(want) !== (h === null)) wrong.push(`t ${f.t}: cell ${i} ${h} for ${want}`);
+          else if (h !== null) worst = Math.max(worst, Math.abs(h - want));
+        });
+      }
+      check('api/log: each terrain frame is a map of the log, with its numbers',
+            wrong.length === 0 && worst <= HEIGHT_STEP / 2 + 1e-7,
+            `${wrong.slice(0, 5).join('; ')}; largest height error ${worst}`);
+    }
 
     const snapshots = [];
     for (const fraction of [0.1, 0.5, 0.9]) {
@@ -180,10 +280,21 @@ async function main() {
             snap.joint_angles.length === want.length && worst <= TOLERANCE,
             `largest error ${worst} (${actuated[errs.indexOf(worst)]?.name}); page ` +
             `${JSON.stringify(snap.joint_angles)}, log ${JSON.stringify(want)}`);
+      if (logMaps.length > 0) checkTerrain(label, snap.terrain, terrainFrames, target);
       if (fraction === 0.5) {
         await page.screenshot({ path: path.join(outDir, 'viewer.png') });
         console.log(`browser_test: screenshot ${path.join(outDir, 'viewer.png')}`);
       }
+    }
+    if (logMaps.length > 0) {
+      // The whole map from above and behind, at the middle of the log.
+      const snap = await page.evaluate((o) => window.stride.seek(o), 0.5 * duration);
+      const [lo, hi] = snap.terrain.bounds;
+      const c = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0];
+      await page.evaluate((v) => window.stride.camera(v),
+                          { target: c, position: [c[0] - 1.2, c[1] - 2.0, c[2] + 1.9] });
+      await page.screenshot({ path: path.join(outDir, 'viewer-terrain.png') });
+      console.log(`browser_test: screenshot ${path.join(outDir, 'viewer-terrain.png')}`);
     }
     writeFileSync(path.join(outDir, 'viewer.json'), JSON.stringify({ base, snapshots, requests, sockets }, null, 1));
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # stride-viz's page in headless Chromium on a fresh log (viz/web/README.md, "Test"): stride-drive
-# drives the quadruped for 3 s in one process and logs every channel, then browser_test.mjs runs
-# `stride-viz --log` on it and checks the page against its own reading of the log.
+# drives the quadruped for 3 s in one process and logs every channel, terrain_log.mjs adds
+# elevation maps of a made-up world around the robot (STRIDE_TERRAIN, 10 Hz), then browser_test.mjs
+# runs `stride-viz --log` on it and checks the page against its own reading of the log.
 #   browser_test.sh STRIDE_VIZ STRIDE_DRIVE CONFIG_DIR NODE NODE_MODULES OUT_DIR
 # Exit 77 (skipped) when there is no Chromium (tools/install-deps.sh installs Debian's).
 set -euo pipefail
@@ -21,6 +22,7 @@ trap 'rm -rf "$dir"' EXIT
   --commands "$config/commands/stride_quad.yaml" --duration "${STRIDE_VIZ_LOG_DURATION:-3}" \
   --log "$dir/session.lcmlog" \
   > "$dir/drive.txt" || { cat "$dir/drive.txt"; exit 1; }
+"$node" "$(dirname "$0")/terrain_log.mjs" "$dir/session.lcmlog" "$dir/terrain.lcmlog"
 mkdir -p "$out"
 STRIDE_VIZ_NODE_MODULES="$modules" CHROMIUM="$chromium" \
-  "$node" "$(dirname "$0")/browser_test.mjs" "$viz" "$dir/session.lcmlog" "$out"
+  "$node" "$(dirname "$0")/browser_test.mjs" "$viz" "$dir/terrain.lcmlog" "$out"

@@ -1,16 +1,17 @@
-// An LCM log reader and a decoder of Stride's robot_state_t, robot_model_t and horizon_t in plain
-// JavaScript, written for the browser tests from the formats alone (no LCM code, nothing of
-// stride-viz): what the page shows is checked against what this reads from the log.
+// An LCM log reader and writer and a decoder (and encoder) of Stride's robot_state_t,
+// robot_model_t, horizon_t and terrain_t in plain JavaScript, written for the browser tests from
+// the formats alone (no LCM code, nothing of stride-viz): what the page shows is checked against
+// what this reads from the log.
 //
 // Log file (lcm-logger): a sequence of events, each
 //   uint32 sync word 0xEDA1DA01, int64 event number, int64 timestamp [µs],
 //   int32 channel length, int32 data length, channel (bytes, no NUL), data,
 // all big-endian. A message (data) is an 8-byte type fingerprint followed by the fields in
-// declaration order, big-endian: integers and doubles as they are, a string as int32 length
-// (with its NUL) + bytes + NUL, an array of a member's count as that many elements.
+// declaration order, big-endian: integers, floats and doubles as they are, a string as int32
+// length (with its NUL) + bytes + NUL, an array of a member's count as that many elements.
 //
-// The types below are messages/robot_state_t.lcm, robot_model_t.lcm and horizon_t.lcm written out
-// as member lists; the fingerprint computed from a list (LCM's hash of member names, primitive
+// The types below are messages/robot_state_t.lcm, robot_model_t.lcm, horizon_t.lcm and
+// terrain_t.lcm written out as member lists; the fingerprint computed from a list (LCM's hash of member names, primitive
 // type names and dimensions) must equal the one in each message, so a change of the .lcm files
 // that this file does not follow fails loudly instead of decoding garbage.
 
@@ -65,6 +66,20 @@ export const horizonType = {
     ['contact_mask', 'int32_t', ['knots']],
     ['impulse', 'int8_t', ['knots']],
     ['force', 'double', ['knots', 'nf']],
+  ],
+};
+
+/** terrain_t (messages/terrain_t.lcm): an elevation map, NaN heights unknown. */
+export const terrainType = {
+  name: 'terrain_t',
+  members: [
+    ['utime', 'int64_t'],
+    ['origin_x', 'double'],
+    ['origin_y', 'double'],
+    ['resolution', 'double'],
+    ['rows', 'int32_t'],
+    ['cols', 'int32_t'],
+    ['height', 'float', ['rows', 'cols']],
   ],
 };
 
@@ -154,6 +169,7 @@ export function decode(type, data) {
       case 'int8_t': need(1); return view.getInt8(pos++);
       case 'int32_t': { need(4); const x = view.getInt32(pos); pos += 4; return x; }
       case 'int64_t': { need(8); const x = view.getBigInt64(pos); pos += 8; return x; }
+      case 'float': { need(4); const x = view.getFloat32(pos); pos += 4; return x; }
       case 'double': { need(8); const x = view.getFloat64(pos); pos += 8; return x; }
       case 'string': {
         need(4);
@@ -187,6 +203,72 @@ export function decode(type, data) {
   return out;
 }
 
+/**
+ * Encodes `message` (an object with every member of `type`; arrays sized by their count members,
+ * int64 as BigInt or Number) into the bytes of an LCM message, fingerprint first. Numbers and
+ * strings only, as decode() reads them.
+ */
+export function encode(type, message) {
+  const parts = [];
+  const put = (n, write) => {
+    const b = Buffer.alloc(n);
+    write(b);
+    parts.push(b);
+  };
+  put(8, (b) => b.writeBigUInt64BE(fingerprint(type)));
+  const writeOne = (primitive, x, name) => {
+    switch (primitive) {
+      case 'int8_t': put(1, (b) => b.writeInt8(x)); break;
+      case 'int32_t': put(4, (b) => b.writeInt32BE(x)); break;
+      case 'int64_t': put(8, (b) => b.writeBigInt64BE(BigInt(x))); break;
+      case 'float': put(4, (b) => b.writeFloatBE(x)); break;
+      case 'double': put(8, (b) => b.writeDoubleBE(x)); break;
+      case 'string': {
+        const s = Buffer.from(x, 'utf8');
+        put(4, (b) => b.writeInt32BE(s.length + 1));
+        parts.push(s, Buffer.from([0]));
+        break;
+      }
+      default: throw new Error(`lcmlog: ${type.name}.${name}: type ${primitive} not supported`);
+    }
+  };
+  for (const [name, primitive, dims = []] of type.members) {
+    const write = (x, level) => {
+      if (level === dims.length) {
+        writeOne(primitive, x, name);
+        return;
+      }
+      const d = dims[level];
+      const n = typeof d === 'number' ? d : Number(message[d]);
+      if (!Array.isArray(x) || x.length !== n) {
+        throw new Error(`lcmlog: ${type.name}.${name}: ${Array.isArray(x) ? x.length : 'no array'} elements, its count says ${n}`);
+      }
+      for (const y of x) write(y, level + 1);
+    };
+    write(message[name], 0);
+  }
+  return Buffer.concat(parts);
+}
+
+/**
+ * The bytes of a log file holding `events` ({channel, data, timestamp}) in that order, numbered
+ * from 0 (lcm-logger's event numbers).
+ */
+export function writeLog(events) {
+  const parts = [];
+  events.forEach((e, i) => {
+    const channel = Buffer.from(e.channel, 'utf8');
+    const head = Buffer.alloc(28);
+    head.writeUInt32BE(SYNC, 0);
+    head.writeBigInt64BE(BigInt(i), 4);
+    head.writeBigInt64BE(BigInt(e.timestamp), 12);
+    head.writeInt32BE(channel.length, 20);
+    head.writeInt32BE(e.data.length, 24);
+    parts.push(head, channel, Buffer.from(e.data.buffer, e.data.byteOffset, e.data.byteLength));
+  });
+  return Buffer.concat(parts);
+}
+
 /** A model hash as the 16 hex digits Stride prints (stride-mpc --print-model). */
 export function hashHex(h) {
   return BigInt.asUintN(64, h).toString(16).padStart(16, '0');
@@ -195,13 +277,16 @@ export function hashHex(h) {
 /**
  * The robot states of a log on `channel`, in log order, each with t = utime * 1e-6 [s] (the
  * robot's clock, as stride-viz's frames), the first robot model on `modelChannel` (null when the
- * log has none), and the horizons on `horizonChannel` (t likewise).
+ * log has none), the horizons on `horizonChannel` and the elevation maps on `terrainChannel` (t
+ * likewise).
  */
 export function readSession(bytes, {
   channel = 'STRIDE_STATE', modelChannel = 'STRIDE_MODEL', horizonChannel = 'STRIDE_HORIZON',
+  terrainChannel = 'STRIDE_TERRAIN',
 } = {}) {
   const states = [];
   const horizons = [];
+  const terrains = [];
   let model = null;
   for (const e of readLog(bytes)) {
     if (e.channel === channel) {
@@ -212,11 +297,15 @@ export function readSession(bytes, {
       const h = decode(horizonType, e.data);
       h.t0 = Number(h.utime) * 1e-6; // h.t is the knots' times after it
       horizons.push(h);
+    } else if (e.channel === terrainChannel) {
+      const m = decode(terrainType, e.data);
+      m.t = Number(m.utime) * 1e-6;
+      terrains.push(m);
     } else if (e.channel === modelChannel && model === null) {
       model = decode(robotModelType, e.data);
     }
   }
-  return { states, model, horizons };
+  return { states, model, horizons, terrains };
 }
 
 /**

@@ -8,14 +8,14 @@ import { existsSync, readFileSync } from 'node:fs';
 import path from 'node:path';
 import test from 'node:test';
 import {
-  decode, fingerprint, hashHex, horizonType, readLog, readSession, robotModelType, robotStateType,
-  stateAt,
+  decode, encode, fingerprint, hashHex, horizonType, readLog, readSession, robotModelType,
+  robotStateType, stateAt, terrainType, writeLog,
 } from './lcmlog.mjs';
 
 const genDir = process.env.STRIDE_LCM_GEN_DIR;
 
 test('fingerprints equal lcm-gen\'s', { skip: genDir ? false : 'STRIDE_LCM_GEN_DIR not set' }, () => {
-  for (const type of [robotStateType, robotModelType, horizonType]) {
+  for (const type of [robotStateType, robotModelType, horizonType, terrainType]) {
     const header = path.join(genDir, 'stride', `${type.name}.hpp`);
     assert.ok(existsSync(header), `${header} (build the messages first)`);
     // lcm-gen writes the hash before its final rotation: `uint64_t hash = 0x...LL;`
@@ -151,6 +151,46 @@ test('a horizon reads back, its arrays of arrays row by row', () => {
   assert.deepEqual(h.contact_mask, [1, 0]);
   assert.deepEqual(h.impulse, [0, 1]);
   assert.deepEqual(h.force, [[1, 2, 30], [0, 0, 0.5]]);
+});
+
+// A 2 x 3 map, one cell unknown, written by encode() and checked byte by byte where the format
+// fixes the bytes (counts, a float's bits).
+const terrain = {
+  utime: 1005000n, origin_x: -0.5, origin_y: 0.25, resolution: 0.02, rows: 2, cols: 3,
+  height: [[0, 0.05, NaN], [0.25, -1.5, 0]],
+};
+
+test('a terrain_t encodes as the format says and reads back, NaN cells too', () => {
+  const bytes = encode(terrainType, terrain);
+  assert.equal(bytes.length, 8 + 8 + 3 * 8 + 2 * 4 + 6 * 4);
+  assert.equal(bytes.readBigUInt64BE(0), fingerprint(terrainType));
+  assert.equal(bytes.readInt32BE(40), 2);
+  assert.equal(bytes.readInt32BE(44), 3);
+  assert.equal(bytes.readFloatBE(48 + 4), Math.fround(0.05));
+  const m = decode(terrainType, bytes);
+  assert.equal(m.utime, 1005000n);
+  assert.equal(m.rows, 2);
+  assert.deepEqual(m.height[1], [0.25, -1.5, 0]);
+  assert.equal(m.height[0][1], Math.fround(0.05));
+  assert.ok(Number.isNaN(m.height[0][2]));
+  assert.throws(() => encode(terrainType, { ...terrain, rows: 3 }), /count says 3/);
+});
+
+test('writeLog writes what readLog reads, terrain maps in the session', () => {
+  const written = writeLog([
+    ...readLog(log).map((e) => ({ channel: e.channel, data: e.data, timestamp: e.timestamp })),
+    { channel: 'STRIDE_TERRAIN', data: encode(terrainType, terrain), timestamp: 1010000 },
+  ]);
+  const events = readLog(written);
+  assert.equal(events.length, 7);
+  assert.deepEqual(events.map((e) => e.eventNumber), [0n, 1n, 2n, 3n, 4n, 5n, 6n]);
+  assert.equal(events[6].timestamp, 1010000n);
+  assert.deepEqual(Buffer.from(events[1].data), Buffer.from(readLog(log)[1].data));
+  const { terrains, states: s } = readSession(written);
+  assert.equal(s.length, 3);
+  assert.equal(terrains.length, 1);
+  assert.equal(terrains[0].t, 1.005);
+  assert.equal(terrains[0].cols, 3);
 });
 
 test('the state shown at t: the newest at or before t, the first before them all', () => {
