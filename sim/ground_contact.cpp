@@ -42,6 +42,10 @@ void updateContactGeometry(const Model& model, const Data& data,
                            const std::vector<ContactPoint>& points, const terrain::Terrain& terrain,
                            const Eigen::VectorXd& v, double margin, double h,
                            ContactGeometry& geometry) {
+  // Two passes: the points' places and Jacobians first, in exactly the loop the flat ground had
+  // (GCC contracts `nu + w.cross(p)` into FMAs differently when the terrain's queries share the
+  // loop: 1-ulp differences in J, and a flat terrain would no longer give the plain ground's bits:
+  // tests/sim/test_terrain_contact.cpp), then the terrain's constraints.
   for (size_t i = 0; i < points.size(); ++i) {
     const ContactPoint& pt = points[i];
     const Frame& frame = model.frames[pt.frame];
@@ -53,13 +57,16 @@ void updateContactGeometry(const Model& model, const Data& data,
     // data.J holds world-frame motion subspaces [velocity of the point at the world origin; w]:
     // the velocity of the point p is nu_o + w x p.
     const int row = 3 * static_cast<int>(i);
-    if (frame.parentJoint != 0) {
-      const Joint& jt = model.joints[frame.parentJoint];
-      for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
-        const Eigen::Vector3d nu = data.J.col(k).head<3>(), w = data.J.col(k).tail<3>();
-        geometry.J.block<3, 1>(row, k) = nu + w.cross(p);
-      }
+    if (frame.parentJoint == 0) continue;
+    const Joint& jt = model.joints[frame.parentJoint];
+    for (int k = jt.idx_v + jt.nv - 1; k >= 0; k = model.parentDof[k]) {
+      const Eigen::Vector3d nu = data.J.col(k).head<3>(), w = data.J.col(k).tail<3>();
+      geometry.J.block<3, 1>(row, k) = nu + w.cross(p);
     }
+  }
+  for (size_t i = 0; i < points.size(); ++i) {
+    const int row = 3 * static_cast<int>(i);
+    const Eigen::Vector3d p = geometry.position.col(i);
     // Faces are looked for as far as the point can travel in this step, and the margin.
     const double speed = (geometry.J.middleRows<3>(row) * v).norm();
     const int slot0 = kConstraintsPerPoint * static_cast<int>(i);

@@ -17,6 +17,9 @@ constexpr double kSide = 1e-7;
 // A point this far below the lower side of a face still feels the face (a foot standing in the
 // corner of a riser has sunk into the ground by the contact solver's slop, 0.1 mm).
 constexpr double kBelowLowSide = 0.01;
+// How far sideways a point inside the terrain looks for the face it came through [m]: deeper than
+// that it leaves upwards (a tunnel a 1 kHz step never makes: 5 cm in 1 ms is 50 m/s).
+constexpr double kMaxInsideSearch = 0.05;
 
 // SplitMix64 (Steele, Lea, Flood 2014): a stateless hash of a rough cell's indices, so that a
 // cell's height needs no table and no draw order.
@@ -165,19 +168,34 @@ double Terrain::roughCell(const Piece& piece, int i, int j) const {
 }
 
 double Terrain::top(const Piece& piece, const Eigen::Vector2d& c) const {
+  // On a line between two steps or cells the higher side's (the face's top: terrain.hpp).
+  // (Within rounding of the line: a place computed as on it, in world coordinates, lands a few ulps
+  // either side of it in the piece's.)
+  auto index = [](double x, double run, int last, int& other) {
+    const double u = x / run, line = std::round(u);
+    if (std::abs(u - line) <= 1e-9 * std::max(1.0, std::abs(u)) && line >= 1.0 && line <= last) {
+      other = static_cast<int>(line) - 1;
+      return static_cast<int>(line);
+    }
+    const int k = std::clamp(static_cast<int>(std::floor(u)), 0, last);
+    other = k;
+    return k;
+  };
   switch (piece.kind) {
     case PieceKind::Block:
       return piece.z0 + piece.slope * (c.x() - piece.half_u);
     case PieceKind::Flight: {
-      const int k = std::clamp(static_cast<int>(std::floor(c.x() / piece.run)), 0, piece.steps - 1);
-      return piece.base + (k + 1) * piece.rise;
+      int k0;
+      const int k = index(c.x(), piece.run, piece.steps - 1, k0);
+      const int higher = piece.rise > 0.0 ? std::max(k, k0) : std::min(k, k0);
+      return piece.base + (higher + 1) * piece.rise;
     }
     case PieceKind::Rough: {
-      const int i =
-          std::clamp(static_cast<int>(std::floor(c.x() / piece.run)), 0, piece.cells_u - 1);
-      const int j =
-          std::clamp(static_cast<int>(std::floor(c.y() / piece.run)), 0, piece.cells_w - 1);
-      return roughCell(piece, i, j);
+      int i0, j0;
+      const int i = index(c.x(), piece.run, piece.cells_u - 1, i0);
+      const int j = index(c.y(), piece.run, piece.cells_w - 1, j0);
+      return std::max(std::max(roughCell(piece, i, j), roughCell(piece, i0, j)),
+                      std::max(roughCell(piece, i, j0), roughCell(piece, i0, j0)));
     }
   }
   return spec_.ground;
@@ -243,8 +261,12 @@ Contact support(const Eigen::Vector3d& p, const Surface& s) {
   return c;
 }
 
-// Keeps the `max` nearest of the walls found so far (out[0..n)), adding one.
+// Keeps the `max` nearest of the walls found so far (out[0..n)), adding one. The same face twice
+// (a box's corner, reached from both of its sides) counts once.
 void keepNearest(Contact* out, int& n, int max, const Contact& c) {
+  for (int i = 0; i < n; ++i)
+    if ((out[i].point - c.point).squaredNorm() < 1e-20 && out[i].normal.dot(c.normal) > 1.0 - 1e-12)
+      return;
   if (n < max) {
     out[n++] = c;
     return;
@@ -264,7 +286,7 @@ void Terrain::wallAt(const Eigen::Vector3d& p, double h_here, const Eigen::Vecto
   const Eigen::Vector2d e = a + t * ab;
   const Eigen::Vector2d to_p = xy - e;
   const double dh = to_p.norm();
-  if (dh > reach) return;
+  if (dh > std::max(reach, std::min(h_here - p.z(), kMaxInsideSearch))) return;
   const Eigen::Vector2d m = Eigen::Vector2d(-ab.y(), ab.x()).normalized();
   int wa, wb;
   const double ha = heightAndPiece(e + kSide * m, wa), hb = heightAndPiece(e - kSide * m, wb);
@@ -279,13 +301,14 @@ void Terrain::wallAt(const Eigen::Vector3d& p, double h_here, const Eigen::Vecto
   c.world_axes = false;
   // In front of the face (on its low side, where the ground is below the face's top), or in it
   // from the high side (crossed: p's place is the high side's, p under its top).
-  if (side > 0.0 && h_here < hi - kMinFace) {
+  if (side > 0.0 && h_here < hi - kMinFace && dh <= reach) {
     const Eigen::Vector2d dir = dh > 1e-12 ? Eigen::Vector2d(to_p / dh) : to_low;
     c.normal = Eigen::Vector3d(dir.x(), dir.y(), 0.0);
     c.distance = dh;
     tangentFrame(c.normal, c.t1, c.t2);
     keepNearest(out, n, max, c);
-  } else if (side <= 0.0 && t > 0.0 && t < 1.0 && h_here > hi - kMinFace && p.z() >= lo) {
+  } else if (side <= 0.0 && t > 0.0 && t < 1.0 && h_here > hi - kMinFace &&
+             p.z() > lo - kBelowLowSide) {
     // Inside the high side's solid, above the low side: out through this face takes dh.
     const double exit = std::max(0.0, -side);
     if (exit < inside_exit) {
@@ -312,11 +335,14 @@ int Terrain::contacts(const Eigen::Vector3d& p, double reach, Contact* out, int 
   double inside_exit = std::numeric_limits<double>::infinity();
   Contact inside_wall;
   const Eigen::Vector2d xy = p.head<2>();
+  // A point inside the terrain looks for the face it crossed as far as it is deep (a foot resting
+  // on the ground swept into a riser within one step may be past the reach), up to a bound.
+  const double search = std::max(reach, std::min(here.height - p.z(), kMaxInsideSearch));
   for (const Piece& piece : pieces_) {
     const Eigen::Vector2d c = local(piece, xy);
     const double lu = 2.0 * piece.half_u, lw = 2.0 * piece.half_w;
     // Far from the rectangle: none of its lines is within reach.
-    if (c.x() < -reach || c.x() > lu + reach || c.y() < -reach || c.y() > lw + reach) continue;
+    if (c.x() < -search || c.x() > lu + search || c.y() < -search || c.y() > lw + search) continue;
     auto at = [&](double x, double y) -> Eigen::Vector2d {
       return piece.center + (x - piece.half_u) * piece.u + (y - piece.half_w) * piece.w;
     };
@@ -331,13 +357,13 @@ int Terrain::contacts(const Eigen::Vector3d& p, double reach, Contact* out, int 
     if (piece.kind == PieceKind::Block) continue;
     // Interior lines within reach: a flight's risers, a rough patch's cell edges.
     const int last_u = piece.kind == PieceKind::Flight ? piece.steps - 1 : piece.cells_u - 1;
-    const int i0 = std::max(1, static_cast<int>(std::ceil((c.x() - reach) / piece.run)));
-    const int i1 = std::min(last_u, static_cast<int>(std::floor((c.x() + reach) / piece.run)));
+    const int i0 = std::max(1, static_cast<int>(std::ceil((c.x() - search) / piece.run)));
+    const int i1 = std::min(last_u, static_cast<int>(std::floor((c.x() + search) / piece.run)));
     for (int i = i0; i <= i1; ++i) line(i * piece.run, 0, i * piece.run, lw);
     if (piece.kind == PieceKind::Rough) {
-      const int j0 = std::max(1, static_cast<int>(std::ceil((c.y() - reach) / piece.run)));
+      const int j0 = std::max(1, static_cast<int>(std::ceil((c.y() - search) / piece.run)));
       const int j1 =
-          std::min(piece.cells_w - 1, static_cast<int>(std::floor((c.y() + reach) / piece.run)));
+          std::min(piece.cells_w - 1, static_cast<int>(std::floor((c.y() + search) / piece.run)));
       for (int j = j0; j <= j1; ++j) line(0, j * piece.run, lu, j * piece.run);
     }
   }

@@ -23,7 +23,7 @@ class Reader {
 
   void onlyKeys(const YAML::Node& node, const std::string& where,
                 std::initializer_list<const char*> keys) const {
-    if (!node.IsMap()) fail(where, "expected a map of keys");
+    if (!node.IsMap()) fail(where.empty() ? "(top level)" : where, "expected a map of keys");
     for (const auto& kv : node) {
       const std::string key = kv.first.as<std::string>();
       bool known = false;

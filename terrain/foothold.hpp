@@ -1,0 +1,67 @@
+#pragma once
+// Footholds and swing clearance on an elevation map (issue 31), for the controller to call each
+// time it plans a step. Both do bounded work (a disc of cells, a line of cells), allocate nothing
+// and never throw.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <limits>
+
+#include "terrain/elevation_map.hpp"
+#include "terrain/steppability.hpp"
+
+namespace stride::terrain {
+
+enum class FootholdStatus : std::uint8_t {
+  Nominal,      // the nominal point itself is safe: kept as it is
+  Moved,        // moved to the nearest steppable cell's centre within reach
+  Unreachable,  // the map knows cells within reach but none is steppable: the nominal, unchanged
+  Unknown,      // outside the map, no valid map, or no known cell within reach: the nominal
+};
+const char* toString(FootholdStatus status);
+
+// Where the foot may go: within `max_shift` of the nominal foothold and, optionally, within
+// `max_hip_distance` of the hip (horizontally; +inf: no such limit).
+struct FootholdReach {
+  double max_shift = 0.1;  // [m]
+  Eigen::Vector2d hip = Eigen::Vector2d::Zero();
+  double max_hip_distance = std::numeric_limits<double>::infinity();  // [m]
+};
+
+struct Foothold {
+  FootholdStatus status = FootholdStatus::Unknown;
+  // x, y: where to step; z: the terrain there (Nominal: the cell's height along its slope;
+  // Moved: the cell's height; Unreachable: the nominal's cell height, NaN when it is unknown;
+  // Unknown: NaN). A caller falls back to its blind estimate where z is NaN.
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // the fitted plane's, up when unknown
+  double shift = 0.0;                                 // [m] horizontal distance from the nominal
+  int row = -1, col = -1;  // the cell stepped on (the nominal's for Unreachable), -1 when none
+};
+
+// The foothold nearest `nominal` that is safe on `map`:
+// - Nominal when the nominal's cell is steppable, the point itself is at least min_edge_distance
+//   from every jump (Steppability::edgeDistanceAt) and within the hip's reach;
+// - otherwise Moved to the centre of the steppable cell nearest the nominal within the reach (ties:
+//   the lowest row, then the lowest column);
+// - Unreachable (the nominal returned unchanged, never a far cell) when no steppable cell is within
+//   reach but a known one is, Unknown when the nominal is outside the map or nothing within reach
+//   is known.
+// Scans the (2k + 1)^2 cells around the nominal, k = ceil(max_shift / resolution) (clipped to the
+// map).
+Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
+                        const FootholdReach& reach);
+
+// The highest known height of `map` on the horizontal segment from `from` to `to`: every cell the
+// segment passes through (a walk along the grid, so that a corner it clips is not missed), unknown
+// cells and the parts outside the map ignored. NaN when it crosses no known cell. Visits at most
+// |cells along x| + |cells along y| + 1 cells.
+double maxHeightAlong(const ElevationMap& map, const Eigen::Vector2d& from,
+                      const Eigen::Vector2d& to);
+
+// The height a swing's apex needs: clearance above the highest of the lift-off point, the
+// touch-down point and the terrain between them (maxHeightAlong; ignored when NaN).
+double swingApexHeight(const ElevationMap& map, const Eigen::Vector3d& lift_off,
+                       const Eigen::Vector3d& touch_down, double clearance);
+
+}  // namespace stride::terrain
