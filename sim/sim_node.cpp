@@ -341,7 +341,9 @@ void SimNode::writeSummary(const std::string& path) const {
   j["stand_down_steps"] = s.stand_down_steps;
   j["lockstep_timeouts"] = s.lockstep_timeouts;
   j["terrain"] = terrain.name();
-  j["final_base"] = {q[0], q[1], q[2]};
+  // A fixed-base robot has no base: its q starts with joints.
+  j["final_base"] = robot_.model.hasFreeFlyer() ? nlohmann::ordered_json({q[0], q[1], q[2]})
+                                                : nlohmann::ordered_json(nullptr);
   j["base_height_above_terrain_m"] = s.above;
   j["base_height_above_terrain_min_m"] = s.above_min;
   j["trips"] = sim_.counters().trips;
