@@ -212,8 +212,35 @@ GaitGenerator::Stance GaitGenerator::foothold(int contact, double touch_down, do
   const double n = lead.norm();
   if (n > options_.max_foothold_lead) lead *= options_.max_foothold_lead / n;
   const Eigen::Vector2d xy = on_robot + lead + correction;
-  return {touch_down, lift_off, Eigen::Vector3d(xy.x(), xy.y(), off.z()),
+  return {touch_down, lift_off, Eigen::Vector3d(xy.x(), xy.y(), off.z() + ground_),
           s.yaw + foot_yaw_[contact]};
+}
+
+void GaitGenerator::updateGround(double t) {
+  // Blind: the ground is where the feet down stand (issue 31). The mean of their heights over
+  // their nominal ones, filtered across plans (a foot landing on a step moves it by a share).
+  double sum = 0.0;
+  int down = 0;
+  for (int c = 0; c < nc_; ++c)
+    if (timeline_.closed(c, t)) {
+      sum += latched_[c].z() - offset_[c].z();
+      ++down;
+    }
+  if (down > 0) {
+    const double raw = sum / down;
+    if (!ground_started_) {
+      ground_filtered_ = raw;  // the robot starts standing on its ground
+      ground_started_ = true;
+    } else {
+      const double dt = std::clamp(t - ground_t_, 0.0, 1.0);
+      ground_filtered_ += dt / (options_.ground_time_constant + dt) * (raw - ground_filtered_);
+    }
+  }
+  ground_t_ = t;
+  const double band = options_.ground_dead_band;
+  ground_ = ground_filtered_ > band    ? ground_filtered_ - band
+            : ground_filtered_ < -band ? ground_filtered_ + band
+                                       : 0.0;
 }
 
 bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, double t_begin,
@@ -234,6 +261,7 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
       latched_[c] = M.p;
       latched_yaw_[c] = std::atan2(M.R(1, 0), M.R(0, 0));
     }
+  updateGround(t);
   // The base reference carries on from the last plan, but stays within a leash of the robot. A
   // robot that stands for good is centred over the feet it stands on instead: wherever a stop left
   // the reference, the stance it settles in is the nominal one.
@@ -342,7 +370,7 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
   const Sample s = baseAt(t);
   x_ref[0] = s.x;
   x_ref[1] = s.y;
-  x_ref[2] = z_nominal_ + s.height;
+  x_ref[2] = z_nominal_ + s.height + ground_;
   const Eigen::Quaterniond o = Eigen::AngleAxisd(s.yaw, Eigen::Vector3d::UnitZ()) * tilt_;
   x_ref.segment<4>(3) << o.x(), o.y(), o.z(), o.w();
   // The joints of the posture for this height (interpolated between the solved ones).
@@ -362,7 +390,7 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
 
 Eigen::Vector3d GaitGenerator::basePosition(double t) const {
   const Sample s = baseAt(t);
-  return {s.x, s.y, z_nominal_ + s.height};
+  return {s.x, s.y, z_nominal_ + s.height + ground_};
 }
 
 double GaitGenerator::baseYaw(double t) const {
@@ -373,7 +401,7 @@ Eigen::Vector3d GaitGenerator::com(double t) const {
   const Sample s = baseAt(t);
   const Eigen::Vector2d xy =
       Eigen::Vector2d(s.x, s.y) + rotate(s.yaw, com_offset_.x(), com_offset_.y());
-  return {xy.x(), xy.y(), z_nominal_ + s.height + com_offset_.z()};
+  return {xy.x(), xy.y(), z_nominal_ + s.height + ground_ + com_offset_.z()};
 }
 
 }  // namespace stride

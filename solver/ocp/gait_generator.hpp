@@ -67,6 +67,11 @@ struct GaitGeneratorOptions {
   // beyond its legs.
   double max_foothold_lead = 0.05;
   double max_height = 0.0;  // the largest |height offset| a command may ask for [m]
+  // The ground the feet feel (blind: no map): the mean height of the feet down at each plan,
+  // filtered with this time constant [s]; offsets within ground_dead_band of the nominal ground
+  // (z = 0) are taken as the nominal ground, so that a flat floor plans exactly as without it.
+  double ground_time_constant = 0.2;
+  double ground_dead_band = 0.005;
   // The longest span plan() is asked to cover (t_end - t_begin) [s], and the step of the base
   // trajectory's samples.
   double horizon = 1.0;
@@ -113,6 +118,9 @@ class GaitGenerator {
   Eigen::Vector3d com(double t) const;
   // The base reference at t: position, yaw.
   Eigen::Vector3d basePosition(double t) const;
+  // The ground height the feet feel (options.ground_time_constant), beyond the dead band: the
+  // height every foothold, the base and the centre of mass are planned on [m].
+  double ground() const { return ground_; }
   double baseYaw(double t) const;
 
   // The planned stances of a foot: touch-down, lift-off (±infinity when outside the timeline's
@@ -139,6 +147,8 @@ class GaitGenerator {
   // A planned stance's position and heading.
   Stance foothold(int contact, double touch_down, double lift_off,
                   const Eigen::Vector2d& correction) const;
+  // The ground the feet down feel at plan time t (ground_).
+  void updateGround(double t);
   // The stance in force (or last lifted from) at t, and how far along the swing to the next one
   // t is (0 while down, 1 when landed; -1 when no next stance is known).
   int stanceAt(int contact, double t, double& s) const;
@@ -163,6 +173,10 @@ class GaitGenerator {
 
   Data data_;  // forward kinematics of the measured state
   bool latched_any_ = false;
+  // The filtered mean height of the feet down relative to their nominal height, and the last
+  // plan's time; ground_: it past the dead band.
+  double ground_filtered_ = 0.0, ground_ = 0.0, ground_t_ = 0.0;
+  bool ground_started_ = false;
   std::vector<Eigen::Vector3d> latched_;  // where each foot was last measured while down
   std::vector<double> latched_yaw_;
   double t_anchor_ = 0.0;

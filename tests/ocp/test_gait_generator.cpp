@@ -681,6 +681,56 @@ TEST(GaitGenerator, LatchesTheMeasuredFeet) {
   }
 }
 
+// Blind, the ground is where the feet down stand (issue 31): the robot on a floor 3 cm below the
+// nominal plans its base, centre of mass and footholds 3 cm lower (less the 5 mm dead band); a
+// floor within the dead band plans exactly as the nominal one; a step change of the feet's height
+// is followed with the time constant.
+TEST(GaitGenerator, TheGroundTheFeetFeel) {
+  const Nominal n;
+  GaitGeneratorOptions o = hand();
+  o.ground_time_constant = 0.2;
+  o.ground_dead_band = 0.005;
+  auto lowered = [](double dz) {
+    Eigen::VectorXd x = placed(0.0, 0.0, 0.0);
+    x[2] += dz;
+    return x;
+  };
+  Generator low(o);
+  low->setCommand(velocity(0.3));
+  ASSERT_TRUE(low->plan(0.0, lowered(-0.03), 0.0, 1.0));
+  EXPECT_NEAR(low->ground(), -0.025, 1e-12);
+  Generator flat(o);
+  flat->setCommand(velocity(0.3));
+  ASSERT_TRUE(flat->plan(0.0, lowered(0.0), 0.0, 1.0));
+  EXPECT_EQ(flat->ground(), 0.0);
+  for (double t : {0.0, 0.35, 0.8}) {
+    EXPECT_NEAR(low->basePosition(t).z(), flat->basePosition(t).z() - 0.025, 1e-12) << t;
+    EXPECT_NEAR(low->com(t).z(), flat->com(t).z() - 0.025, 1e-12) << t;
+    Eigen::VectorXd a(quad().x_nominal.size()), b(a.size());
+    low->state(t, a);
+    flat->state(t, b);
+    EXPECT_NEAR(a[2], b[2] - 0.025, 1e-12) << t;
+  }
+  // Each planned touch-down (after the feet down at 0) lands on the felt ground.
+  for (int c = 0; c < 4; ++c)
+    for (int i = 1; i < low->stances(c); ++i)
+      EXPECT_NEAR(low->stance(c, i).p.z(), n.foot[c].z() - 0.025, 1e-12) << c << " " << i;
+  // Feet 3 mm high: within the dead band, the nominal ground exactly.
+  Generator within(o);
+  ASSERT_TRUE(within->plan(0.0, lowered(0.003), 0.0, 1.0));
+  EXPECT_EQ(within->ground(), 0.0);
+  EXPECT_EQ(within->basePosition(0.5).z(), n.z);
+  // Standing (all feet down) on a floor that rises by 4 cm at 0.05: after one plan 0.2 s later the
+  // filter has gone dt / (tau + dt) = 1/2 of the way (2 cm, 1.5 cm past the dead band).
+  GaitGeneratorOptions standing = o;
+  Generator step(standing, stride::stand());
+  ASSERT_TRUE(step->plan(0.0, lowered(0.0), 0.0, 1.0));
+  ASSERT_TRUE(step->plan(0.2, lowered(0.04), 0.2, 1.2));
+  EXPECT_NEAR(step->ground(), 0.015, 1e-12);
+  ASSERT_TRUE(step->plan(0.4, lowered(0.04), 0.4, 1.4));
+  EXPECT_NEAR(step->ground(), 0.025, 1e-12);  // 3 cm, less the band
+}
+
 // The velocity beyond the command moves each foot's next touch-down, and only that one.
 TEST(GaitGenerator, RaibertCorrectionOfTheNextTouchDown) {
   const Nominal n;
