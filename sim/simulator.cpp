@@ -43,6 +43,7 @@ void checkOptions(const SimOptions& o) {
   if (!(o.pgs_tolerance >= 0.0)) fail("pgs_tolerance must be >= 0");
   if (!(o.regularization >= 0.0)) fail("regularization must be >= 0");
   if (!std::isfinite(o.ground_height)) fail("ground_height must be finite");
+  if (!(o.max_velocity > 0.0)) fail("max_velocity must be > 0");
 }
 }  // namespace
 
@@ -250,7 +251,10 @@ StepStatus Simulator::substep(double h) {
   q_prev_ = q_;
   rhs_ = h * v_;
   integrate(model_, q_prev_, rhs_, q_);
-  if (!q_.allFinite() || !v_.allFinite()) {
+  // A velocity no robot reaches (1000 rad/s or m/s by default) is not physics any more: joints
+  // spun up in the air by full torque with nothing to stop them (the mock robot has no joint
+  // velocity limits yet), or an impact at such speeds. Held and reported like a non-finite state.
+  if (!q_.allFinite() || !(v_.cwiseAbs().maxCoeff() <= options_.max_velocity)) {
     q_ = q_prev_;
     v_.setZero();
     warm_.setZero();

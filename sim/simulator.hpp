@@ -47,12 +47,16 @@ struct SimOptions {
   // Added to each diagonal entry of G relative to its 3 x 3 block's mean diagonal: keeps redundant
   // points (a sole's 4 corners) well posed; a compliance of ~1e-8 of the point's mobility.
   double regularization = 1e-8;
+  // A step whose velocity exceeds this anywhere (rad/s, m/s) has left physics: it is held and
+  // reported as a non-finite state (the run diverged).
+  double max_velocity = 1e3;
 };
 
 enum class StepStatus : std::uint8_t {
   Ok,
-  RejectedTorque,      // non-finite τ: zero torque was applied instead
-  NonFiniteState,      // the step produced a non-finite state: q kept, v set to zero
+  RejectedTorque,  // non-finite τ: zero torque was applied instead
+  NonFiniteState,  // the step produced a non-finite state or a velocity past max_velocity: q kept,
+                   // v set to zero
   SingularMassMatrix,  // M not positive definite (non-finite q?): the state was not advanced
 };
 const char* toString(StepStatus status);

@@ -70,7 +70,7 @@ struct GaitGeneratorOptions {
   // The ground the feet feel (blind: no map): the mean height of the feet down at each plan,
   // filtered with this time constant [s]; offsets within ground_dead_band of the nominal ground
   // (z = 0) are taken as the nominal ground, so that a flat floor plans exactly as without it.
-  double ground_time_constant = 0.2;
+  double ground_time_constant = 0.3;
   double ground_dead_band = 0.005;
   // The longest span plan() is asked to cover (t_end - t_begin) [s], and the step of the base
   // trajectory's samples.

@@ -387,6 +387,32 @@ TEST(Simulator, RejectsBadArguments) {
   bad = SimOptions();
   bad.substeps = 0;
   EXPECT_THROW(Simulator(r, bad), std::invalid_argument);
+  bad = SimOptions();
+  bad.max_velocity = 0.0;
+  EXPECT_THROW(Simulator(r, bad), std::invalid_argument);
+}
+
+// A step that leaves physics (a joint spun past max_velocity: no robot turns at 1000 rad/s) is
+// held and reported as a non-finite state, so that the run stops as diverged instead of going on
+// with numbers that mean nothing; just under the bound it steps as usual.
+TEST(Simulator, AVelocityPastTheBoundIsADivergence) {
+  const Robot& r = robot("stride_quad");
+  SimOptions opt;
+  opt.max_velocity = 50.0;
+  Simulator sim(r, opt);
+  Eigen::VectorXd q = r.default_q;
+  q[2] += 0.5;  // in the air: nothing but the joint's own speed
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(r.model.nv);
+  v[6] = 49.0;
+  sim.reset(q, v);
+  EXPECT_EQ(sim.step(Eigen::VectorXd::Zero(sim.nu())), StepStatus::Ok);
+  v[6] = 60.0;
+  sim.reset(q, v);
+  const Eigen::VectorXd q_before = sim.q();
+  EXPECT_EQ(sim.step(Eigen::VectorXd::Zero(sim.nu())), StepStatus::NonFiniteState);
+  EXPECT_EQ(sim.q(), q_before);
+  EXPECT_TRUE(sim.v().isZero());
+  EXPECT_EQ(sim.counters().nonfinite_states, 1);
 }
 
 // Contact candidates come from the geometry: the quadruped's feet are at its foot frames, a sole's

@@ -83,7 +83,8 @@ struct Run {
   std::string terrain = "flat";
   std::int64_t trips = 0;
   double base_above_terrain = 0.0;
-  bool fell() const { return sim.fell; }
+  // A diverged simulation (sim::SimNodeStats::diverged) counts as a fall: the run is over.
+  bool fell() const { return sim.fell || sim.diverged; }
   // The base states for segments (t: sim time).
   std::vector<logs::BaseSample> baseSamples() const;
   // One segment per run of identical commands (logs::segmentCommands).

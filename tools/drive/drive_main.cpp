@@ -26,6 +26,7 @@ void writeJson(const std::string& path, const stride::drive::Run& run,
                const std::vector<stride::logs::Segment>& segments, bool tracked) {
   nlohmann::ordered_json j;
   j["fell"] = run.fell();
+  j["diverged"] = run.sim.diverged;
   j["duration_s"] = run.samples.empty() ? 0.0 : run.samples.back().t;
   j["tracked"] = tracked;
   j["fallbacks"] = run.mpc.fallbacks;
@@ -161,11 +162,11 @@ int main(int argc, char** argv) {
     if (trace) std::fclose(trace);
     const std::vector<stride::logs::Segment> segments = run.segments(segment_options);
     const std::vector<stride::logs::TrackingMiss> misses = stride::logs::checkTracking(segments);
-    std::printf("stride-drive: %s, %.1f s of %.1f s, %s; %lld fallbacks, %lld failed solves\n",
-                config_path.c_str(), run.samples.empty() ? 0.0 : run.samples.back().t,
-                options.duration, run.fell() ? "FELL" : "no fall",
-                static_cast<long long>(run.mpc.fallbacks),
-                static_cast<long long>(run.mpc.failed_solves));
+    std::printf(
+        "stride-drive: %s, %.1f s of %.1f s, %s; %lld fallbacks, %lld failed solves\n",
+        config_path.c_str(), run.samples.empty() ? 0.0 : run.samples.back().t, options.duration,
+        run.sim.diverged ? "DIVERGED (the simulation)" : (run.fell() ? "FELL" : "no fall"),
+        static_cast<long long>(run.mpc.fallbacks), static_cast<long long>(run.mpc.failed_solves));
     if (run.q_end.size() >= 7)
       std::printf(
           "  terrain '%s': final base (%.3f, %.3f, %.3f) m, %.3f m above the terrain under it, "
