@@ -44,7 +44,7 @@ for robot in "${robots[@]}"; do
     row=$(python3 - "$json" "$robot" "$t" <<'PY'
 import json, sys
 j = json.load(open(sys.argv[1]))
-fell = "fell at %.1f s" % j["duration_s"] if j["fell"] else "no"
+fell = ("diverged" if j.get("diverged") else "fell") + " at %.1f s" % j["duration_s"] if j["fell"] else "no"
 print("| %s | %s | %s | %.2f | %.3f | %d | %s |" % (sys.argv[2], sys.argv[3], fell,
       j["final_base"][0], j["base_height_above_terrain_m"], j["trips"],
       "yes" if j["tracked"] else "no"))
