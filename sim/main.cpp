@@ -59,7 +59,8 @@ int main(int argc, char** argv) {
       ->excludes(terrain_option);
   app.add_option("--drop-height", drop_height, "start this high above standing on the terrain [m]");
   app.add_option("--map-rate", node_options.map.rate_hz,
-                 "elevation maps (stride.terrain_t) per second of robot time; 0: none");
+                 "elevation maps (stride.terrain_t) per second of robot time; 0: none (default: 10 "
+                 "with --terrain or --ground, else none)");
   app.add_option("--map-size", node_options.map.size, "side of the square map around the base [m]");
   app.add_option("--map-resolution", node_options.map.resolution, "the map's cell side [m]");
   app.add_option("--map-noise", node_options.map.noise, "noise of each cell's height, std [m]");
@@ -113,6 +114,10 @@ int main(int argc, char** argv) {
           stride::terrain::loadTerrainFile(stride::terrain::findTerrainFile(
               terrain_name, stride::terrain::terrainConfigDirs())));
     node_options.map.seed = node_options.seed + 2;
+    // The default world, the flat ground at 0, has nothing to map: no 400 kB/s of flat maps on
+    // the bus of every run that did not ask for a world (sim/README.md, "Terrain map").
+    if (app.count("--map-rate") == 0 && app.count("--terrain") == 0 && app.count("--ground") == 0)
+      node_options.map.rate_hz = 0.0;
     if (print_model) {
       std::printf("%s", stride::describeModel(robot).c_str());
       return 0;

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # lcm-spy decodes every Stride channel (issue 17: the model message shows, state and policy stay
-# decodable): a short in-process drive writes a log of all channels, and LcmSpyDecodes.java looks
+# decodable): a short in-process drive (on a terrain: its elevation maps too) writes a log of all
+# channels, and LcmSpyDecodes.java looks
 # each message's class up by fingerprint the way lcm-spy does, from stride_lcm_types.jar. The
 # elevation map (terrain_t) also from a map with unknown (NaN) cells the C++ encoder wrote: the
 # fuzzer's seed corpus (its ctest fuzz_corpus_current keeps it current).
@@ -11,7 +12,8 @@ dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 lcm_jar=/usr/share/java/lcm.jar
 "$drive" --config "$config/controller/stride_quad.yaml" \
-  --commands "$config/commands/stride_quad.yaml" --duration 1.5 --log "$dir/session.lcmlog" > /dev/null
+  --commands "$config/commands/stride_quad.yaml" --terrain step_up_down --duration 1.5 \
+  --log "$dir/session.lcmlog" > /dev/null
 javac -nowarn -cp "$lcm_jar" -d "$dir" "$(dirname "$0")/LcmSpyDecodes.java"
 # jchart2d: lcm-spy's charts, which the class scan loads with lcm.jar.
 java -cp "$jar:$lcm_jar:/usr/share/java/jchart2d.jar:$dir" LcmSpyDecodes "$dir/session.lcmlog" STRIDE_STATE=robot_state_t \

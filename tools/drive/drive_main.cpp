@@ -106,7 +106,8 @@ int main(int argc, char** argv) {
   app.add_option("--drop-height", options.drop_height,
                  "start this high above standing on the terrain [m]");
   app.add_option("--map-rate", options.sim.map.rate_hz,
-                 "elevation maps (stride.terrain_t) per second; 0: none");
+                 "elevation maps (stride.terrain_t) per second; 0: none (default: 10 with "
+                 "--terrain or --ground, else none)");
   app.add_option("--map-noise", options.sim.map.noise, "the maps' cell height noise, std [m]");
   app.add_option("--map-holes", options.sim.map.holes, "probability of an unknown map cell");
   app.add_option("--map-latency", options.sim.map.latency, "the maps' latency [s]");
@@ -126,6 +127,9 @@ int main(int argc, char** argv) {
     else if (ground != 0.0)
       options.terrain = std::make_shared<const stride::terrain::Terrain>(ground);
     options.sim.map.seed = options.sim.seed + 2;
+    // As stride-sim: the default flat world publishes no maps unless asked.
+    if (app.count("--map-rate") == 0 && app.count("--terrain") == 0 && app.count("--ground") == 0)
+      options.sim.map.rate_hz = 0.0;
     if (options.duration <= 0.0) options.duration = options.script.back().at + 4.0;
     for (const std::string& p : pushes) {
       stride::sim::Push push;
