@@ -324,7 +324,9 @@ void Terrain::wallAt(const Eigen::Vector3d& p, double h_here, const Eigen::Vecto
 int Terrain::contacts(const Eigen::Vector3d& p, double reach, Contact* out, int max) const {
   if (max < 1) return 0;
   const Surface here = surface(p.x(), p.y());
-  if (pieces_.empty()) {
+  // A point that is not a place (NaN) gets the ground's support only: no line index is computed
+  // from it (a NaN cast to an index is undefined behaviour).
+  if (pieces_.empty() || !p.allFinite()) {
     out[0] = support(p, here);
     return 1;
   }

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <string>
@@ -539,6 +540,21 @@ TEST(TerrainContacts, RampFootIsNoWall) {
 }
 
 // At most `max`, the nearest kept; a max of 1 is the support alone.
+// A point that is not a place (NaN, from a robot whose state went bad) gets the support alone, and
+// no index is computed from it (clang's UBSan flags a NaN cast to int).
+TEST(TerrainContacts, NotAPlaceGetsTheSupportAlone) {
+  TerrainSpec s;
+  s.stairs.push_back({{0.0, 0.0}, 0.0, 3, 0.1, 0.3, 1.0, 0.5});
+  s.rough.push_back({{-2.0, -1.0}, {-1.0, 1.0}, 0.1, 0.02, 1});
+  const Terrain t(s);
+  Contact out[4];
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(t.contacts({nan, 0.0, 0.05}, 0.01, out, 4), 1);
+  EXPECT_EQ(t.contacts({0.5, nan, 0.05}, 0.01, out, 4), 1);
+  EXPECT_EQ(t.contacts({0.5, 0.0, nan}, 0.01, out, 4), 1);
+  EXPECT_EQ(out[0].kind, Contact::Kind::Support);
+}
+
 TEST(TerrainContacts, AtMostMax) {
   // The inner corner of two boxes' sides: a point in front of both.
   TerrainSpec s;
