@@ -28,8 +28,7 @@ const Robot& simRobot(const std::string& name) {
   return name == "stride_quad" ? quad : humanoid;
 }
 
-void simStep(benchmark::State& state, const std::string& name, double kp, double kd,
-             bool rough) {
+void simStep(benchmark::State& state, const std::string& name, double kp, double kd, bool rough) {
   const Robot& robot = simRobot(name);
   sim::SimOptions options;
   if (rough) {
@@ -59,8 +58,8 @@ void simStep(benchmark::State& state, const std::string& name, double kp, double
 }
 
 void terrainMap(benchmark::State& state, const std::string& name, double x) {
-  const terrain::Terrain world(terrain::loadTerrainFile(
-      terrain::findTerrainFile(name, {std::string(STRIDE_CONFIG_DIR)})));
+  const terrain::Terrain world(
+      terrain::loadTerrainFile(terrain::findTerrainFile(name, {std::string(STRIDE_CONFIG_DIR)})));
   terrain::ElevationMap map;
   map.resolution = 0.02;
   map.resize(100, 100);
