@@ -100,7 +100,7 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   if (!root.IsMap()) r.fail("", "the top level must be a mapping");
   r.onlyKeys(root, "",
              {"robot", "rate_hz", "horizon", "policy_knots", "solver", "contacts", "weights",
-              "gait", "command", "lcm", "safety", "realtime"});
+              "gait", "command", "lcm", "safety", "realtime", "terrain"});
 
   ControllerConfig c;
   c.path = yaml_path;
@@ -292,7 +292,7 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   const YAML::Node lcm = root["lcm"];
   r.onlyKeys(lcm, "lcm",
              {"input", "output", "state", "policy", "status", "plan", "command", "model", "horizon",
-              "horizon_rate_hz"});
+              "horizon_rate_hz", "terrain"});
   if (lcm) {
     r.get(lcm, "input", "lcm", c.input_url);
     r.get(lcm, "output", "lcm", c.output_url);
@@ -303,13 +303,14 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(lcm, "command", "lcm", c.command_channel);
     r.get(lcm, "model", "lcm", c.model_channel);
     r.get(lcm, "horizon", "lcm", c.horizon_channel);
+    r.get(lcm, "terrain", "lcm", c.terrain_channel);
     r.get(lcm, "horizon_rate_hz", "lcm", c.horizon_rate_hz);
     if (!(c.horizon_rate_hz >= 0.0 && c.horizon_rate_hz <= c.rate_hz))
       r.fail("lcm.horizon_rate_hz", "must be in [0, rate_hz]");
   }
   for (const std::string* ch :
        {&c.state_channel, &c.policy_channel, &c.status_channel, &c.plan_channel, &c.command_channel,
-        &c.model_channel, &c.horizon_channel})
+        &c.model_channel, &c.horizon_channel, &c.terrain_channel})
     if (ch->empty() || ch->size() > 63) r.fail("lcm", "channel names must have 1 to 63 characters");
 
   const YAML::Node safety = root["safety"];
@@ -335,6 +336,41 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   r.nonNegative(c.hold_kp, "safety.hold_kp");
   r.nonNegative(c.hold_kd, "safety.hold_kd");
   if (c.max_previous_ticks < 0) r.fail("safety.max_previous_ticks", "must be non-negative");
+
+  const YAML::Node terrain = root["terrain"];
+  r.onlyKeys(terrain, "terrain",
+             {"max_map_age_ms", "max_cells", "max_slope_deg", "jump_height", "min_edge_distance",
+              "edge_search_radius", "max_foothold_shift", "swing_clearance", "max_swing_height"});
+  if (terrain) {
+    double age_ms = c.terrain.max_map_age * 1e3;
+    r.get(terrain, "max_map_age_ms", "terrain", age_ms);
+    r.positive(age_ms, "terrain.max_map_age_ms");
+    c.terrain.max_map_age = age_ms * 1e-3;
+    r.get(terrain, "max_cells", "terrain", c.terrain.max_cells);
+    if (c.terrain.max_cells < 1 || c.terrain.max_cells > 1024 * 1024)
+      r.fail("terrain.max_cells", "must be in [1, 1048576]");
+    terrain::SteppabilityOptions& st = c.terrain.steppability;
+    double slope_deg = st.max_slope * 180.0 / M_PI;
+    r.get(terrain, "max_slope_deg", "terrain", slope_deg);
+    if (!(slope_deg > 0.0 && slope_deg < 90.0))
+      r.fail("terrain.max_slope_deg", "must be in (0, 90)");
+    st.max_slope = slope_deg * M_PI / 180.0;
+    r.get(terrain, "jump_height", "terrain", st.jump_height);
+    r.positive(st.jump_height, "terrain.jump_height");
+    r.get(terrain, "min_edge_distance", "terrain", st.min_edge_distance);
+    r.nonNegative(st.min_edge_distance, "terrain.min_edge_distance");
+    st.edge_search_radius = std::max(st.edge_search_radius, st.min_edge_distance);
+    r.get(terrain, "edge_search_radius", "terrain", st.edge_search_radius);
+    if (!(st.edge_search_radius >= st.min_edge_distance) || !std::isfinite(st.edge_search_radius))
+      r.fail("terrain.edge_search_radius", "must be finite and at least min_edge_distance");
+    GaitGeneratorOptions& g = c.generator;
+    r.get(terrain, "max_foothold_shift", "terrain", g.max_foothold_shift);
+    r.nonNegative(g.max_foothold_shift, "terrain.max_foothold_shift");
+    r.get(terrain, "swing_clearance", "terrain", g.swing_clearance);
+    r.nonNegative(g.swing_clearance, "terrain.swing_clearance");
+    r.get(terrain, "max_swing_height", "terrain", g.max_swing_height);
+    r.nonNegative(g.max_swing_height, "terrain.max_swing_height");
+  }
 
   const YAML::Node rt = root["realtime"];
   r.onlyKeys(rt, "realtime", {"cpu", "fifo_priority"});

@@ -13,6 +13,7 @@
 #include "controller/gait.hpp"
 #include "solver/ddp/solver.hpp"
 #include "solver/ocp/locomotion.hpp"
+#include "terrain/steppability.hpp"
 
 namespace stride {
 
@@ -24,6 +25,18 @@ struct GaitConfig {
 };
 
 enum class Fallback { Previous, Hold };
+
+// Planning on an elevation map (STRIDE_TERRAIN, terrain_t; controller/README.md, "Terrain"): where
+// a foot may stand (steppability) and how a map's age is judged. The foothold shift, swing
+// clearance and apex cap are the generator's (GaitGeneratorOptions).
+struct TerrainConfig {
+  terrain::SteppabilityOptions steppability;
+  // A map measured longer ago than this (robot clock: the state's stamp minus the map's) is stale:
+  // the controller plans blind until a fresh one comes, and counts the ticks.
+  double max_map_age = 0.5;  // [s]
+  // The largest map accepted (cells); a larger one is refused and counted.
+  int max_cells = 256 * 256;
+};
 
 struct ControllerConfig {
   std::string path;        // the YAML it came from
@@ -37,6 +50,7 @@ struct ControllerConfig {
   GaitGeneratorOptions generator;  // horizon, accelerations and height rate follow the rest
   GaitConfig gait;
   CommandConfig command;
+  TerrainConfig terrain;
 
   SolverKind solver = SolverKind::BoxFddp;
   int max_iterations = 1;          // per tick
@@ -56,7 +70,7 @@ struct ControllerConfig {
   std::string state_channel = "STRIDE_STATE", policy_channel = "STRIDE_POLICY",
               status_channel = "STRIDE_STATUS", plan_channel = "STRIDE_PLAN",
               command_channel = "STRIDE_COMMAND", model_channel = "STRIDE_MODEL",
-              horizon_channel = "STRIDE_HORIZON";
+              horizon_channel = "STRIDE_HORIZON", terrain_channel = "STRIDE_TERRAIN";
   // horizon_t (the whole predicted horizon, for viewers) per second; 0: not published.
   double horizon_rate_hz = 10.0;
   std::string input_url, output_url;  // empty: LCM_DEFAULT_URL

@@ -70,6 +70,8 @@ Mpc::Mpc(const ControllerConfig& config)
     throw ConfigError(config_.path + ": " + e.what());
   }
   x_ = Eigen::VectorXd::Zero(nq_ + nv_);
+  steppability_ = terrain::Steppability(config_.terrain.steppability, config_.terrain.max_cells);
+  map_in_.height.reserve(config_.terrain.max_cells);
   msg::shape(policy_, config_.policy_knots, nq_, nv_, nu_);
   msg::shape(previous_, config_.policy_knots, nq_, nv_, nu_);
   policy_.model_hash = previous_.model_hash = stride::modelHash(robot_);
@@ -87,6 +89,48 @@ void Mpc::setPlan(const ContactPlan& plan, std::int64_t start_utime) {
   plan_start_utime_ = start_utime;
   plan_start_set_ = true;
   rebuild_ = true;
+}
+
+bool Mpc::setTerrain(const terrain_t& m) {
+  const long cells = static_cast<long>(m.rows) * m.cols;
+  if (m.rows < 1 || m.cols < 1 || cells > config_.terrain.max_cells ||
+      static_cast<long>(m.height.size()) != m.rows ||
+      // Maps come in stamp order; one more than a second behind is a restarted robot's clock.
+      (steppability_.valid() && m.utime < map_utime_ && m.utime > map_utime_ - 1000000)) {
+    ++counters_.maps_refused;
+    return false;
+  }
+  map_in_.origin_x = m.origin_x;
+  map_in_.origin_y = m.origin_y;
+  map_in_.resolution = m.resolution;
+  map_in_.rows = m.rows;
+  map_in_.cols = m.cols;
+  map_in_.height.resize(cells);  // within the reserved capacity: no allocation
+  for (int r = 0; r < m.rows; ++r) {
+    if (static_cast<int>(m.height[r].size()) != m.cols) {
+      ++counters_.maps_refused;
+      return false;
+    }
+    std::copy(m.height[r].begin(), m.height[r].end(),
+              map_in_.height.begin() + static_cast<long>(r) * m.cols);
+  }
+  if (!steppability_.update(map_in_)) {
+    ++counters_.maps_refused;
+    return false;
+  }
+  map_utime_ = m.utime;
+  ++counters_.maps;
+  return true;
+}
+
+void Mpc::chooseMap(std::int64_t utime) {
+  on_map_ = false;
+  if (steppability_.valid()) {
+    const double age = (utime - map_utime_) * 1e-6;
+    on_map_ = age >= -config_.terrain.max_map_age && age <= config_.terrain.max_map_age;
+    ++(on_map_ ? counters_.map_ticks : counters_.stale_map_ticks);
+  }
+  gen_->setMap(on_map_ ? &steppability_ : nullptr);
 }
 
 void Mpc::setCommand(const BodyCommand& command, int gait) {
@@ -305,6 +349,7 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
   if (!have_plan_ && timeline.lastPattern() != gait_pattern_[gait_])
     timeline.switchTo(gait_pattern_[gait_], t);
   gen_->setCommand(command_);
+  chooseMap(state->utime);
   status_.phase = static_cast<std::int32_t>(timeline.mask(t));
   const int in_force = timeline.patternAt(t);
   status_.gait = have_plan_ ? kPlanGait : gaits_[std::min<int>(in_force, gaits_.size() - 1)];
@@ -432,7 +477,36 @@ bool Mpc::writeHorizon(horizon_t& h) const {
       row += contacts[c].dim;
     }
   }
+  writeFootholds(h, times[T - 1]);
   return true;
+}
+
+void Mpc::writeFootholds(horizon_t& h, double t_end) const {
+  static_assert(static_cast<int>(StanceSource::Unknown) == msg::kFootholdSources - 1,
+                "horizon_t.foothold_source carries StanceSource as a number");
+  // The touch-downs the gait generator planned for the problem just solved: after the state (the
+  // stances in force or lifted from are behind it) and no later than the horizon's last knot. In
+  // the capacity h was shaped with (msg::shape), so that nothing is allocated.
+  const std::size_t capacity = std::min({h.foothold_contact.size(), h.foothold_time.size(),
+                                         h.foothold.size(), h.foothold_source.size()});
+  const double t = t_last_;  // the state's plan time (h.utime)
+  std::size_t n = 0;
+  for (int c = 0; c < gen_->timeline().contacts() && c < h.ncontacts; ++c) {
+    int of_contact = 0;
+    for (int i = 0;
+         i < gen_->stances(c) && of_contact < msg::kHorizonFootholdsPerContact && n < capacity;
+         ++i) {
+      const GaitGenerator::Stance& s = gen_->stance(c, i);
+      if (!(s.touch_down > t && s.touch_down <= t_end)) continue;
+      h.foothold_contact[n] = c;
+      h.foothold_time[n] = s.touch_down - t;
+      std::copy(s.p.data(), s.p.data() + 3, h.foothold[n].begin());
+      h.foothold_source[n] = static_cast<std::int8_t>(s.source);
+      ++of_contact;
+      ++n;
+    }
+  }
+  h.nfootholds = static_cast<std::int32_t>(n);
 }
 
 void Mpc::countAnswer(Clock::time_point deadline) {
@@ -573,6 +647,11 @@ void Mpc::finishStatus(Clock::time_point tick_start, std::int8_t policy_status) 
   status_.stale_states = counters_.stale_states;
   status_.ticks_without_state = counters_.ticks_without_state;
   status_.unprepared_solves = counters_.unprepared_solves;
+  status_.terrain_mode = on_map_ ? 1 : steppability_.valid() ? 2 : 0;
+  status_.map_age =
+      steppability_.valid() && status_.utime != 0 ? (status_.utime - map_utime_) * 1e-6 : -1.0;
+  status_.maps = counters_.maps;
+  status_.stale_map_ticks = counters_.stale_map_ticks;
   status_.tick_ms = millisSince(tick_start);
 }
 

@@ -34,6 +34,8 @@
 #include "messages/validate.hpp"
 #include "solver/ddp/solver.hpp"
 #include "solver/ocp/locomotion.hpp"
+#include "terrain/elevation_map.hpp"
+#include "terrain/steppability.hpp"
 
 namespace stride {
 
@@ -68,6 +70,13 @@ struct MpcCounters {
   // controller's own work made (a stall longer than a period makes two in a row whatever it does).
   std::int64_t host_stalls = 0;
   std::int64_t max_own_misses_in_a_row = 0;
+  // Elevation maps (controller/README.md, "Terrain"): taken, refused (larger than
+  // terrain.max_cells or not well formed), and the ticks planned on a map, or blind because the
+  // newest map was older than terrain.max_map_age (or from the future) when maps had come before.
+  std::int64_t maps = 0;
+  std::int64_t maps_refused = 0;
+  std::int64_t map_ticks = 0;
+  std::int64_t stale_map_ticks = 0;
 };
 
 class Mpc {
@@ -94,6 +103,16 @@ class Mpc {
   // The body command in force (the node's CommandFilter smooths it toward the one received), and
   // the gait asked for (an index into gaits()). Takes effect at the next tick's re-planning.
   void setCommand(const BodyCommand& command, int gait);
+  // An elevation map (validated: messages/validate.hpp checkTerrain), measured at map.utime on the
+  // robot's clock: its steppability is computed now (bounded by terrain.max_cells; no allocation
+  // after construction) and the ticks plan on it while it is fresh. False, and counted, for a map
+  // larger than terrain.max_cells or older than the one in use.
+  bool setTerrain(const terrain_t& map);
+  // The map the ticks plan on (valid() false before the first).
+  const terrain::Steppability& terrain() const { return steppability_; }
+  // Whether the last tick planned on the map.
+  bool plannedOnMap() const { return on_map_; }
+
   // The gaits the robot walks with ("stand" first).
   const std::vector<std::string>& gaits() const { return gaits_; }
 
@@ -135,10 +154,16 @@ class Mpc {
   static constexpr int kMaxStartupResolves = 3;
 
   // After a tick that solved (a fresh policy, not a fallback): the whole predicted horizon into a
-  // horizon_t shaped by msg::shape(h, horizonKnots(), nq, contacts). Allocation-free. False when
-  // the last tick did not solve.
+  // horizon_t shaped by msg::shape(h, horizonKnots(), nq, contacts, horizonFootholds()), with the
+  // footholds the gait generator chose for it: each contact's touch-downs after the state and no
+  // later than the last knot (at most msg::kHorizonFootholdsPerContact each, and the capacity h
+  // was shaped with), by contact then time, their times after the state. Allocation-free. False
+  // when the last tick did not solve.
   bool writeHorizon(horizon_t& h) const;
   int horizonKnots() const { return config_.locomotion.knots; }
+  int horizonFootholds() const {
+    return msg::kHorizonFootholdsPerContact * static_cast<int>(robot_.contacts.size());
+  }
 
   // After a tick: the solver and the problem, for tests and tools.
   const Solver* solver() const { return solver_.get(); }
@@ -149,6 +174,9 @@ class Mpc {
 
  private:
   void start(std::int64_t utime);  // builds the problem and the gaits (allocates)
+  // writeHorizon's footholds: the gait generator's touch-downs after the state up to t_end (plan
+  // time).
+  void writeFootholds(horizon_t& h, double t_end) const;
   // Re-plans the references from the state x_ at plan time t for the horizon from t_warm_, and
   // rewrites the knots for them. False when either refuses (non-finite time or state).
   bool replan(double t);
@@ -167,6 +195,8 @@ class Mpc {
   void holdPolicy(std::int64_t utime, double t);
   void countAnswer(Clock::time_point deadline);  // a miss when the policy is out after it
   void finishStatus(Clock::time_point tick_start, std::int8_t policy_status);
+  // Before a tick's plan: the map if it is fresh at the state's stamp, else blind (counted).
+  void chooseMap(std::int64_t utime);
 
   ControllerConfig config_;
   Robot robot_;
@@ -206,6 +236,11 @@ class Mpc {
   bool late_ = false;        // the coming tick started late (countLateTick)
   std::int64_t misses_in_a_row_ = 0;
   bool run_stalled_ = false;  // the host stalled the controller in the current run of misses
+
+  terrain::ElevationMap map_in_;  // the incoming map, sized for terrain.max_cells
+  terrain::Steppability steppability_;
+  std::int64_t map_utime_ = 0;
+  bool on_map_ = false;
 
   Eigen::VectorXd x_;  // the state as a solver vector
   policy_t policy_, previous_;

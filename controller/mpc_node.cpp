@@ -49,8 +49,10 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
   model_buffer_.resize(m.getEncodedSize());
   m.encode(model_buffer_.data(), 0, static_cast<int>(model_buffer_.size()));
   mpc_.status().wrong_model_cause.reserve(sizeof(ModelMismatch::text));
+  // Shaped with every foothold it can carry: the buffer fits the largest horizon, and writing one
+  // with fewer footholds only lowers nfootholds.
   msg::shape(horizon_, mpc_.horizonKnots(), model.nq,
-             static_cast<int>(mpc_.robot().contacts.size()));
+             static_cast<int>(mpc_.robot().contacts.size()), mpc_.horizonFootholds());
   horizon_buffer_.resize(horizon_.getEncodedSize());
 }
 
@@ -143,6 +145,7 @@ void MpcNode::subscribe(lcm::LCM& in, bool watch_policies) {
   if (watch_policies) add(in.subscribe(config_.policy_channel, &MpcNode::onPolicy, this), 100);
   add(in.subscribe(config_.plan_channel, &MpcNode::onPlan, this), 10);
   add(in.subscribe(config_.command_channel, &MpcNode::onCommand, this), 100);
+  add(in.subscribe(config_.terrain_channel, &MpcNode::onTerrain, this), 2);
 }
 
 void MpcNode::reject(msg::Reject reason) {
@@ -234,6 +237,18 @@ void MpcNode::onCommand(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     return;
   }
   last_command_utime_ = command_msg_.utime;
+}
+
+void MpcNode::onTerrain(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  const int size = static_cast<int>(rbuf->data_size);
+  msg::Reject why = msg::checkTerrainWire(rbuf->data, size, config_.terrain.max_cells);
+  if (why == msg::Reject::None && terrain_msg_.decode(rbuf->data, 0, size) != size)
+    why = msg::Reject::Undecodable;
+  if (why == msg::Reject::None) why = msg::checkTerrain(terrain_msg_);
+  // Mpc::setTerrain refuses a map older than the one in use (out of order) or larger than
+  // terrain.max_cells (the wire check has refused those already).
+  if (why == msg::Reject::None && !mpc_.setTerrain(terrain_msg_)) why = msg::Reject::OutOfOrder;
+  if (why != msg::Reject::None) reject(why);
 }
 
 void MpcNode::applyPendingPlan() {

@@ -14,8 +14,8 @@
 // written to stderr once ("expected nq 19, nv 18 (anymal_c, hash ...), got nq 29, ...") and the
 // latest is carried by the status. The robot_model_t goes out on the model channel at the first
 // tick and then at 1 Hz, so a robot, lcm-spy or a log can tell which layout the controller expects.
-// For viewers, the whole predicted horizon (horizon_t) goes out at lcm.horizon_rate_hz after ticks
-// that solved.
+// For viewers, the whole predicted horizon (horizon_t, with the footholds the gait generator chose)
+// goes out at lcm.horizon_rate_hz after ticks that solved.
 // Two ways to run:
 //   real time  a fixed-rate loop on CLOCK_MONOTONIC (controller/main.cpp);
 //   stamps     time is the newest state's stamp: a tick is due whenever a state reaches the next
@@ -51,6 +51,9 @@ class MpcNode {
   void onState(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void onPlan(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void onCommand(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  // Elevation maps (terrain_t): checked on the wire and in content, handed to Mpc::setTerrain
+  // (controller/README.md, "Terrain"); a map older than the last one taken is out of order.
+  void onTerrain(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   // Policies on the policy channel: this controller's own come back (LCM delivers to the sender);
   // another source is a rival controller, counted and written to stderr once per source.
   void onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
@@ -120,6 +123,7 @@ class MpcNode {
   contact_plan_t plan_msg_;
   bool plan_pending_ = false;
   command_t command_msg_;
+  terrain_t terrain_msg_;
   CommandFilter commands_;
   std::int64_t last_command_utime_ = -1, commands_malformed_ = 0;
   std::vector<unsigned char> buffer_;  // encoded policy / status

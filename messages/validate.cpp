@@ -192,7 +192,7 @@ Reject checkStatusWire(const void* buf, int size) {
   // and gait, and after gait. lcm-gen's decoder takes a string's length minus one as the number of
   // characters to copy: a length of -2^31 overflows (undefined behaviour, in practice 2^31 - 1
   // characters read past the buffer) and 0 makes std::string throw.
-  constexpr long kBeforeCause = kHash + 158, kBetween = 48, kAfterGait = 32;
+  constexpr long kBeforeCause = kHash + 158, kBetween = 48, kAfterGait = 57;
   long at = kBeforeCause;
   for (const long fixed_after : {kBetween, kAfterGait}) {
     std::int32_t len;  // counts the terminating NUL, which must be there
@@ -309,7 +309,7 @@ void shape(policy_t& m, int knots, int nq, int nv, int nu) {
   m.K.assign(knots, std::vector<double>(m.nk, 0.0));
 }
 
-void shape(horizon_t& m, int knots, int nq, int ncontacts) {
+void shape(horizon_t& m, int knots, int nq, int ncontacts, int footholds) {
   m.knots = knots;
   m.nq = nq;
   m.ncontacts = ncontacts;
@@ -319,6 +319,11 @@ void shape(horizon_t& m, int knots, int nq, int ncontacts) {
   m.contact_mask.assign(knots, 0);
   m.impulse.assign(knots, 0);
   m.force.assign(knots, std::vector<double>(m.nf, 0.0));
+  m.nfootholds = footholds;
+  m.foothold_contact.assign(footholds, 0);
+  m.foothold_time.assign(footholds, 0.0);
+  m.foothold.assign(footholds, std::vector<double>(3, 0.0));
+  m.foothold_source.assign(footholds, 0);
 }
 
 void shape(terrain_t& m, int rows, int cols) {

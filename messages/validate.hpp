@@ -104,11 +104,19 @@ long terrainWireSize(int rows, int cols);
 // decoder skips an array whose count is 0, which would leave a reused object's old entries.
 bool decode(const void* buf, int size, robot_state_t& m);
 
+// horizon_t's footholds (issue 31): at most this many per contact (nfootholds <= it times
+// ncontacts), each foothold_source in [0, kFootholdSources) (GaitGenerator's StanceSource:
+// measured, blind, nominal, moved, unreachable, unknown).
+constexpr int kHorizonFootholdsPerContact = 4;
+constexpr int kFootholdSources = 6;
+
 // Resizes a message's arrays to these dimensions (sets the count fields too). Done once at setup,
 // so that later decodes and encodes of the same dimensions allocate nothing.
 void shape(robot_state_t& m, int nq, int nv, int ncontacts);
 void shape(policy_t& m, int knots, int nq, int nv, int nu);
-void shape(horizon_t& m, int knots, int nq, int ncontacts);
+// footholds: the footholds' capacity (nfootholds is set to it, every entry 0); a writer that fills
+// fewer lowers nfootholds, which needs no allocation, nor does raising it back to the capacity.
+void shape(horizon_t& m, int knots, int nq, int ncontacts, int footholds = 0);
 void shape(terrain_t& m, int rows, int cols);  // every height NaN (unknown)
 
 }  // namespace stride::msg

@@ -312,12 +312,14 @@ void SimNode::writeSummary(const std::string& path) const {
       static_cast<long long>(s.stand_down_steps), static_cast<long long>(s.stand_downs),
       static_cast<long long>(s.lockstep_timeouts));
   const terrain::Terrain& terrain = sim_.terrain();
+  const SimCounters& counters = sim_.counters();
   std::printf(
       "stride-sim: terrain '%s'; final base (%.3f, %.3f, %.3f) m, %.3f m above the terrain under "
       "it (lowest %.3f, start %.3f); %lld trips (a foot pushing on a vertical face); %lld terrain "
       "maps published\n",
       terrain.name().c_str(), q[0], q[1], q[2], s.above, s.above_min, s.above0,
-      static_cast<long long>(sim_.counters().trips), static_cast<long long>(mapper_.published()));
+      static_cast<long long>(counters.trips), static_cast<long long>(mapper_.published()));
+  std::printf("stride-sim: %s\n", footholdText(counters, sim_.options()).c_str());
   if (path.empty()) return;
   nlohmann::ordered_json j;
   j["sim_time_s"] = sim_.time();
@@ -346,7 +348,13 @@ void SimNode::writeSummary(const std::string& path) const {
                                                 : nlohmann::ordered_json(nullptr);
   j["base_height_above_terrain_m"] = s.above;
   j["base_height_above_terrain_min_m"] = s.above_min;
-  j["trips"] = sim_.counters().trips;
+  j["trips"] = counters.trips;
+  j["footholds"] = counters.footholds;
+  j["edge_footholds"] = counters.edge_footholds;
+  // No touch-down had an edge within the search radius: null, not infinity (not JSON).
+  j["min_edge_distance_m"] = std::isfinite(counters.min_edge_distance)
+                                 ? nlohmann::ordered_json(counters.min_edge_distance)
+                                 : nlohmann::ordered_json(nullptr);
   j["terrain_maps"] = mapper_.published();
   std::ofstream f(path);
   f << j.dump(2) << "\n";

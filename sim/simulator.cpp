@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -26,6 +27,23 @@ const char* toString(StepStatus status) {
   return "?";
 }
 
+std::string footholdText(const SimCounters& c, const SimOptions& o) {
+  char text[256];
+  int n =
+      std::snprintf(text, sizeof text,
+                    "%lld footholds (touch-downs), %lld closer than %g cm to an edge of more "
+                    "than %g cm, ",
+                    static_cast<long long>(c.footholds), static_cast<long long>(c.edge_footholds),
+                    100.0 * o.edge_distance, 100.0 * o.edge_jump);
+  n = std::max(0, std::min(n, static_cast<int>(sizeof text) - 1));
+  if (std::isfinite(c.min_edge_distance))
+    std::snprintf(text + n, sizeof text - n, "nearest %.3f m", c.min_edge_distance);
+  else
+    std::snprintf(text + n, sizeof text - n, "no edge within %g cm of any",
+                  100.0 * o.edge_search_radius);
+  return text;
+}
+
 namespace {
 void checkOptions(const SimOptions& o) {
   auto fail = [](const std::string& what) {
@@ -44,6 +62,13 @@ void checkOptions(const SimOptions& o) {
   if (!(o.regularization >= 0.0)) fail("regularization must be >= 0");
   if (!std::isfinite(o.ground_height)) fail("ground_height must be finite");
   if (!(o.max_velocity > 0.0)) fail("max_velocity must be > 0");
+  if (!(o.foothold_lift >= 0.0) || !std::isfinite(o.foothold_lift))
+    fail("foothold_lift must be >= 0");
+  if (!(o.edge_jump >= 0.0) || !std::isfinite(o.edge_jump)) fail("edge_jump must be >= 0");
+  if (!(o.edge_distance >= 0.0) || !std::isfinite(o.edge_distance))
+    fail("edge_distance must be >= 0");
+  if (!(o.edge_search_radius >= o.edge_distance) || !std::isfinite(o.edge_search_radius))
+    fail("edge_search_radius must be >= edge_distance");
 }
 }  // namespace
 
@@ -83,6 +108,8 @@ Simulator::Simulator(const Model& model, std::vector<ContactPoint> points,
   contacts_.assign(np, PointContact{});
   on_wall_.assign(np, 0);
   touching_wall_.assign(np, 0);
+  airborne_.assign(np, 1);
+  touching_support_.assign(np, 0);
 }
 
 Simulator::Simulator(const Robot& robot, const SimOptions& options)
@@ -105,6 +132,7 @@ void Simulator::reset(const Eigen::Ref<const Eigen::VectorXd>& q,
   forces_.setZero();
   for (PointContact& c : contacts_) c = PointContact{};
   std::fill(on_wall_.begin(), on_wall_.end(), 0);
+  std::fill(airborne_.begin(), airborne_.end(), 1);  // the points standing now are footholds
   last_status_ = StepStatus::Ok;
 }
 
@@ -224,7 +252,7 @@ StepStatus Simulator::substep(double h) {
   }
   // Constraints that left the candidate set start from zero when they come back.
   warm_.setZero();
-  for (int i = 0; i < np; ++i) touching_wall_[i] = 0;
+  for (int i = 0; i < np; ++i) touching_wall_[i] = touching_support_[i] = 0;
   for (int a = 0; a < na; ++a) {
     const int slot = active_[a];
     const int i = slot / kConstraintsPerPoint;
@@ -239,12 +267,28 @@ StepStatus Simulator::substep(double h) {
     if (impulse.z() > 0.0) {
       contacts_[i].in_contact = true;
       if (c.kind == terrain::Contact::Kind::Wall) touching_wall_[i] = 1;
+      if (slot % kConstraintsPerPoint == 0) touching_support_[i] = 1;
     }
   }
   // A trip: a point that starts pushing on a vertical face (a riser, a box's side).
   for (int i = 0; i < np; ++i) {
     if (touching_wall_[i] && !on_wall_[i]) ++counters_.trips;
     on_wall_[i] = touching_wall_[i];
+  }
+  // A touch-down: a point that starts loading its support after a swing. Its place on the support
+  // (the point under it on flat ground) is measured against the true terrain's edges.
+  for (int i = 0; i < np; ++i) {
+    if (!touching_support_[i]) {
+      if (contacts_[i].height > options_.foothold_lift) airborne_[i] = 1;
+    } else if (airborne_[i]) {
+      airborne_[i] = 0;
+      ++counters_.footholds;
+      const Eigen::Vector3d& at = geometry_.constraint[kConstraintsPerPoint * i].point;
+      const double d =
+          terrain_.edgeDistance(at.x(), at.y(), options_.edge_jump, options_.edge_search_radius);
+      counters_.min_edge_distance = std::min(counters_.min_edge_distance, d);
+      if (d < options_.edge_distance) ++counters_.edge_footholds;
+    }
   }
 
   // q⁺ = q ⊕ h v⁺ (rhs_ is free again: it holds h v⁺).

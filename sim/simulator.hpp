@@ -17,7 +17,9 @@
 // built at construction; step() allocates nothing and never throws.
 
 #include <cstdint>
+#include <limits>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "config/robot_config.hpp"
@@ -50,6 +52,16 @@ struct SimOptions {
   // A step whose velocity exceeds this anywhere (rad/s, m/s) has left physics: it is held and
   // reported as a non-finite state (the run diverged).
   double max_velocity = 1e3;
+  // Footholds (SimCounters::footholds): a touch-down is an edge foothold when its contact point is
+  // closer than `edge_distance` horizontally to a line where the terrain's height jumps by more
+  // than `edge_jump`, looked for within `edge_search_radius` (terrain::Terrain::edgeDistance; the
+  // steppability of terrain/README.md asks the same 2 cm of a map). A touch-down is one after a
+  // swing: the point rose more than `foothold_lift` above its support since it last loaded it (a
+  // foot bouncing or rocking in place, up to ~1 cm on the light PD legs, is not a new foothold).
+  double foothold_lift = 0.02;
+  double edge_jump = 0.02;
+  double edge_distance = 0.02;
+  double edge_search_radius = 0.05;
 };
 
 enum class StepStatus : std::uint8_t {
@@ -71,7 +83,23 @@ struct SimCounters {
   // Times a contact point started pushing on a vertical face of the terrain (a riser, a box's
   // side): a foot that hit an obstacle instead of stepping onto it.
   std::int64_t trips = 0;
+  // Touch-downs: a contact point that starts carrying a normal impulse on its support after a swing
+  // (it rose more than SimOptions::foothold_lift above the terrain since it last loaded it), each
+  // sole corner on its own; the points standing on the terrain at a reset count too. Measured on
+  // the true terrain at the point's place on its support.
+  std::int64_t footholds = 0;
+  // Touch-downs closer than SimOptions::edge_distance (horizontally) to an edge of the terrain: a
+  // height jump of more than edge_jump, at the top of a drop or at the foot of a wall.
+  std::int64_t edge_footholds = 0;
+  // The smallest distance of a touch-down to an edge [m]; +infinity while no touch-down had one
+  // within SimOptions::edge_search_radius (always on flat ground).
+  double min_edge_distance = std::numeric_limits<double>::infinity();
 };
+
+// The footholds in words, for the summaries of stride-sim and stride-drive: "412 footholds
+// (touch-downs), 3 closer than 2 cm to an edge of more than 2 cm, nearest 0.012 m" (or "no edge
+// within 5 cm of any").
+std::string footholdText(const SimCounters& counters, const SimOptions& options);
 
 // What one candidate point did in the last step.
 struct PointContact {
@@ -164,7 +192,8 @@ class Simulator {
   Eigen::Matrix3Xd impulse_sum_;  // 3 x P: impulses summed over the substeps of this step
   Eigen::Matrix3Xd forces_;       // 3 x P
   std::vector<PointContact> contacts_;
-  std::vector<char> on_wall_, touching_wall_;  // per point: pushing on a face (trips)
+  std::vector<char> on_wall_, touching_wall_;      // per point: pushing on a face (trips)
+  std::vector<char> airborne_, touching_support_;  // per point: swung, loading its support
 
   SimCounters counters_;
   StepStatus last_status_ = StepStatus::Ok;

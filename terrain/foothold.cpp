@@ -91,11 +91,18 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
   return out;
 }
 
-double maxHeightAlong(const ElevationMap& map, const Eigen::Vector2d& from,
-                      const Eigen::Vector2d& to) {
+namespace {
+// Visits every cell of `map` that the horizontal segment from `from` to `to` passes through, in
+// order (a walk along the grid, so that a corner it clips is not missed), as visit(r, c, f0, f1):
+// the cell and the fractions of the segment at which it enters and leaves it. The parts outside
+// the map are skipped. False (nothing visited) for a map or segment that is not well formed, or
+// one that misses the map. At most |cells along x| + |cells along y| + 1 visits.
+template <class Visit>
+bool walkSegment(const ElevationMap& map, const Eigen::Vector2d& from, const Eigen::Vector2d& to,
+                 Visit&& visit) {
   if (map.rows <= 0 || map.cols <= 0 || !(map.resolution > 0.0) || !from.allFinite() ||
       !to.allFinite() || map.height.size() != static_cast<std::size_t>(map.rows) * map.cols)
-    return kNaN;
+    return false;
   // Grid coordinates in which cell (r, c) is the square [c, c + 1) x [r, r + 1).
   const double u0 = (from.x() - map.origin_x) / map.resolution + 0.5;
   const double v0 = (from.y() - map.origin_y) / map.resolution + 0.5;
@@ -113,7 +120,7 @@ double maxHeightAlong(const ElevationMap& map, const Eigen::Vector2d& from,
     return t0 <= t1;
   };
   if (!clip(-du, u0) || !clip(du, map.cols - u0) || !clip(-dv, v0) || !clip(dv, map.rows - v0))
-    return kNaN;
+    return false;
   const auto cell = [](double x, int n) {
     return std::clamp(static_cast<int>(std::floor(x)), 0, n - 1);
   };
@@ -128,11 +135,12 @@ double maxHeightAlong(const ElevationMap& map, const Eigen::Vector2d& from,
   double next_u = du != 0.0 ? (step_c > 0 ? c + 1 - ua : ua - c) * delta_u : kInf;
   double next_v = dv != 0.0 ? (step_r > 0 ? r + 1 - va : va - r) * delta_v : kInf;
   const int steps = std::abs(c_end - c) + std::abs(r_end - r);
-  double best = -kInf;
+  double enter = t0;
   for (int i = 0;; ++i) {
-    const float h = map.at(r, c);
-    if (!std::isnan(h)) best = std::max(best, static_cast<double>(h));
+    const double leave = i == steps ? t1 : std::clamp(t0 + std::min(next_u, next_v), enter, t1);
+    visit(r, c, enter, leave);
     if (i == steps) break;
+    enter = leave;
     // Never past the end cell on either axis, whatever the rounding of the crossings.
     if ((next_u < next_v && c != c_end) || r == r_end) {
       c += step_c;
@@ -142,15 +150,42 @@ double maxHeightAlong(const ElevationMap& map, const Eigen::Vector2d& from,
       next_v += delta_v;
     }
   }
+  return true;
+}
+}  // namespace
+
+double maxHeightAlong(const ElevationMap& map, const Eigen::Vector2d& from,
+                      const Eigen::Vector2d& to) {
+  double best = -kInf;
+  walkSegment(map, from, to, [&](int r, int c, double, double) {
+    const float h = map.at(r, c);
+    if (!std::isnan(h)) best = std::max(best, static_cast<double>(h));
+  });
   return best == -kInf ? kNaN : best;
 }
 
-double swingApexHeight(const ElevationMap& map, const Eigen::Vector3d& lift_off,
-                       const Eigen::Vector3d& touch_down, double clearance) {
-  double top = std::max(lift_off.z(), touch_down.z());
-  const double between = maxHeightAlong(map, lift_off.head<2>(), touch_down.head<2>());
-  if (!std::isnan(between)) top = std::max(top, between);
-  return top + clearance;
+double swingLift(const ElevationMap& map, const Eigen::Vector3d& lift_off,
+                 const Eigen::Vector3d& touch_down, double foot_height, double clearance) {
+  // The arc at the fraction f of the way: z(f) = line(f) + h 2 sqrt(f (1 - f)) (sin(pi s) with
+  // f = (1 - cos(pi s)) / 2). Clearing a cell of height H over [f0, f1] by clearance c (faded the
+  // same way towards both ends, where the foot must meet the ground) needs
+  //   h >= c + (H + foot_height - line(f)) / (2 sqrt(f (1 - f))),
+  // evaluated at the cell's ends and middle; the ends' own few per cent are left out (the cells the
+  // foot stands on: a map's noise there would ask for an arbitrarily high arc).
+  constexpr double kEnd = 0.05;
+  const double dz = touch_down.z() - lift_off.z();
+  double need = 0.0;
+  walkSegment(map, lift_off.head<2>(), touch_down.head<2>(),
+              [&](int r, int c, double f0, double f1) {
+                const float h = map.at(r, c);
+                if (std::isnan(h)) return;
+                for (const double f_raw : {f0, 0.5 * (f0 + f1), f1}) {
+                  const double f = std::clamp(f_raw, kEnd, 1.0 - kEnd);
+                  const double above = h + foot_height - (lift_off.z() + f * dz);
+                  if (above > 0.0) need = std::max(need, above / (2.0 * std::sqrt(f * (1.0 - f))));
+                }
+              });
+  return clearance + need;
 }
 
 }  // namespace stride::terrain

@@ -59,9 +59,12 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
 double maxHeightAlong(const ElevationMap& map, const Eigen::Vector2d& from,
                       const Eigen::Vector2d& to);
 
-// The height a swing's apex needs: clearance above the highest of the lift-off point, the
-// touch-down point and the terrain between them (maxHeightAlong; ignored when NaN).
-double swingApexHeight(const ElevationMap& map, const Eigen::Vector3d& lift_off,
-                       const Eigen::Vector3d& touch_down, double clearance);
+// The apex h the swing arc p(f) = a + f (b - a) + h 2 sqrt(f (1 - f)) e_z of the controller
+// (GaitGenerator: the horizontal fraction f = (1 - cos(pi s)) / 2 and the bump h sin(pi s) of the
+// swing phase s) needs so that the foot frame, foot_height above the sole, clears every known cell
+// between lift-off a and touch-down b by `clearance` in mid-swing (faded as sin(pi s) towards both
+// ends, where the foot meets the ground). A flat path: `clearance`. Bounded as maxHeightAlong.
+double swingLift(const ElevationMap& map, const Eigen::Vector3d& lift_off,
+                 const Eigen::Vector3d& touch_down, double foot_height, double clearance);
 
 }  // namespace stride::terrain

@@ -382,4 +382,77 @@ int Terrain::contacts(const Eigen::Vector3d& p, double reach, Contact* out, int 
   return 1 + n;
 }
 
+double Terrain::edgeDistance(double x, double y, double min_jump, double radius) const {
+  // The walk along a line where the jump changes, and the bisection's tolerance [m].
+  constexpr double kWalk = 1e-3, kLocate = 1e-6;
+  double best = std::numeric_limits<double>::infinity();
+  if (pieces_.empty() || !std::isfinite(x) || !std::isfinite(y) || !(radius >= 0.0) ||
+      !std::isfinite(radius))
+    return best;
+  const Eigen::Vector2d xy(x, y);
+  auto edgeAt = [&](const Eigen::Vector2d& e, const Eigen::Vector2d& m) {
+    int wa, wb;
+    return std::abs(heightAndPiece(e + kSide * m, wa) - heightAndPiece(e - kSide * m, wb)) >
+           min_jump;
+  };
+  // One line segment [a, b]: its nearest edge point within min(best, radius).
+  auto line = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    const Eigen::Vector2d ab = b - a;
+    const double length = ab.norm();
+    if (!(length > 0.0)) return;
+    const Eigen::Vector2d dir = ab / length, m(-dir.y(), dir.x());
+    auto at = [&](double s) -> Eigen::Vector2d { return a + s * dir; };
+    auto distance = [&](double s) { return (xy - at(s)).norm(); };
+    const double s0 = std::clamp((xy - a).dot(dir), 0.0, length);
+    if (distance(s0) > std::min(best, radius)) return;
+    if (edgeAt(at(s0), m)) {
+      best = distance(s0);
+      return;
+    }
+    // The distance grows away from s0 on either side: the first edge point each way is the
+    // nearest on that side.
+    for (double sign : {1.0, -1.0}) {
+      double below = s0;
+      for (int k = 1;; ++k) {
+        const double s = std::clamp(s0 + sign * k * kWalk, 0.0, length);
+        if (s == below || distance(s) > std::min(best, radius)) break;
+        if (edgeAt(at(s), m)) {
+          double above = s;
+          while (std::abs(above - below) > kLocate) {
+            const double mid = 0.5 * (below + above);
+            (edgeAt(at(mid), m) ? above : below) = mid;
+          }
+          best = std::min(best, distance(above));
+          break;
+        }
+        below = s;
+      }
+    }
+  };
+  for (const Piece& piece : pieces_) {
+    const Eigen::Vector2d c = local(piece, xy);
+    const double lu = 2.0 * piece.half_u, lw = 2.0 * piece.half_w;
+    if (c.x() < -radius || c.x() > lu + radius || c.y() < -radius || c.y() > lw + radius) continue;
+    auto at = [&](double u, double w) -> Eigen::Vector2d {
+      return piece.center + (u - piece.half_u) * piece.u + (w - piece.half_w) * piece.w;
+    };
+    line(at(0, 0), at(lu, 0));
+    line(at(lu, 0), at(lu, lw));
+    line(at(lu, lw), at(0, lw));
+    line(at(0, lw), at(0, 0));
+    if (piece.kind == PieceKind::Block) continue;
+    const int last_u = piece.kind == PieceKind::Flight ? piece.steps - 1 : piece.cells_u - 1;
+    const int i0 = std::max(1, static_cast<int>(std::ceil((c.x() - radius) / piece.run)));
+    const int i1 = std::min(last_u, static_cast<int>(std::floor((c.x() + radius) / piece.run)));
+    for (int i = i0; i <= i1; ++i) line(at(i * piece.run, 0), at(i * piece.run, lw));
+    if (piece.kind == PieceKind::Rough) {
+      const int j0 = std::max(1, static_cast<int>(std::ceil((c.y() - radius) / piece.run)));
+      const int j1 =
+          std::min(piece.cells_w - 1, static_cast<int>(std::floor((c.y() + radius) / piece.run)));
+      for (int j = j0; j <= j1; ++j) line(at(0, j * piece.run), at(lu, j * piece.run));
+    }
+  }
+  return best;
+}
+
 }  // namespace stride::terrain

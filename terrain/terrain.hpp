@@ -94,6 +94,17 @@ class Terrain {
   // of the riser, not up onto the step).
   int contacts(const Eigen::Vector3d& p, double reach, Contact* out, int max) const;
 
+  // The horizontal distance from (x, y) to the nearest point of an edge: a line where H jumps by
+  // more than `min_jump` (a riser, a box's side, a rough patch's cell edge or border, a ramp's
+  // high end; a ramp's foot is a kink, not an edge), on either side of it (at the top of a drop or
+  // at the foot of a wall), looked for within `radius` (finite, >= 0). +infinity when there is none
+  // within it, when the terrain is flat, and for a place or radius that is not finite. The jump is
+  // read across each line as contacts() reads it; where it changes along a line (a ramp's side, a
+  // rough patch's border, a face partly covered by a higher piece) the line is walked from its
+  // point nearest (x, y) outwards in 1 mm steps and the change located by bisection (to 1 µm). What
+  // the mock robot's edge_footholds count measures (sim/README.md).
+  double edgeDistance(double x, double y, double min_jump, double radius) const;
+
   // The axis-aligned rectangle [min, max] that holds every piece (the ground's point when flat):
   // what a viewer or a map needs to cover.
   void bounds(Eigen::Vector2d& min, Eigen::Vector2d& max) const;

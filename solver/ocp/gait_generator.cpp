@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
@@ -9,6 +10,8 @@
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/jacobian.hpp"
 #include "solver/multibody/lie_group.hpp"
+#include "terrain/foothold.hpp"
+#include "terrain/ground_plane.hpp"
 
 namespace stride {
 
@@ -22,6 +25,8 @@ constexpr double kLookahead = 2.0;
 constexpr double kHalfStanceCap = 0.5;
 // Body-height postures solved at construction (odd: one at the nominal height).
 constexpr int kCrouches = 9;
+// Feet a generator plans for (the ground plane's fit takes them on the stack).
+constexpr int kMaxFeet = 8;
 
 double yawOf(double qx, double qy, double qz, double qw) {
   return std::atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz));
@@ -31,6 +36,15 @@ Eigen::Vector2d rotate(double yaw, double x, double y) {
   const double c = std::cos(yaw), s = std::sin(yaw);
   return {c * x - s * y, s * x + c * y};
 }
+
+// The smallest rotation that takes e_z to the unit vector n (exactly the identity for e_z: flat
+// ground plans the same bits as without a map).
+Eigen::Matrix3d alignZ(const Eigen::Vector3d& n) {
+  if (n.x() == 0.0 && n.y() == 0.0) return Eigen::Matrix3d::Identity();
+  return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n).toRotationMatrix();
+}
+
+const Eigen::Vector3d kUp = Eigen::Vector3d::UnitZ();
 }  // namespace
 
 GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
@@ -43,8 +57,9 @@ GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
       data_(model) {
   if (!model.hasFreeFlyer())
     throw std::invalid_argument("GaitGenerator: the robot needs a free-flyer base");
-  if (contacts.size() == 0)
-    throw std::invalid_argument("GaitGenerator: the robot needs at least one contact to walk on");
+  if (contacts.size() == 0 || contacts.size() > kMaxFeet)
+    throw std::invalid_argument("GaitGenerator: the robot needs one to " +
+                                std::to_string(kMaxFeet) + " contacts to walk on");
   if (x_nominal.size() != model.nq + model.nv || !x_nominal.allFinite())
     throw std::invalid_argument("GaitGenerator: x_nominal must be finite of size nq + nv");
   const GaitGeneratorOptions& o = options;
@@ -83,6 +98,7 @@ GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
   buildCrouches(contacts);
   latched_.assign(nc_, Eigen::Vector3d::Zero());
   latched_yaw_.assign(nc_, 0.0);
+  latched_normal_.assign(nc_, kUp);
   samples_.assign(static_cast<size_t>(std::ceil((o.horizon + kLookahead) / o.sample_dt)) + 2,
                   Sample{});
   stances_.assign(nc_, std::vector<Stance>(kMaxStances));
@@ -212,8 +228,41 @@ GaitGenerator::Stance GaitGenerator::foothold(int contact, double touch_down, do
   const double n = lead.norm();
   if (n > options_.max_foothold_lead) lead *= options_.max_foothold_lead / n;
   const Eigen::Vector2d xy = on_robot + lead + correction;
-  return {touch_down, lift_off, Eigen::Vector3d(xy.x(), xy.y(), off.z() + ground_),
-          s.yaw + foot_yaw_[contact]};
+  Stance stance{touch_down, lift_off, Eigen::Vector3d(xy.x(), xy.y(), off.z() + ground_),
+                s.yaw + foot_yaw_[contact]};
+  stance.source = StanceSource::Blind;
+  stance.swing_height = options_.swing_height;
+  if (!map_) return stance;
+  // On the map: the nearest safe cell to the nominal foothold, at the map's height (issue 31).
+  terrain::FootholdReach reach;
+  reach.max_shift = options_.max_foothold_shift;
+  const terrain::Foothold f = terrain::selectFoothold(*map_, xy, reach);
+  switch (f.status) {
+    case terrain::FootholdStatus::Nominal:
+    case terrain::FootholdStatus::Moved:
+      stance.p = f.position + Eigen::Vector3d(0.0, 0.0, off.z());
+      stance.normal = f.normal;
+      stance.source = f.status == terrain::FootholdStatus::Nominal ? StanceSource::Nominal
+                                                                   : StanceSource::Moved;
+      break;
+    case terrain::FootholdStatus::Unreachable:
+      // No safe cell within reach: the nominal place, at the map's height when it knows it.
+      if (std::isfinite(f.position.z())) stance.p.z() = f.position.z() + off.z();
+      stance.source = StanceSource::Unreachable;
+      break;
+    case terrain::FootholdStatus::Unknown:
+      stance.source = StanceSource::Unknown;
+      break;
+  }
+  return stance;
+}
+
+double GaitGenerator::swingHeight(int contact, const Stance& from, const Stance& to) const {
+  if (!map_) return options_.swing_height;
+  const double lift =
+      terrain::swingLift(map_->map(), from.p, to.p, offset_[contact].z(), options_.swing_clearance);
+  return std::clamp(lift, options_.swing_height,
+                    std::max(options_.swing_height, options_.max_swing_height));
 }
 
 void GaitGenerator::updateGround(double t) {
@@ -260,6 +309,10 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
       const SE3& M = data_.oMf[frames_[c]];
       latched_[c] = M.p;
       latched_yaw_[c] = std::atan2(M.R(1, 0), M.R(0, 0));
+      latched_normal_[c] = kUp;
+      int row, col;
+      if (map_ && map_->cellOf(M.p.x(), M.p.y(), row, col) && std::isfinite(map_->slope(row, col)))
+        latched_normal_[c] = map_->normal(row, col);
     }
   updateGround(t);
   // The base reference carries on from the last plan, but stays within a leash of the robot. A
@@ -306,6 +359,8 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
     else
       st[0] = {-ContactTimeline::kNever, timeline_.lastChange(c, t_from), latched_[c],
                latched_yaw_[c]};
+    st[0].normal = latched_normal_[c];
+    st[0].swing_height = options_.swing_height;
     int count = 1;
     bool next = true;  // the next touch-down after t takes the correction
     double lift_off = st[0].lift_off;
@@ -314,12 +369,16 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
       if (touch_down == ContactTimeline::kNever) break;
       const double next_lift_off = timeline_.nextChange(c, touch_down);
       if (touch_down <= t) {  // already down at t: where it was measured
-        st[count++] = {touch_down, next_lift_off, latched_[c], latched_yaw_[c]};
+        st[count] = {touch_down, next_lift_off, latched_[c], latched_yaw_[c]};
+        st[count].normal = latched_normal_[c];
+        st[count].swing_height = options_.swing_height;
       } else {
-        st[count++] = foothold(c, touch_down, next_lift_off,
-                               next ? correction : Eigen::Vector2d::Zero().eval());
+        st[count] = foothold(c, touch_down, next_lift_off,
+                             next ? correction : Eigen::Vector2d::Zero().eval());
+        st[count].swing_height = swingHeight(c, st[count - 1], st[count]);
         next = false;
       }
+      ++count;
       if (touch_down > t_end) break;
       lift_off = next_lift_off;
     }
@@ -350,8 +409,53 @@ Eigen::Vector3d GaitGenerator::foot(int contact, double t) const {
   const std::vector<Stance>& st = stances_[contact];
   if (s <= 0.0) return st[i].p;  // down, or no touch-down known: hold the lift-off point
   Eigen::Vector3d p = st[i].p + 0.5 * (1.0 - std::cos(kPi * s)) * (st[i + 1].p - st[i].p);
-  p.z() += options_.swing_height * std::sin(kPi * s);
+  p.z() += st[i + 1].swing_height * std::sin(kPi * s);
   return p;
+}
+
+const Eigen::Vector3d& GaitGenerator::footNormal(int contact, double t) const {
+  double s;
+  const int i = stanceAt(contact, t, s);
+  const std::vector<Stance>& st = stances_[contact];
+  return s > 0.0 ? st[i + 1].normal : st[i].normal;
+}
+
+double GaitGenerator::groundAt(double t) const {
+  if (!map_) return ground_;
+  // The mean height of the feet's footholds over their nominal heights, each foot's on the swing's
+  // ramp between its footholds.
+  double sum = 0.0;
+  for (int c = 0; c < nc_; ++c) {
+    double s;
+    const int i = stanceAt(c, t, s);
+    const std::vector<Stance>& st = stances_[c];
+    double z = st[i].p.z();
+    if (s > 0.0) z += 0.5 * (1.0 - std::cos(kPi * s)) * (st[i + 1].p.z() - z);
+    sum += z - offset_[c].z();
+  }
+  return sum / nc_;
+}
+
+Eigen::Vector3d GaitGenerator::groundNormalAt(double t) const {
+  if (!map_) return kUp;
+  std::array<Eigen::Vector3d, kMaxFeet> feet;
+  Eigen::Vector3d normals = Eigen::Vector3d::Zero();
+  for (int c = 0; c < nc_; ++c) {
+    double s;
+    const int i = stanceAt(c, t, s);
+    const std::vector<Stance>& st = stances_[c];
+    feet[c] = st[i].p;
+    if (s > 0.0) feet[c] += 0.5 * (1.0 - std::cos(kPi * s)) * (st[i + 1].p - st[i].p);
+    feet[c].z() -= offset_[c].z();
+    normals += s > 0.0 ? st[i + 1].normal : st[i].normal;
+  }
+  // Across a line of feet (a biped, a trot's diagonal) the footholds' surfaces tell the slope.
+  const Eigen::Vector3d n = normals.normalized();
+  terrain::GroundPlane prior, plane;
+  prior.b = -n.x() / n.z();
+  prior.c = -n.y() / n.z();
+  if (terrain::fitGroundPlane(feet.data(), nc_, prior, plane) == 0) plane = prior;
+  return plane.normal();
 }
 
 Eigen::Matrix3d GaitGenerator::footRotation(int contact, double t) const {
@@ -361,7 +465,9 @@ Eigen::Matrix3d GaitGenerator::footRotation(int contact, double t) const {
   double yaw = st[i].yaw;
   if (s > 0.0)
     yaw += 0.5 * (1.0 - std::cos(kPi * s)) * std::remainder(st[i + 1].yaw - yaw, 2.0 * kPi);
-  return Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * foot_tilt_[contact];
+  // A sole lands flat on its foothold's surface.
+  const Eigen::Vector3d& n = s > 0.0 ? st[i + 1].normal : st[i].normal;
+  return alignZ(n) * Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * foot_tilt_[contact];
 }
 
 void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
@@ -370,8 +476,10 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
   const Sample s = baseAt(t);
   x_ref[0] = s.x;
   x_ref[1] = s.y;
-  x_ref[2] = z_nominal_ + s.height + ground_;
-  const Eigen::Quaterniond o = Eigen::AngleAxisd(s.yaw, Eigen::Vector3d::UnitZ()) * tilt_;
+  x_ref[2] = z_nominal_ + s.height + groundAt(t);
+  // The body tilts with the ground under the feet (flat: exactly the nominal tilt).
+  const Eigen::Quaterniond o = Eigen::Quaterniond(alignZ(groundNormalAt(t))) *
+                               Eigen::AngleAxisd(s.yaw, Eigen::Vector3d::UnitZ()) * tilt_;
   x_ref.segment<4>(3) << o.x(), o.y(), o.z(), o.w();
   // The joints of the posture for this height (interpolated between the solved ones).
   const int n = static_cast<int>(crouch_.size());
@@ -390,7 +498,7 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
 
 Eigen::Vector3d GaitGenerator::basePosition(double t) const {
   const Sample s = baseAt(t);
-  return {s.x, s.y, z_nominal_ + s.height + ground_};
+  return {s.x, s.y, z_nominal_ + s.height + groundAt(t)};
 }
 
 double GaitGenerator::baseYaw(double t) const {
@@ -401,7 +509,7 @@ Eigen::Vector3d GaitGenerator::com(double t) const {
   const Sample s = baseAt(t);
   const Eigen::Vector2d xy =
       Eigen::Vector2d(s.x, s.y) + rotate(s.yaw, com_offset_.x(), com_offset_.y());
-  return {xy.x(), xy.y(), z_nominal_ + s.height + ground_ + com_offset_.z()};
+  return {xy.x(), xy.y(), z_nominal_ + s.height + groundAt(t) + com_offset_.z()};
 }
 
 }  // namespace stride

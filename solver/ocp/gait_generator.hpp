@@ -39,10 +39,12 @@
 // plan() allocates nothing and queries are array look-ups; the sizes are fixed at construction.
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 #include "solver/multibody/data.hpp"
 #include "solver/ocp/contact_timeline.hpp"
+#include "terrain/steppability.hpp"
 
 namespace stride {
 
@@ -51,6 +53,16 @@ struct BodyCommand {
   double vx = 0.0, vy = 0.0;  // [m/s]
   double yaw_rate = 0.0;      // [rad/s]
   double height = 0.0;        // [m], from the nominal posture's
+};
+
+// Where a stance's position came from (horizon_t.foothold_source carries it as a number).
+enum class StanceSource : std::uint8_t {
+  Measured = 0,     // the foot is (or was) down there: its measured position
+  Blind = 1,        // planned on the ground the feet feel (no map, or a stale one)
+  Nominal = 2,      // the map's: the nominal foothold was safe
+  Moved = 3,        // the map's: moved to the nearest steppable cell
+  Unreachable = 4,  // the map knows no steppable cell within reach: blind height, nominal place
+  Unknown = 5,      // the map does not know the place: blind
 };
 
 struct GaitGeneratorOptions {
@@ -72,6 +84,12 @@ struct GaitGeneratorOptions {
   // (z = 0) are taken as the nominal ground, so that a flat floor plans exactly as without it.
   double ground_time_constant = 0.3;
   double ground_dead_band = 0.005;
+  // On a map (setMap): how far a foothold may move from the nominal one to a steppable cell [m],
+  // the swing's clearance over the terrain between its footholds [m], and the highest apex a swing
+  // may take above the line between them [m].
+  double max_foothold_shift = 0.08;
+  double swing_clearance = 0.05;
+  double max_swing_height = 0.25;
   // The longest span plan() is asked to cover (t_end - t_begin) [s], and the step of the base
   // trajectory's samples.
   double horizon = 1.0;
@@ -95,6 +113,21 @@ class GaitGenerator {
   // [-options.max_height, options.max_height] (empty without a body-height range).
   const std::vector<Eigen::VectorXd>& crouchPostures() const { return crouch_; }
 
+  // The terrain to plan on (terrain/steppability.hpp), or none (nullptr): blind, the ground the
+  // feet feel. The map must outlive its use (until the next setMap); the controller sets it before
+  // each plan() from the newest map that is fresh enough (controller/README.md, "Terrain").
+  //
+  // With a map, each touch-down after the plan time goes to terrain::selectFoothold of its
+  // nominal place (within max_foothold_shift), at the map's height there; the swing that lands
+  // there rises high enough to clear the terrain between its footholds (terrain::swingLift with
+  // swing_clearance, at least swing_height, at most max_swing_height); the base's height follows
+  // the mean height of the feet's footholds along the horizon (each foot's on the swing's ramp
+  // between them), and its tilt the plane through them (terrain::fitGroundPlane, across a line of
+  // feet the mean of the footholds' surface normals); a foot's friction cone and a sole's
+  // orientation follow the surface normal of its foothold.
+  void setMap(const terrain::Steppability* map) { map_ = map && map->valid() ? map : nullptr; }
+  const terrain::Steppability* map() const { return map_; }
+
   // The command in force (the controller's smoothed command), held over the horizon.
   void setCommand(const BodyCommand& command) { command_ = command; }
   const BodyCommand& command() const { return command_; }
@@ -112,8 +145,11 @@ class GaitGenerator {
   bool closed(int contact, double t) const { return timeline_.closed(contact, t); }
   unsigned mask(double t) const { return timeline_.mask(t); }
   Eigen::Vector3d foot(int contact, double t) const;
-  // Its reference orientation: the nominal tilt of the foot, turned to the planned heading.
+  // Its reference orientation: the nominal tilt of the foot, turned to the planned heading (and on
+  // a map tilted onto the surface of its foothold).
   Eigen::Matrix3d footRotation(int contact, double t) const;
+  // The surface normal (world) where contact c stands at t, or where it lands when in the air.
+  const Eigen::Vector3d& footNormal(int contact, double t) const;
   void state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const;
   Eigen::Vector3d com(double t) const;
   // The base reference at t: position, yaw.
@@ -130,6 +166,11 @@ class GaitGenerator {
     double touch_down, lift_off;
     Eigen::Vector3d p;
     double yaw;  // the foot's heading
+    // Where p came from: measured (a foot down), blind (the ground the feet feel), or the map's
+    // foothold selection (terrain::FootholdStatus: Nominal, Moved, Unreachable, Unknown).
+    StanceSource source = StanceSource::Measured;
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // the surface's there (world, up)
+    double swing_height = 0.0;  // the apex of the swing that lands here, above the line [m]
   };
   int stances(int contact) const { return n_stances_[contact]; }
   const Stance& stance(int contact, int i) const { return stances_[contact][i]; }
@@ -142,11 +183,17 @@ class GaitGenerator {
   };
   void sampleBase(double t, const Eigen::Vector2d& p0, double yaw0);
   Sample baseAt(double t) const;
+  // The height of the ground under the base at t (the feet's footholds on a map; else ground_),
+  // and the unit normal of the ground plane through the feet (up without a map).
+  double groundAt(double t) const;
+  Eigen::Vector3d groundNormalAt(double t) const;
   // The same command carried from the measured base instead (where footholds are planned).
   Sample robotAt(double t) const;
   // A planned stance's position and heading.
   Stance foothold(int contact, double touch_down, double lift_off,
                   const Eigen::Vector2d& correction) const;
+  // The apex of the swing from `from` to `to` (swing_height; on a map, high enough to clear it).
+  double swingHeight(int contact, const Stance& from, const Stance& to) const;
   // The ground the feet down feel at plan time t (ground_).
   void updateGround(double t);
   // The stance in force (or last lifted from) at t, and how far along the swing to the next one
@@ -179,6 +226,8 @@ class GaitGenerator {
   bool ground_started_ = false;
   std::vector<Eigen::Vector3d> latched_;  // where each foot was last measured while down
   std::vector<double> latched_yaw_;
+  std::vector<Eigen::Vector3d> latched_normal_;  // the map's normal where the foot stands
+  const terrain::Steppability* map_ = nullptr;
   double t_anchor_ = 0.0;
   Eigen::Vector2d robot_xy_ = Eigen::Vector2d::Zero();  // measured base at t_anchor_
   double robot_turn_ = 0.0;                             // measured yaw - reference yaw there

@@ -1,10 +1,14 @@
 // The controller's tick allocates nothing after start-up (ARCHITECTURE.md §4): decoding the state
-// bytes, validating them, shifting the horizon, the solve, the policy and the status messages,
-// encoding them and handing them to the publisher, through fallbacks too.
+// bytes, validating them, shifting the horizon, the solve, the policy and the status messages
+// (and the predicted horizon with its footholds), encoding them and handing them to the
+// publisher, through fallbacks too.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
+#include <string>
 #include <thread>
+#include <utility>
 
 #include "allocation_counter.hpp"
 #include "controller/mpc_node.hpp"
@@ -120,6 +124,55 @@ void tickNoAllocation(const std::string& robot, int ticks) {
   EXPECT_EQ(statuses,
             (std::vector<int>{kPolicyPrevious, kPolicyPrevious, kPolicyHold, kPolicyHold}));
   EXPECT_GT(out.bytes, 0);
+}
+
+// The horizon goes out with the footholds the gait generator chose, and writing them allocates
+// nothing (issue 31): a planner's trot (config/plans/quad_trot_then_stand.yaml: stand 1 s, then
+// trot), in stamps mode, a horizon every 0.1 s of stamps. Its size tells how many footholds it
+// carries (37 bytes each).
+struct HorizonSizes : Publisher {
+  explicit HorizonSizes(std::string c) : channel(std::move(c)) {}
+  std::string channel;
+  int horizons = 0, smallest = 1 << 30, largest = 0;
+  void publish(const std::string& c, const void*, int size) override {
+    if (c != channel) return;
+    ++horizons;
+    smallest = std::min(smallest, size);
+    largest = std::max(largest, size);
+  }
+};
+
+TEST(ControllerNoAllocation, HorizonsWithFootholds) {
+  ControllerConfig config = loadControllerConfig(controller_cases::configPath("stride_quad"));
+  config.gait.plan_file = std::string(STRIDE_CONFIG_DIR) + "/plans/quad_trot_then_stand.yaml";
+  HorizonSizes out(config.horizon_channel);
+  MpcNode node(config, out, TimeSource::Stamps);
+  const Robot& robot = node.mpc().robot();
+  robot_state_t s = controller_cases::standingState(robot, 0);
+  std::vector<unsigned char> bytes(s.getEncodedSize());
+  auto tick = [&](std::int64_t utime) {
+    s.utime = utime;
+    s.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    lcm::ReceiveBuffer rbuf{bytes.data(), static_cast<uint32_t>(bytes.size()), 0};
+    node.onState(&rbuf, config.state_channel);
+    node.tick(Mpc::Clock::time_point::max());
+    node.prepare(Mpc::Clock::time_point::max());
+  };
+  tick(0);  // start-up: builds and solves the problem
+  const auto period = static_cast<std::int64_t>(1e6 / config.rate_hz);
+  for (std::int64_t t = period; t <= 800000; t += period)
+    EXPECT_EQ(allocations([&] { tick(t); }), 0) << "at " << t << " us";
+  horizon_t none;
+  msg::shape(none, node.mpc().horizonKnots(), robot.model.nq,
+             static_cast<int>(robot.contacts.size()));
+  const int fewest = (out.smallest - none.getEncodedSize()) / 37;
+  const int most = (out.largest - none.getEncodedSize()) / 37;
+  EXPECT_GE(out.horizons, 7);
+  // Standing until 0.3 s, nothing to land; from 0.4 s the touch-downs from 1.3 s on are within
+  // the 1 s horizon: two feet at 1.3 s, two at 1.6 s, ... (at most 4 per foot).
+  EXPECT_EQ(fewest, 0);
+  EXPECT_GE(most, 2);
+  EXPECT_LT(most, node.mpc().horizonFootholds());
 }
 
 TEST(ControllerNoAllocation, QuadrupedTicks) {

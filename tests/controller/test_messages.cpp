@@ -320,6 +320,7 @@ TEST_F(NodeInput, PublishesTheHorizonAt10Hz) {
     fz += h.force[0][3 * c + 2];
   }
   EXPECT_NEAR(fz, robot.model.totalMass() * 9.81, 0.1 * robot.model.totalMass() * 9.81);
+  EXPECT_EQ(h.nfootholds, 0);  // standing: no touch-down planned (test_mpc.cpp: a trot's)
 }
 
 // The controller watches its policy channel: its own policies come back and count for nothing,

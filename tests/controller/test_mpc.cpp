@@ -183,6 +183,97 @@ TEST(Mpc, PlanKeepsTheCommandVelocity) {
     }
 }
 
+// The footholds the gait generator chose go out with the horizon (issue 31): for a trot, each
+// foot's touch-downs after the state and no later than the last knot, by contact then time, with
+// the generator's positions and sources, their times after the state; none while standing; no
+// more than the capacity the message was shaped with.
+TEST(Mpc, HorizonCarriesTheChosenFootholds) {
+  ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  Mpc mpc(config);
+  const int nc = static_cast<int>(mpc.robot().contacts.size());
+  const int nq = mpc.robot().model.nq;
+  ASSERT_EQ(mpc.horizonFootholds(), msg::kHorizonFootholdsPerContact * nc);
+  horizon_t h;
+  msg::shape(h, mpc.horizonKnots(), nq, nc, mpc.horizonFootholds());
+  robot_state_t s = standingState(mpc.robot(), 1000000);
+  ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+  ASSERT_TRUE(mpc.writeHorizon(h));
+  EXPECT_EQ(h.nfootholds, 0);  // standing: no touch-down planned
+
+  BodyCommand walk;
+  walk.vx = 0.3;
+  mpc.setCommand(walk, 1);  // trot
+  // The footholds the generator planned for the solve, found here from its stances.
+  struct Expected {
+    int contact;
+    double dt;
+    Eigen::Vector3d p;
+    int source;
+  };
+  auto expected = [&]() {
+    std::vector<Expected> e;
+    const GaitGenerator& gen = *mpc.reference();
+    const double t = mpc.status().plan_time;
+    const double t_end = mpc.problem()->knotTimes()[h.knots - 1];
+    for (int c = 0; c < nc; ++c) {
+      int n = 0;
+      for (int i = 0; i < gen.stances(c); ++i) {
+        const GaitGenerator::Stance& st = gen.stance(c, i);
+        if (st.touch_down > t && st.touch_down <= t_end && n < msg::kHorizonFootholdsPerContact) {
+          e.push_back({c, st.touch_down - t, st.p, static_cast<int>(st.source)});
+          ++n;
+        }
+      }
+    }
+    return e;
+  };
+  int checked = 0;
+  for (int i = 0; i < 40; ++i) {
+    s.utime += 5000;
+    ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+    if (!mpc.writeHorizon(h)) continue;  // a rejected step: nothing written
+    const std::vector<Expected> e = expected();
+    ASSERT_EQ(h.nfootholds, static_cast<int>(e.size())) << "tick " << i;
+    std::vector<int> per_contact(nc, 0);
+    for (int k = 0; k < h.nfootholds; ++k) {
+      EXPECT_EQ(h.foothold_contact[k], e[k].contact) << k;
+      EXPECT_DOUBLE_EQ(h.foothold_time[k], e[k].dt) << k;
+      EXPECT_GT(h.foothold_time[k], 0.0) << k;
+      EXPECT_LE(h.foothold_time[k], h.t[h.knots - 1] + config.locomotion.dt) << k;
+      for (int j = 0; j < 3; ++j) EXPECT_EQ(h.foothold[k][j], e[k].p[j]) << k << " " << j;
+      EXPECT_EQ(h.foothold_source[k], e[k].source) << k;
+      if (k > 0 && h.foothold_contact[k] == h.foothold_contact[k - 1]) {
+        EXPECT_GT(h.foothold_time[k], h.foothold_time[k - 1]) << k;
+      }
+      if (k > 0) {
+        EXPECT_GE(h.foothold_contact[k], h.foothold_contact[k - 1]) << k;
+      }
+      ++per_contact[h.foothold_contact[k]];
+    }
+    // A trot of 0.6 s cycles over a 1 s horizon: every foot lands at least once.
+    for (int c = 0; c < nc; ++c) {
+      EXPECT_GE(per_contact[c], 1) << "contact " << c << " tick " << i;
+      EXPECT_LE(per_contact[c], msg::kHorizonFootholdsPerContact) << c;
+    }
+    ++checked;
+  }
+  EXPECT_GE(checked, 20);
+  // Walking forward: the first foot's next foothold lies ahead of where it stands.
+  ASSERT_GT(h.nfootholds, 0);
+  EXPECT_GT(h.foothold[0][0], mpc.reference()->stance(0, 0).p.x());
+
+  // A message shaped for fewer footholds gets the first ones, and says how many.
+  horizon_t small;
+  msg::shape(small, mpc.horizonKnots(), nq, nc, 3);
+  ASSERT_TRUE(mpc.writeHorizon(small));
+  ASSERT_EQ(small.nfootholds, 3);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(small.foothold_contact[k], h.foothold_contact[k]);
+    EXPECT_EQ(small.foothold_time[k], h.foothold_time[k]);
+    EXPECT_EQ(small.foothold[k], h.foothold[k]);
+  }
+}
+
 // The controller around a robot that stands still: the first tick solves to convergence and
 // publishes; the next ones shift and re-solve within their budget.
 TEST(Mpc, StandingTicks) {

@@ -7,6 +7,7 @@
 
 #include "controller_cases.hpp"
 #include "terrain/terrain.hpp"
+#include "terrain/terrain_file.hpp"
 #include "tools/drive/closed_loop.hpp"
 #include "tools/log/segments.hpp"
 
@@ -43,7 +44,9 @@ TEST_P(BlindGroundOffset, WalksAndTracks) {
   o.duration = 9.0;
   o.script = forward(c.gait, c.vx);
   o.terrain = std::make_shared<const terrain::Terrain>(c.ground);
+  o.sim.map.rate_hz = 0.0;  // blind: no elevation map
   const drive::Run r = drive::run(config, o);
+  EXPECT_EQ(r.mpc.maps, 0);
   ASSERT_FALSE(r.fell()) << c.robot << " on a floor at " << c.ground << " m";
   // It stood on that floor: its feet felt it, and the base is as high above it as it stands.
   const double z0 = r.samples.front().q[2];
@@ -68,6 +71,64 @@ INSTANTIATE_TEST_SUITE_P(
       return std::string(info.param.robot) + (info.param.ground < 0 ? "_lower_" : "_higher_") +
              std::to_string(static_cast<int>(std::abs(info.param.ground) * 100)) + "cm";
     });
+
+// Forward at vx from 2 s to `until`, then stand.
+std::vector<ScriptedCommand> forwardUntil(double vx, double until) {
+  std::vector<ScriptedCommand> s = forward("trot", vx);
+  s[3].at = until;
+  return s;
+}
+
+// The mean forward speed of the segment commanded at vx.
+double forwardSpeed(const drive::Run& r, double vx) {
+  for (const logs::Segment& s : r.segments())
+    if (s.command[0] == vx && s.samples > 0) return s.achieved[0];
+  return 0.0;
+}
+
+// With the elevation map (issue 31): anymal_c trots at 0.4 m/s up the shipped 17 cm x 29 cm
+// stairs (4 steps from x = 1.5), across the 1 m landing and down the 4 steps on the other side
+// (to the ground from x = 4.82): no fall, at least 70 % of the command, at most one trip on a
+// riser, every tick planned on a fresh map.
+TEST(TerrainWithMap, AnymalClimbsAndDescendsTheStairs) {
+  ControllerConfig config = loadControllerConfig(controller_cases::configPath("anymal_c"));
+  config.robots_dirs = {STRIDE_ROBOT_PACKAGES};
+  drive::Options o;
+  o.duration = 16.0;
+  o.script = forwardUntil(0.4, 15.5);
+  o.terrain = std::make_shared<const terrain::Terrain>(
+      terrain::loadTerrainFile(std::string(STRIDE_CONFIG_DIR) + "/terrain/stairs_anymal_c.yaml"));
+  const drive::Run r = drive::run(config, o);
+  ASSERT_FALSE(r.fell());
+  EXPECT_GT(r.q_end[0], 5.0) << "down the stairs and on the ground beyond";
+  EXPECT_NEAR(r.base_above_terrain, r.samples.front().q[2], 0.03);
+  EXPECT_GE(forwardSpeed(r, 0.4), 0.7 * 0.4);
+  EXPECT_LE(r.trips, 1);
+  EXPECT_GT(r.mpc.maps, 100);
+  EXPECT_EQ(r.mpc.stale_map_ticks, 0);
+  EXPECT_EQ(r.mpc.fallbacks, 0);
+}
+
+// Blind (no map): solo12 trots at 0.3 m/s across a rough patch of 10 cm cells up to 2 cm high or
+// low from x = 0.5 to 3.0, planning on the ground its feet feel.
+TEST(TerrainBlind, Solo12CrossesTheRoughPatch) {
+  ControllerConfig config = loadControllerConfig(controller_cases::configPath("solo12"));
+  config.robots_dirs = {STRIDE_ROBOT_PACKAGES};
+  drive::Options o;
+  o.duration = 14.0;
+  o.script = forwardUntil(0.3, 13.5);
+  o.terrain = std::make_shared<const terrain::Terrain>(terrain::parseTerrain(
+      "ground: 0.0\nrough:\n  - {min: [0.5, -1.0], max: [3.0, 1.0], cell: 0.1, amplitude: 0.02, "
+      "seed: 5}\n",
+      "test"));
+  o.sim.map.rate_hz = 0.0;
+  const drive::Run r = drive::run(config, o);
+  ASSERT_FALSE(r.fell());
+  EXPECT_GT(r.q_end[0], 3.0) << "across the patch";
+  EXPECT_GE(forwardSpeed(r, 0.3), 0.7 * 0.3);
+  EXPECT_EQ(r.mpc.maps, 0);
+  EXPECT_EQ(r.mpc.fallbacks, 0);
+}
 
 }  // namespace
 }  // namespace stride

@@ -214,6 +214,17 @@ class Corpus {
     h.contact_mask[3] = 1 << nc_;
     add(Channel::VizHorizon, "mask_of_a_fifth_contact", encode(h));
     add(Channel::VizHorizon, "knots_2e31", poke32(encode(horizon(1000000, 8)), 8 + 16, kHuge));
+    // The chosen footholds (issue 31): a count of 2^31, a fifth contact's, an unknown source.
+    h = horizon(1000000, 8);
+    horizon_t no_footholds = h;
+    no_footholds.nfootholds = 0;
+    const std::size_t nfootholds_at = static_cast<std::size_t>(no_footholds.getEncodedSize()) - 4;
+    add(Channel::VizHorizon, "nfootholds_2e31", poke32(encode(h), nfootholds_at, kHuge));
+    h.foothold_contact[1] = nc_;
+    add(Channel::VizHorizon, "foothold_of_a_fifth_contact", encode(h));
+    h = horizon(1000000, 8);
+    h.foothold_source[0] = msg::kFootholdSources;
+    add(Channel::VizHorizon, "foothold_source_unknown", encode(h));
     const mpc_status_t st = status(1000000);
     add(Channel::VizStatus, "trot", encode(st));
     mpc_status_t refusing = status(1005000);
@@ -312,10 +323,17 @@ class Corpus {
     return m;
   }
 
-  // Standing still, the feet alternating in pairs every 4 knots, each carrying a quarter of 25 N.
+  // Standing still, the feet alternating in pairs every 4 knots, each carrying a quarter of 25 N;
+  // the two feet that lift at knot 4 land again 1/8 s later, one blind, one moved by the map.
   horizon_t horizon(std::int64_t utime, int knots) const {
     horizon_t m;
-    msg::shape(m, knots, nq_, nc_);
+    msg::shape(m, knots, nq_, nc_, 2);
+    for (int i = 0; i < 2; ++i) {
+      m.foothold_contact[i] = 1 + i;
+      m.foothold_time[i] = 0.125;
+      m.foothold[i] = {0.25, i == 0 ? 0.125 : -0.125, 0.0078125 * i};
+      m.foothold_source[i] = static_cast<std::int8_t>(i == 0 ? 1 : 3);
+    }
     m.utime = utime;
     m.model_hash = hash_;
     for (int k = 0; k < knots; ++k) {

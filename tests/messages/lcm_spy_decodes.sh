@@ -3,8 +3,9 @@
 # decodable): a short in-process drive (on a terrain: its elevation maps too) writes a log of all
 # channels, and LcmSpyDecodes.java looks
 # each message's class up by fingerprint the way lcm-spy does, from stride_lcm_types.jar. The
-# elevation map (terrain_t) also from a map with unknown (NaN) cells the C++ encoder wrote: the
-# fuzzer's seed corpus (its ctest fuzz_corpus_current keeps it current).
+# elevation map (terrain_t) also from a map with unknown (NaN) cells the C++ encoder wrote, and the
+# horizon (horizon_t) from one with chosen footholds (issue 31): the fuzzer's seed corpus (its
+# ctest fuzz_corpus_current keeps it current).
 #   lcm_spy_decodes.sh STRIDE_DRIVE JAR CONFIG_DIR
 set -euo pipefail
 drive=$1 jar=$2 config=$3
@@ -18,4 +19,6 @@ javac -nowarn -cp "$lcm_jar" -d "$dir" "$(dirname "$0")/LcmSpyDecodes.java"
 # jchart2d: lcm-spy's charts, which the class scan loads with lcm.jar.
 java -cp "$jar:$lcm_jar:/usr/share/java/jchart2d.jar:$dir" LcmSpyDecodes "$dir/session.lcmlog" STRIDE_STATE=robot_state_t \
   STRIDE_POLICY=policy_t STRIDE_STATUS=mpc_status_t STRIDE_MODEL=robot_model_t STRIDE_COMMAND=command_t \
-  STRIDE_TERRAIN=terrain_t "corpus:$(dirname "$0")/../fuzz/corpus/viz_terrain-box_step=terrain_t"
+  STRIDE_TERRAIN=terrain_t STRIDE_HORIZON=horizon_t \
+  "corpus:$(dirname "$0")/../fuzz/corpus/viz_terrain-box_step=terrain_t" \
+  "corpus:$(dirname "$0")/../fuzz/corpus/viz_horizon-standing=horizon_t"

@@ -23,6 +23,7 @@
 #include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/ocp/gait_generator.hpp"
+#include "terrain/steppability.hpp"
 
 namespace stride {
 namespace {
@@ -909,6 +910,97 @@ TEST(GaitGenerator, ConstructionRefusesBadOptions) {
   EXPECT_THROW(make(o), std::invalid_argument);
   EXPECT_THROW(GaitGenerator(r.robot.model, r.contacts, r.x_nominal.head(5), hand()),
                std::invalid_argument);
+}
+
+// ============================================================================ On a map (issue 31)
+
+// A map of 1 cm cells over [-1, 2] x [-1, 1] with the height h(x, y) at each cell's centre.
+template <class H>
+terrain::Steppability mapOf(H h) {
+  terrain::ElevationMap m;
+  m.resolution = 0.01;
+  m.origin_x = -1.0;
+  m.origin_y = -1.0;
+  m.resize(201, 301);
+  for (int r = 0; r < m.rows; ++r)
+    for (int c = 0; c < m.cols; ++c)
+      m.at(r, c) =
+          static_cast<float>(h(m.origin_x + c * m.resolution, m.origin_y + r * m.resolution));
+  terrain::Steppability st({}, m.rows * m.cols);
+  EXPECT_TRUE(st.update(m));
+  return st;
+}
+
+TEST(GaitGenerator, OnARampTheBodyAndTheConesFollowTheSurface) {
+  // z = 0.2 (x + 1): every touch-down after the first lands on it; once every foot has (t = 0.9),
+  // the base stands at its nominal height above the mean of the footholds' surface heights,
+  // pitched nose-up by atan(0.2), and a foot down there has its cone along the ramp's normal.
+  const double slope = 0.2;
+  const terrain::Steppability ramp = mapOf([&](double x, double) { return slope * (x + 1.0); });
+  Generator g;
+  g->setCommand(velocity(0.3));
+  g->setMap(&ramp);
+  ASSERT_TRUE(g->plan(0.0, placed(0.0, 0.0, 0.0), 0.0, 1.0));
+  const Nominal n;
+  const Eigen::Vector3d up_the_ramp = Eigen::Vector3d(-slope, 0.0, 1.0).normalized();
+  for (int c = 0; c < 4; ++c)
+    for (int i = 1; i < g->stances(c); ++i) {
+      const GaitGenerator::Stance& s = g->stance(c, i);
+      EXPECT_TRUE(s.source == StanceSource::Nominal) << c << " " << i;
+      EXPECT_NEAR(s.p.z() - n.foot[c].z(), slope * (s.p.x() + 1.0), 0.006) << c << " " << i;
+      EXPECT_NEAR((s.normal - up_the_ramp).norm(), 0.0, 1e-4) << c << " " << i;
+    }
+  const double t = 0.9;  // FL, HR landed at 0.3 and 0.9; FR, HL at 0.6
+  double mean = 0.0;
+  for (int c = 0; c < 4; ++c) mean += slope * (g->foot(c, t).x() + 1.0) / 4.0;
+  Eigen::VectorXd x(quad().x_nominal.size());
+  g->state(t, x);
+  EXPECT_NEAR(x[2] - n.z, mean, 0.006);
+  const Eigen::Quaterniond o(x[6], x[3], x[4], x[5]);
+  const Eigen::Vector3d nose = o * Eigen::Vector3d::UnitX();
+  EXPECT_NEAR(std::atan2(nose.z(), nose.x()), std::atan(slope), 0.01);
+  for (int c = 0; c < 4; ++c)
+    if (g->closed(c, t)) EXPECT_NEAR((g->footNormal(c, t) - up_the_ramp).norm(), 0.0, 1e-4);
+  // Without the map: level, on the ground the feet feel.
+  g->setMap(nullptr);
+  ASSERT_TRUE(g->plan(0.0, placed(0.0, 0.0, 0.0), 0.0, 1.0));
+  g->state(t, x);
+  EXPECT_NEAR(x[2], n.z, 1e-12);
+  EXPECT_NEAR(std::abs(Eigen::Quaterniond(x[6], x[3], x[4], x[5]).w()), 1.0, 1e-12);
+}
+
+TEST(GaitGenerator, OnAMapTheSwingClearsABox) {
+  // A box 8 cm high across FL's first swing (lift-off at 0.1 s, touch-down at 0.3 s, 6 cm further
+  // on at 0.3 m/s): the arc passes over every cell of the box with the clearance, where the blind
+  // arc (5 cm apex) would go through it.
+  const Nominal n;
+  Generator blind;
+  blind->setCommand(velocity(0.3));
+  ASSERT_TRUE(blind->plan(0.0, placed(0.0, 0.0, 0.0), 0.0, 1.0));
+  const double x0 = n.foot[FL].x(), x1 = blind->stance(FL, 1).p.x();
+  ASSERT_GT(x1 - x0, 0.05);
+  const double lo = x0 + 0.35 * (x1 - x0), hi = x0 + 0.65 * (x1 - x0);
+  const terrain::Steppability box =
+      mapOf([&](double x, double) { return x >= lo && x <= hi ? 0.08 : 0.0; });
+  Generator g(hand());
+  g->setCommand(velocity(0.3));
+  g->setMap(&box);
+  ASSERT_TRUE(g->plan(0.0, placed(0.0, 0.0, 0.0), 0.0, 1.0));
+  EXPECT_GT(g->stance(FL, 1).swing_height, 0.08);
+  int over = 0;
+  bool blind_hits = false;
+  for (double t = 0.1; t <= 0.3; t += 0.001) {
+    const Eigen::Vector3d p = g->foot(FL, t), q = blind->foot(FL, t);
+    int r, c;
+    if (box.cellOf(p.x(), p.y(), r, c) && box.height(r, c) > 0.0f) {
+      ++over;
+      EXPECT_GT(p.z() - n.foot[FL].z(), 0.08) << t;
+    }
+    if (box.cellOf(q.x(), q.y(), r, c) && box.height(r, c) > 0.0f)
+      blind_hits = blind_hits || q.z() - n.foot[FL].z() < 0.08;
+  }
+  EXPECT_GT(over, 10);
+  EXPECT_TRUE(blind_hits);
 }
 
 }  // namespace

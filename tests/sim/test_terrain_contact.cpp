@@ -2,7 +2,9 @@
 // a flat terrain gives the very bits the simulator gave before terrains existed; the quadruped
 // rests on a box top at its standing height; a sled stays put on a 20° ramp with μ = 1 and slides
 // down it at g (sin θ − μ cos θ) with μ = 0.1; a point swept into a 10 cm riser is stopped at its
-// plane and counted as a trip; step() allocates nothing on stairs and rough ground.
+// plane and counted as a trip; footholds: the distance of a place to the terrain's edges (stairs,
+// a ramp's side), a puck or a sled dropped onto a tread near its nosing or mid-tread counted as
+// edge footholds or not, never on flat ground; step() allocates nothing on stairs and rough ground.
 
 #include <gtest/gtest.h>
 
@@ -11,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -391,6 +394,226 @@ TEST(TerrainContact, PuckSweptIntoARiserIsStoppedAndTripsOnce) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Footholds near edges (SimCounters::footholds, edge_footholds, min_edge_distance). The stairs of
+// stride_quad's terrains: 3 steps of 8 cm x 25 cm from x = 0.2 m, 1 m wide; tread 1 (top 0.08 m)
+// from its nosing at x = 0.2 to the next riser at x = 0.45.
+constexpr double kNosing = 0.2, kRun = 0.25, kRise = 0.08;
+
+std::shared_ptr<const Terrain> stairs() {
+  TerrainSpec s;
+  terrain::StairsSpec f;
+  f.start = {kNosing, 0.0};
+  f.steps = 3;
+  f.rise = kRise;
+  f.run = kRun;
+  f.width = 1.0;
+  s.stairs.push_back(f);
+  return std::make_shared<Terrain>(s);
+}
+
+TEST(TerrainContact, EdgeDistanceOnStairsAndRamps) {
+  const auto flight = stairs();
+  const double inf = std::numeric_limits<double>::infinity();
+  struct Case {
+    const char* what;
+    double x, y, expected;
+  };
+  const Case cases[] = {
+      {"on tread 1, 1 cm from its nosing (the top of a drop)", kNosing + 0.01, 0.0, 0.01},
+      {"on the ground, 1 cm before the first riser (the foot of a wall)", kNosing - 0.01, 0.1,
+       0.01},
+      {"on tread 1, 1 cm before the next riser", kNosing + kRun - 0.01, -0.2, 0.01},
+      {"on tread 1, 3 cm from its nosing", kNosing + 0.03, 0.0, 0.03},
+      {"mid-tread: 12.5 cm from either edge", kNosing + 0.5 * kRun, 0.0, inf},
+      {"on a riser's line", kNosing + kRun, 0.0, 0.0},
+      {"beside the flight, 1 cm from its side", kNosing + 0.1, 0.51, 0.01},
+      {"beside the flight's corner, 3 cm off it in x and in y", kNosing - 0.03, 0.53,
+       std::hypot(0.03, 0.03)},
+      {"on the ground far from it", -1.0, 0.0, inf},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    const double d = flight->edgeDistance(c.x, c.y, 0.02, 0.05);
+    if (std::isinf(c.expected))
+      EXPECT_TRUE(std::isinf(d)) << d;
+    else
+      EXPECT_NEAR(d, c.expected, 1e-9);
+  }
+  // Only jumps of more than min_jump: the 8 cm risers are no edge for 10 cm, and none beyond the
+  // radius.
+  EXPECT_TRUE(std::isinf(flight->edgeDistance(kNosing + 0.01, 0.0, 0.1, 0.05)));
+  EXPECT_TRUE(std::isinf(flight->edgeDistance(kNosing + 0.03, 0.0, 0.02, 0.0299)));
+  EXPECT_NEAR(flight->edgeDistance(kNosing + 0.03, 0.0, 0.02, 0.0301), 0.03, 1e-9);
+  // Flat ground, and places that are not: no edge.
+  EXPECT_TRUE(std::isinf(Terrain(0.1).edgeDistance(0.0, 0.0, 0.02, 0.05)));
+  EXPECT_TRUE(std::isinf(flight->edgeDistance(std::nan(""), 0.0, 0.02, 0.05)));
+  EXPECT_TRUE(std::isinf(flight->edgeDistance(kNosing, 0.0, 0.02, inf)));
+
+  // A ramp rising 10 cm over 1 m along x from x = 0, 1 m wide: its foot is a kink, not an edge;
+  // its high end is a 10 cm drop; its sides are faces whose height grows along them, past 2 cm
+  // from x = 0.2 on: a place 1 cm beside the side at x = 0.19 is sqrt(2) cm from that point, one at
+  // x = 0.1 has no edge within 5 cm (the side is 1 cm high there).
+  TerrainSpec s;
+  s.ramps.push_back({{0.0, 0.0}, {1.0, 0.0}, 1.0, 0.1});
+  const Terrain ramp(s);
+  EXPECT_TRUE(std::isinf(ramp.edgeDistance(-0.01, 0.0, 0.02, 0.05))) << "the foot";
+  EXPECT_TRUE(std::isinf(ramp.edgeDistance(0.01, 0.0, 0.02, 0.05))) << "the foot";
+  EXPECT_NEAR(ramp.edgeDistance(0.99, 0.0, 0.02, 0.05), 0.01, 1e-9) << "the high end";
+  EXPECT_NEAR(ramp.edgeDistance(1.01, 0.0, 0.02, 0.05), 0.01, 1e-9) << "below the high end";
+  EXPECT_NEAR(ramp.edgeDistance(0.19, 0.51, 0.02, 0.05), std::sqrt(2.0) * 0.01, 1e-5) << "side";
+  EXPECT_NEAR(ramp.edgeDistance(0.19, 0.49, 0.02, 0.05), std::sqrt(2.0) * 0.01, 1e-5) << "side";
+  EXPECT_NEAR(ramp.edgeDistance(0.5, 0.51, 0.02, 0.05), 0.01, 1e-9) << "side, 5 cm high";
+  EXPECT_TRUE(std::isinf(ramp.edgeDistance(0.1, 0.51, 0.02, 0.05))) << "side, 1 cm high";
+}
+
+struct Drop {
+  std::int64_t footholds = 0, edge_footholds = 0;
+  double min_edge_distance = 0.0;
+  double moved = 0.0;  // horizontal drift of the body over the drop
+};
+
+// A body of `points` (the puck: one; the sled: four corners) dropped with its lowest points 2 cm
+// above the terrain at (x, y), left to rest for 0.5 s.
+Drop dropOnto(std::shared_ptr<const Terrain> world, const Model& model,
+              const std::vector<sim::ContactPoint>& points, double bottom, double x, double y) {
+  SimOptions opt;
+  opt.terrain = world;
+  Simulator sim(model, points, opt);
+  Eigen::VectorXd q(7);
+  const double top = world ? world->height(x, y) : 0.0;
+  q << x, y, top + 0.02 + bottom, 0, 0, 0, 1;
+  sim.reset(q, Eigen::VectorXd::Zero(6));
+  const Eigen::VectorXd none(0);
+  for (int i = 0; i < 500; ++i) EXPECT_EQ(sim.step(none), StepStatus::Ok) << "step " << i;
+  for (const sim::PointContact& c : sim.pointContacts()) EXPECT_TRUE(c.in_contact) << "at rest";
+  Drop d;
+  d.footholds = sim.counters().footholds;
+  d.edge_footholds = sim.counters().edge_footholds;
+  d.min_edge_distance = sim.counters().min_edge_distance;
+  d.moved = std::hypot(sim.q()[0] - x, sim.q()[1] - y);
+  return d;
+}
+
+TEST(TerrainContact, AFootDroppedNearAnEdgeIsAnEdgeFoothold) {
+  const Puck puck;
+  const auto flight = stairs();
+  const double inf = std::numeric_limits<double>::infinity();
+  struct Case {
+    const char* what;
+    double x;
+    std::int64_t edge;
+    double nearest;
+  };
+  const Case cases[] = {
+      {"on tread 1, 1 cm from its nosing", kNosing + 0.01, 1, 0.01},
+      {"on the ground, 1 cm before the first riser", kNosing - 0.01, 1, 0.01},
+      {"on tread 1, 1 cm before the next riser", kNosing + kRun - 0.01, 1, 0.01},
+      {"on tread 1, 3 cm from its nosing", kNosing + 0.03, 0, 0.03},
+      {"mid-tread", kNosing + 0.5 * kRun, 0, inf},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    const Drop d = dropOnto(flight, puck.model, puck.points, 0.0, c.x, 0.0);
+    EXPECT_EQ(d.footholds, 1) << "one touch-down, then resting";
+    EXPECT_EQ(d.edge_footholds, c.edge);
+    if (std::isinf(c.nearest))
+      EXPECT_TRUE(std::isinf(d.min_edge_distance)) << d.min_edge_distance;
+    else
+      EXPECT_NEAR(d.min_edge_distance, c.nearest, 1e-6);
+    EXPECT_LT(d.moved, 1e-6);
+  }
+  // Flat ground (no terrain, a flat one): never an edge, wherever the foot comes down.
+  for (const std::shared_ptr<const Terrain>& flat :
+       {std::shared_ptr<const Terrain>(), std::make_shared<const Terrain>(0.0)})
+    for (double x : {kNosing - 0.01, kNosing + 0.01, 0.0}) {
+      const Drop d = dropOnto(flat, puck.model, puck.points, 0.0, x, 0.0);
+      EXPECT_EQ(d.footholds, 1);
+      EXPECT_EQ(d.edge_footholds, 0);
+      EXPECT_TRUE(std::isinf(d.min_edge_distance));
+    }
+}
+
+TEST(TerrainContact, ASolesCornersAreFootholdsEach) {
+  // The sled (0.2 m square: a sole's four corners) on tread 1, its -x corners 1 cm from the nosing
+  // and its +x corners 4 cm before the next riser: four touch-downs, two of them edge footholds.
+  const sim_test::Sled sled;
+  const double x = kNosing + 0.01 + sled.kHalfX;
+  const Drop on_tread = dropOnto(stairs(), sled.model, sled.points, sled.kHalfZ, x, 0.0);
+  EXPECT_EQ(on_tread.footholds, 4);
+  EXPECT_EQ(on_tread.edge_footholds, 2);
+  EXPECT_NEAR(on_tread.min_edge_distance, 0.01, 1e-6);
+  const Drop flat = dropOnto(nullptr, sled.model, sled.points, sled.kHalfZ, x, 0.0);
+  EXPECT_EQ(flat.footholds, 4);
+  EXPECT_EQ(flat.edge_footholds, 0);
+  EXPECT_TRUE(std::isinf(flat.min_edge_distance));
+}
+
+TEST(TerrainContact, AFootholdIsATouchDownAfterASwing) {
+  // The puck at rest on tread 1, 1 cm from its nosing (one edge foothold), lifted by an upward
+  // force on its body: a hop of 9 mm comes down where it was and is no new foothold, one of 10 cm
+  // (above foothold_lift, 2 cm) is.
+  const Puck puck;
+  SimOptions opt;
+  opt.terrain = stairs();
+  Simulator sim(puck.model, puck.points, opt);
+  Eigen::VectorXd q(7);
+  q << kNosing + 0.01, 0, kRise + 0.005, 0, 0, 0, 1;
+  sim.reset(q, Eigen::VectorXd::Zero(6));
+  const Eigen::VectorXd none(0);
+  auto hop = [&](double force, double duration) {
+    Vector6d up = Vector6d::Zero();
+    up[2] = force * kG;  // the puck weighs 1 kg
+    sim.applyExternalWrench(up, sim.time() + duration);
+    double apex = 0.0;
+    for (int i = 0; i < 800; ++i) {
+      EXPECT_EQ(sim.step(none), StepStatus::Ok);
+      apex = std::max(apex, sim.q()[2] - kRise);
+    }
+    EXPECT_TRUE(sim.pointContacts()[0].in_contact) << "landed";
+    return apex;
+  };
+  for (int i = 0; i < 300; ++i) sim.step(none);
+  EXPECT_EQ(sim.counters().footholds, 1);
+  EXPECT_EQ(sim.counters().edge_footholds, 1);
+  const double low = hop(1.5, 0.05);
+  EXPECT_GT(low, 0.005);
+  EXPECT_LT(low, 0.015);
+  EXPECT_EQ(sim.counters().footholds, 1) << "a hop of " << low << " m";
+  const double high = hop(2.0, 0.1);
+  EXPECT_GT(high, 0.05);
+  EXPECT_EQ(sim.counters().footholds, 2) << "a hop of " << high << " m";
+  EXPECT_EQ(sim.counters().edge_footholds, 2);
+  EXPECT_NEAR(sim.counters().min_edge_distance, 0.01, 1e-6);
+}
+
+TEST(TerrainContact, TheQuadStandingOnFlatGroundHasNoEdgeFootholds) {
+  // Dropped from 2 cm and held, on the flat ground and on a box top 2 m wide: each of the four
+  // feet touches down once (the front feet bounce ~1 cm on the PD legs after landing: below
+  // foothold_lift, no new footholds), and no edge is near any foot.
+  const Robot& r = robot("stride_quad");
+  TerrainSpec box;
+  box.boxes.push_back({{0.0, 0.0}, {2.0, 2.0}, 0.15, 0.0});
+  for (const std::shared_ptr<const Terrain>& world :
+       {std::shared_ptr<const Terrain>(), std::make_shared<const Terrain>(box)}) {
+    SimOptions opt;
+    opt.terrain = world;
+    Simulator sim(r, opt);
+    Eigen::VectorXd q = r.default_q;
+    q[2] += 0.02 + (world ? 0.15 : 0.0);
+    sim.reset(q, Eigen::VectorXd::Zero(r.model.nv));
+    const sim::HoldPolicy hold = sim_test::holdDefault(r);
+    Eigen::VectorXd tau(sim.nu());
+    for (int i = 0; i < 1000; ++i) {
+      hold.torque(r.model, sim.q(), sim.v(), tau);
+      sim.step(tau);
+    }
+    EXPECT_EQ(sim.counters().footholds, 4);
+    EXPECT_EQ(sim.counters().edge_footholds, 0);
+    EXPECT_TRUE(std::isinf(sim.counters().min_edge_distance));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
 // step() allocates nothing with walls in play: the puck's sweep into the riser, and the quadruped
 // dropped from 5 cm onto a rough patch (5 cm cells, ±2 cm) in front of a flight (1 and 3
 // substeps).
@@ -430,6 +653,7 @@ TEST(TerrainContact, StepAllocatesNothingOnStairsAndRoughGround) {
     });
     EXPECT_EQ(allocations, 0) << "substeps " << substeps;
     EXPECT_GT(most_force, 0.0) << "it landed";
+    EXPECT_GE(sim.counters().footholds, 4) << "the touch-downs' edge distances were measured";
   }
 }
 

@@ -268,8 +268,6 @@ TEST(SwingClearance, HighestTerrainBetweenLiftOffAndTouchDown) {
   // From outside the map and back out: the part over the map counts.
   EXPECT_NEAR(maxHeightAlong(map, {-1.0, 0.25}, {3.0, 0.35}), 0.08, 1e-7);
   EXPECT_TRUE(std::isnan(maxHeightAlong(map, {-1.0, -1.0}, {-0.5, 2.0})));
-  EXPECT_NEAR(swingApexHeight(map, {0.1, 0.3, 0.0}, {0.8, 0.3, 0.01}, 0.05), 0.13, 1e-7);
-  EXPECT_NEAR(swingApexHeight(map, {0.1, 0.5, 0.0}, {0.8, 0.5, 0.01}, 0.05), 0.06, 1e-12);
 
   // One cell 20 cm high ([0.19, 0.21] squared): a diagonal that clips its corner (x + y = 0.415,
   // inside it for x in [0.205, 0.21]) sees it, one just past the corner (x + y = 0.425) does not.
@@ -282,7 +280,56 @@ TEST(SwingClearance, HighestTerrainBetweenLiftOffAndTouchDown) {
   EXPECT_NEAR(maxHeightAlong(pillar, {0.0, 0.1}, {0.3, 0.1}), 0.0, 1e-12);
   for (int c = 0; c < 20; ++c) pillar.at(4, c) = NAN;
   EXPECT_TRUE(std::isnan(maxHeightAlong(pillar, {0.0, 0.08}, {0.3, 0.08})));
-  EXPECT_NEAR(swingApexHeight(pillar, {0.0, 0.08, 0.02}, {0.3, 0.08, 0.01}, 0.05), 0.07, 1e-12);
+}
+
+// The controller's arc at the fraction f of the way (GaitGenerator::foot, in f).
+double arcHeight(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double h, double f) {
+  return a.z() + f * (b.z() - a.z()) + h * 2.0 * std::sqrt(f * (1.0 - f));
+}
+
+TEST(SwingClearance, TheArcClearsTheTerrainBetweenItsFootholds) {
+  // The box 8 cm high of x in [0.39, 0.59] between footholds at x = 0.1 and 0.8 (the foot frame
+  // 2 cm above the sole): the apex clears every cell of the box by the clearance faded as the
+  // arc's bump (2 sqrt(f (1 - f))), and no lower apex does.
+  ElevationMap map = flatMap(30, 50);
+  for (int r = 10; r < 20; ++r)
+    for (int c = 20; c < 30; ++c) map.at(r, c) = 0.08f;
+  const double foot = 0.02, clearance = 0.05;
+  const Eigen::Vector3d a(0.1, 0.3, foot), b(0.8, 0.3, foot);
+  const double h = swingLift(map, a, b, foot, clearance);
+  auto worst = [&](double apex) {  // the smallest margin over the box, per unit of fade
+    double m = 1e9;
+    for (double x = 0.39; x <= 0.59 + 1e-9; x += 0.001) {
+      const double f = (x - a.x()) / (b.x() - a.x());
+      const double fade = 2.0 * std::sqrt(f * (1.0 - f));
+      m = std::min(m, (arcHeight(a, b, apex, f) - (0.08 + foot)) / fade);
+    }
+    return m;
+  };
+  EXPECT_GE(worst(h), clearance - 1e-6);  // the map holds floats
+  EXPECT_LT(worst(h - 0.01), clearance);  // tight: the box's near edge sets it
+  EXPECT_GT(h, 0.08 + clearance);         // higher than the box itself over the line
+  // Beside the box (y = 0.5): the clearance over flat ground, whatever the footholds' heights.
+  EXPECT_NEAR(swingLift(map, {0.1, 0.5, foot}, {0.8, 0.5, foot}, foot, clearance), clearance,
+              1e-12);
+  // Up a step: landing on the box (its top 0.08) from the ground; the box's cells before the
+  // touch-down are above the line, so the arc rises above the straight climb by more than the
+  // clearance, yet stays finite (the ends' cells are left out).
+  const Eigen::Vector3d on_box(0.5, 0.3, 0.08 + foot);
+  const double up = swingLift(map, a, on_box, foot, clearance);
+  EXPECT_GT(up, clearance);
+  EXPECT_LT(up, 0.3);
+  for (double x = 0.40; x <= 0.49; x += 0.01) {
+    const double f = (x - a.x()) / (on_box.x() - a.x());
+    if (f < 0.95) EXPECT_GE(arcHeight(a, on_box, up, f), 0.08 + foot) << x;
+  }
+  // Unknown cells are no obstacle; outside the map neither.
+  ElevationMap unknown = map;
+  for (int r = 10; r < 20; ++r)
+    for (int c = 20; c < 30; ++c) unknown.at(r, c) = NAN;
+  EXPECT_NEAR(swingLift(unknown, a, b, foot, clearance), clearance, 1e-12);
+  EXPECT_NEAR(swingLift(map, {-2.0, -2.0, foot}, {-1.0, -2.0, foot}, foot, clearance), clearance,
+              1e-12);
 }
 
 // z = 0.1 + tan(10 deg) x - 0.05 y.
@@ -435,7 +482,7 @@ TEST(TerrainPlanningNoAllocation, PerCallFunctions) {
         moved += f.status == FootholdStatus::Moved;
         sink += f.position.x() + std::min(s.edgeDistanceAt(x, 1.0), 1.0);  // +inf: none near
         sink += maxHeightAlong(map, {x, 0.2}, {1.9 - 0.9 * x, 1.8});
-        sink += swingApexHeight(map, {x, 0.5, 0.0}, {x + 0.2, 0.6, 0.08}, 0.05);
+        sink += swingLift(map, {x, 0.5, 0.0}, {x + 0.2, 0.6, 0.08}, 0.02, 0.05);
       }
       est.update(feet, 4, 0.005);
       fitGroundPlane(feet, 2, est.plane(), p);

@@ -18,6 +18,7 @@
 #include "viz/server/frames.hpp"
 #include "viz/server/log_document.hpp"
 #include "viz/server/robot_files.hpp"
+#include "viz/server/wire.hpp"
 #include "viz_cases.hpp"
 
 namespace stride::viz {
@@ -89,7 +90,8 @@ TEST(Feed, MalformedMessagesOnEveryChannelAreCountedAndDropped) {
   mpc_status_t st{};
   st.gait = "trot";
   std::vector<unsigned char> status = encode(st);
-  poke32(status, status.size() - 32 - 5 - 4, 1000);  // gait: length, "trot\0", then 4 int64
+  // gait: length, "trot\0", then 4 int64, an int8, a double and 2 int64 (the terrain fields)
+  poke32(status, status.size() - 57 - 5 - 4, 1000);
   take(feed, ch.status, status);
   st.utime = -1;
   take(feed, ch.status, encode(st));
@@ -132,6 +134,90 @@ TEST(Feed, MalformedMessagesOnEveryChannelAreCountedAndDropped) {
   ASSERT_FALSE(state.is_null());
   EXPECT_EQ(state["q"].size(), 19u);
   EXPECT_EQ(state["forces"], Json::array());  // no policy yet
+}
+
+// The chosen footholds of a horizon (issue 31) are checked like the rest: their count on the bytes
+// (at most 4 per contact, the exact size), then each one finite, after the state, of an existing
+// contact, from a known source. A refused horizon changes nothing the feed holds.
+TEST(Feed, MalformedFootholdsAreRefused) {
+  const Robot& r = quad();
+  const int nc = static_cast<int>(r.contacts.size());
+  const msg::WireModel model{modelHash(r), r.model.nq, r.model.nv, r.model.nv - 6, "stride_quad"};
+  horizon_t out;
+  auto decode = [&](const std::vector<unsigned char>& b) {
+    return decodeHorizon(b.data(), static_cast<int>(b.size()), model, nc, 100, true, out);
+  };
+  horizon_t h = standingHorizon(1000, 20);
+  addFootholds(h);
+  ASSERT_EQ(decode(encode(h)), msg::Reject::None);
+  EXPECT_EQ(out.nfootholds, 3);
+  EXPECT_EQ(out.foothold[2], h.foothold[2]);
+  EXPECT_EQ(out.foothold_source, h.foothold_source);
+  // None at all, and the most the controller sends (4 per contact).
+  EXPECT_EQ(decode(encode(standingHorizon(1000, 20))), msg::Reject::None);
+  EXPECT_EQ(out.nfootholds, 0);
+  horizon_t most = standingHorizon(1000, 20);
+  most.nfootholds = msg::kHorizonFootholdsPerContact * nc;
+  most.foothold_contact.assign(most.nfootholds, 3);
+  most.foothold_time.assign(most.nfootholds, 0.5);
+  most.foothold.assign(most.nfootholds, std::vector<double>{0.1, 0.2, 0.0});
+  most.foothold_source.assign(most.nfootholds, 5);
+  EXPECT_EQ(decode(encode(most)), msg::Reject::None);
+  EXPECT_EQ(out.nfootholds, 16);
+
+  // Counts: one more than 4 per contact, 2^31, negative, and one that disagrees with the size.
+  horizon_t many = most;
+  ++many.nfootholds;
+  many.foothold_contact.push_back(0);
+  many.foothold_time.push_back(0.5);
+  many.foothold.push_back({0.0, 0.0, 0.0});
+  many.foothold_source.push_back(0);
+  EXPECT_EQ(decode(encode(many)), msg::Reject::WrongSize);
+  horizon_t no_footholds = standingHorizon(1000, 20);
+  const std::size_t count_at = encode(no_footholds).size() - 4;
+  std::vector<unsigned char> b = encode(h);
+  poke32(b, count_at, std::numeric_limits<std::int32_t>::max());
+  EXPECT_EQ(decode(b), msg::Reject::WrongSize);
+  poke32(b, count_at, -1);
+  EXPECT_EQ(decode(b), msg::Reject::WrongSize);
+  poke32(b, count_at, 2);  // 3 footholds' bytes follow
+  EXPECT_EQ(decode(b), msg::Reject::WrongSize);
+  b = encode(h);
+  b.pop_back();  // truncated
+  EXPECT_EQ(decode(b), msg::Reject::WrongSize);
+  EXPECT_EQ(decode(std::vector<unsigned char>(b.begin(), b.begin() + count_at + 2)),
+            msg::Reject::WrongSize);  // not even the count
+
+  // Content: a fifth contact's, a negative contact, an unknown source, a time not after the
+  // state, a NaN position, an infinite time.
+  auto bad = [&](auto edit) {
+    horizon_t m = standingHorizon(1000, 20);
+    addFootholds(m);
+    edit(m);
+    return decode(encode(m));
+  };
+  EXPECT_EQ(bad([&](horizon_t& m) { m.foothold_contact[1] = nc; }), msg::Reject::BadField);
+  EXPECT_EQ(bad([](horizon_t& m) { m.foothold_contact[0] = -1; }), msg::Reject::BadField);
+  EXPECT_EQ(bad([](horizon_t& m) { m.foothold_source[2] = msg::kFootholdSources; }),
+            msg::Reject::BadField);
+  EXPECT_EQ(bad([](horizon_t& m) { m.foothold_source[2] = -1; }), msg::Reject::BadField);
+  EXPECT_EQ(bad([](horizon_t& m) { m.foothold_time[0] = 0.0; }), msg::Reject::BadField);
+  EXPECT_EQ(bad([](horizon_t& m) { m.foothold[1][2] = std::nan(""); }), msg::Reject::NonFinite);
+  EXPECT_EQ(bad([](horizon_t& m) { m.foothold_time[2] = std::numeric_limits<double>::infinity(); }),
+            msg::Reject::NonFinite);
+
+  // Through the feed: counted by reason, the good plan kept.
+  Feed feed(Channels{}, quadSource());
+  const Channels ch;
+  b = encode(h);
+  poke32(b, count_at, std::numeric_limits<std::int32_t>::max());
+  take(feed, ch.horizon, b);
+  horizon_t fifth = h;
+  fifth.foothold_contact[0] = nc;
+  take(feed, ch.horizon, encode(fifth));
+  EXPECT_EQ(feed.rejected(ch.horizon), 2);
+  EXPECT_EQ(feed.accepted(ch.horizon), 0);
+  EXPECT_TRUE(feed.frame(FrameKind::Plan).is_null());
 }
 
 TEST(Feed, StatesBeforeTheRobotIsKnownAreDropped) {
@@ -182,7 +268,22 @@ TEST(Feed, AHorizonGivesFeetFootholdsAndPlannedForces) {
   EXPECT_NEAR(plan["footholds"][4][0].get<double>(), plan["feet"][20][1][0].get<double>(), 1e-9);
   ASSERT_EQ(plan["forces"].size(), 4u);
   EXPECT_DOUBLE_EQ(plan["forces"][0][2].get<double>(), 6.0);
+  EXPECT_EQ(plan["chosen_footholds"], Json::array());  // this horizon chose none
   EXPECT_TRUE(feed.frame(FrameKind::Plan).is_null());  // framed once
+
+  // The footholds the gait generator chose, as the horizon carries them: [x, y, z, contact, time
+  // after t, source].
+  horizon_t h = standingHorizon(5100000, 30);
+  addFootholds(h);
+  take(feed, Channels{}.horizon, encode(h));
+  const Json chosen = feed.frame(FrameKind::Plan)["chosen_footholds"];
+  ASSERT_EQ(chosen.size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) EXPECT_DOUBLE_EQ(chosen[i][j].get<double>(), h.foothold[i][j]);
+    EXPECT_EQ(chosen[i][3], h.foothold_contact[i]);
+    EXPECT_DOUBLE_EQ(chosen[i][4].get<double>(), h.foothold_time[i]);
+    EXPECT_EQ(chosen[i][5], h.foothold_source[i]);
+  }
 }
 
 // The session log (stride-drive: the quadruped stands, then trots): the state frames of the
@@ -282,8 +383,8 @@ TEST(Feed, StatusStringLengthsAreCheckedOnTheBytes) {
   st.gait = "trot";
   const std::vector<unsigned char> good = encode(st);
   // wrong_model_cause's length field after 166 bytes of fixed fields (type hash included), gait's
-  // before its 5 bytes and the 4 int64 after it.
-  const std::size_t cause_at = 166, gait_at = good.size() - 32 - 5 - 4;
+  // before its 5 bytes and the 57 bytes of fixed fields after it.
+  const std::size_t cause_at = 166, gait_at = good.size() - 57 - 5 - 4;
   long refused = 0;
   for (const std::size_t at : {cause_at, gait_at}) {
     for (const std::int32_t len : {std::numeric_limits<std::int32_t>::min(), -1, 0, 1000,

@@ -69,6 +69,16 @@ inline horizon_t standingHorizon(std::int64_t utime, int knots) {
   return h;
 }
 
+// The horizon's chosen footholds (issue 31): contacts 1 and 2 land 0.2 s after the state, contact
+// 1 again 0.09 s later; moved by the map (source 3), blind (1), the map's nominal one (2).
+inline void addFootholds(horizon_t& h) {
+  h.nfootholds = 3;
+  h.foothold_contact = {1, 1, 2};
+  h.foothold_time = {0.2, 0.29, 0.2};
+  h.foothold = {{0.05, 0.15, 0.0}, {0.15, 0.15, 0.01}, {0.25, -0.15, 0.02}};
+  h.foothold_source = {3, 1, 2};
+}
+
 // An elevation map as the mock robot publishes one: rows x cols cells of 2 cm centred on (cx, cy),
 // a 5 cm box step where x > 0.3 m (world), unknown cells in a 5 x 5 square at rows and cols 10-14.
 inline terrain_t boxStepMap(std::int64_t utime, int rows, int cols, double cx = 0.0,

@@ -212,7 +212,12 @@ Run run(const ControllerConfig& config, const Options& options) {
   r.rival_policies = rival_policies;
   r.q_end = sim->simulator().q();
   r.terrain = sim->simulator().terrain().name();
-  r.trips = sim->simulator().counters().trips;
+  const sim::SimCounters& counters = sim->simulator().counters();
+  r.trips = counters.trips;
+  r.footholds = counters.footholds;
+  r.edge_footholds = counters.edge_footholds;
+  r.min_edge_distance = counters.min_edge_distance;
+  r.footholds_text = sim::footholdText(counters, sim->simulator().options());
   r.base_above_terrain = sim->stats().above;
   return r;
 }

@@ -82,6 +82,12 @@ struct Run {
   // terrain under it at the end.
   std::string terrain = "flat";
   std::int64_t trips = 0;
+  // Its feet's touch-downs, those closer than 2 cm to an edge of the true terrain, the nearest any
+  // came to one (+infinity: none within 5 cm) and all of it in words (sim::SimCounters,
+  // sim::footholdText). After a restart of the mock robot (Options::sim_lost_at), the new one's.
+  std::int64_t footholds = 0, edge_footholds = 0;
+  double min_edge_distance = std::numeric_limits<double>::infinity();
+  std::string footholds_text;
   double base_above_terrain = 0.0;
   // A diverged simulation (sim::SimNodeStats::diverged) counts as a fall: the run is over.
   bool fell() const { return sim.fell || sim.diverged; }

@@ -12,6 +12,7 @@
 // 2 for bad arguments or files.
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -35,6 +36,12 @@ void writeJson(const std::string& path, const stride::drive::Run& run,
   if (run.q_end.size() >= 3) j["final_base"] = {run.q_end[0], run.q_end[1], run.q_end[2]};
   j["base_height_above_terrain_m"] = run.base_above_terrain;
   j["trips"] = run.trips;
+  j["footholds"] = run.footholds;
+  j["edge_footholds"] = run.edge_footholds;
+  // No touch-down with an edge within the search radius (5 cm): null (infinity is not JSON).
+  j["min_edge_distance_m"] = std::isfinite(run.min_edge_distance)
+                                 ? nlohmann::ordered_json(run.min_edge_distance)
+                                 : nlohmann::ordered_json(nullptr);
   j["segments"] = nlohmann::ordered_json::array();
   for (const stride::logs::Segment& s : segments) {
     nlohmann::ordered_json segment;
@@ -171,12 +178,14 @@ int main(int argc, char** argv) {
         config_path.c_str(), run.samples.empty() ? 0.0 : run.samples.back().t, options.duration,
         run.sim.diverged ? "DIVERGED (the simulation)" : (run.fell() ? "FELL" : "no fall"),
         static_cast<long long>(run.mpc.fallbacks), static_cast<long long>(run.mpc.failed_solves));
-    if (run.q_end.size() >= 7)
+    if (run.q_end.size() >= 7) {
       std::printf(
           "  terrain '%s': final base (%.3f, %.3f, %.3f) m, %.3f m above the terrain under it, "
           "%lld trips\n",
           run.terrain.c_str(), run.q_end[0], run.q_end[1], run.q_end[2], run.base_above_terrain,
           static_cast<long long>(run.trips));
+      std::printf("  %s\n", run.footholds_text.c_str());
+    }
     if (options.controller_lost_at >= 0.0)
       std::printf(
           "  controller killed at %.3f s, %s; the robot: %lld steps past a policy's end, %lld on "

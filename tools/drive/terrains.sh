@@ -2,7 +2,8 @@
 # Every shipped terrain a robot has (config/terrain/*_ROBOT.yaml, plus flat and step_up_down),
 # driven with the robot's default command script by stride-drive (lock-step, deterministic;
 # tools/drive/README.md): did it fall, and when; how far it got along x; its feet's trips on
-# vertical faces; did it track every segment. Prints one markdown row per run; writes
+# vertical faces; its touch-downs closer than 2 cm to an edge of the true terrain, of all its
+# touch-downs; did it track every segment. Prints one markdown row per run; writes
 # DIR/terrains_ROBOT.json.
 #   tools/drive/terrains.sh [ROBOT...] [--robots-dir DIR] [--out DIR]
 # ROBOT: names of config/controller/ROBOT.yaml (default: the five shipped robots).
@@ -24,8 +25,8 @@ done
 [ ${#robots[@]} -gt 0 ] || robots=(stride_quad solo12 anymal_c stride_humanoid talos_reduced)
 [ -d "$build/robot_packages" ] && dirs+=(--robots-dir "$build/robot_packages")
 mkdir -p "$out"
-echo "| robot | terrain | fell | distance x [m] | final base z above terrain [m] | trips | tracked |"
-echo "| --- | --- | --- | --- | --- | --- | --- |"
+echo "| robot | terrain | fell | distance x [m] | final base z above terrain [m] | trips | edge footholds | tracked |"
+echo "| --- | --- | --- | --- | --- | --- | --- | --- |"
 for robot in "${robots[@]}"; do
   config="$root/config/controller/$robot.yaml"
   [ -f "$config" ] || { echo "terrains.sh: no robot '$robot'" >&2; exit 2; }
@@ -45,9 +46,9 @@ for robot in "${robots[@]}"; do
 import json, sys
 j = json.load(open(sys.argv[1]))
 fell = ("diverged" if j.get("diverged") else "fell") + " at %.1f s" % j["duration_s"] if j["fell"] else "no"
-print("| %s | %s | %s | %.2f | %.3f | %d | %s |" % (sys.argv[2], sys.argv[3], fell,
-      j["final_base"][0], j["base_height_above_terrain_m"], j["trips"],
-      "yes" if j["tracked"] else "no"))
+print("| %s | %s | %s | %.2f | %.3f | %d | %d / %d | %s |" % (sys.argv[2], sys.argv[3], fell,
+      j["final_base"][0], j["base_height_above_terrain_m"], j["trips"], j["edge_footholds"],
+      j["footholds"], "yes" if j["tracked"] else "no"))
 PY
 )
     echo "$row"

@@ -202,8 +202,9 @@ int main(int argc, char** argv) {
   app.add_option("--terrain-channel", terrain_channel,
                  "elevation maps: heights are taken above the terrain under the base");
   app.add_option("--sim-summary", sim_summary_path,
-                 "the mock robot's own summary (stride-sim --summary): its terrain, trips and "
-                 "verdict go into this one; a fall it saw is a fall here, whatever the log holds")
+                 "the mock robot's own summary (stride-sim --summary): its terrain, trips, "
+                 "footholds and verdict go into this one; a fall it saw is a fall here, whatever "
+                 "the log holds")
       ->check(CLI::ExistingFile);
   app.add_option("--fall-height", fall_height,
                  "fallen: base below this fraction of its first height");
@@ -541,6 +542,9 @@ int main(int argc, char** argv) {
     j["final_base"] = states > 0 ? json::array({x1, y1, z1}) : json(nullptr);
     j["base_height_above_terrain_m"] = robot(z1 - ground_last);
     j["trips"] = sim_summary.contains("trips") ? sim_summary["trips"] : json(nullptr);
+    // The feet's touch-downs near edges of the true terrain: only the mock robot knows them.
+    for (const char* key : {"footholds", "edge_footholds", "min_edge_distance_m"})
+      j[key] = sim_summary.contains(key) ? sim_summary[key] : json(nullptr);
     j["terrain_maps"] = maps;
     j["terrain_map_top_m"] = std::isfinite(map_top) ? json(map_top) : json(nullptr);
     j["tick_latency"] = timingJson(latency);

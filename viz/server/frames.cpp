@@ -267,13 +267,24 @@ Json FrameBuilder::plan(const horizon_t& h) {
       forces.push_back(vec3(Eigen::Map<const Eigen::Vector3d>(h.force[k].data() + 3 * c)));
     break;
   }
-  return planFrom(static_cast<double>(h.utime) * 1e-6, qs, h.contact_mask, std::move(forces));
+  Json frame = planFrom(static_cast<double>(h.utime) * 1e-6, qs, h.contact_mask, std::move(forces));
+  // The footholds the gait generator chose (issue 31), as the controller sent them.
+  Json chosen = Json::array();
+  for (int i = 0; i < h.nfootholds; ++i) {
+    const std::vector<double>& p = h.foothold[i];
+    chosen.push_back({r6(p[0]), r6(p[1]), r6(p[2]), static_cast<int>(h.foothold_contact[i]),
+                      r6(h.foothold_time[i]), static_cast<int>(h.foothold_source[i])});
+  }
+  frame["chosen_footholds"] = std::move(chosen);
+  return frame;
 }
 
 Json FrameBuilder::plan(const policy_t& p) {
   std::vector<const std::vector<double>*> qs;
   for (const std::vector<double>& x : p.x_ref) qs.push_back(&x);  // q is x's head
-  return planFrom(static_cast<double>(p.knot0_utime) * 1e-6, qs, {p.phase}, Json::array());
+  Json frame = planFrom(static_cast<double>(p.knot0_utime) * 1e-6, qs, {p.phase}, Json::array());
+  frame["chosen_footholds"] = Json::array();  // a policy does not carry them
+  return frame;
 }
 
 Json FrameBuilder::status(const mpc_status_t& s, const command_t* requested) {

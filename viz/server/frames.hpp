@@ -57,10 +57,12 @@ class FrameBuilder {
   Json state(const robot_state_t& state, std::uint64_t policy_serial = 0);
   // The torque of the last estimate (size nu), after clamping.
   const Eigen::VectorXd& lastTorque() const { return u_; }
-  // {"type":"plan","t","base","feet","footholds","forces"} from the controller's horizon.
+  // {"type":"plan","t","base","feet","footholds","forces","chosen_footholds"} from the
+  // controller's horizon; chosen_footholds: the gait generator's, [x, y, z, contact, time after t,
+  // source] each.
   Json plan(const horizon_t& horizon);
   // The same from a policy's x_ref knots: no contact mask per knot (only at knot 0: footholds of
-  // the stances under way) and no planned forces ([]).
+  // the stances under way), no planned forces ([]) and no chosen footholds ([]).
   Json plan(const policy_t& policy);
   // {"type":"status",...}; `requested`: the newest command_t seen, if any.
   static Json status(const mpc_status_t& status, const command_t* requested);

@@ -118,12 +118,20 @@ msg::Reject decodeHorizon(const void* buf, int size, const msg::WireModel& model
   if (knots < 1 || knots > max_knots || nc != ncontacts || nf != 3 * ncontacts)
     return msg::Reject::WrongSize;
   // The size those counts imply, from lcm-gen's own size function (it reads the counts only), so
-  // a field added per knot is accounted for without a change here.
+  // a field added per knot is accounted for without a change here. The footholds' count follows
+  // the knots' arrays: where it sits, from the size of the message without footholds.
   horizon_t shape;
   shape.knots = knots;
   shape.nq = nq;
   shape.ncontacts = nc;
   shape.nf = nf;
+  shape.nfootholds = 0;
+  std::int32_t nfootholds;
+  if (!w.skip(shape.getEncodedSize() - 4 - w.at()) || !w.int32(nfootholds))
+    return msg::Reject::WrongSize;
+  if (nfootholds < 0 || nfootholds > msg::kHorizonFootholdsPerContact * ncontacts)
+    return msg::Reject::WrongSize;
+  shape.nfootholds = nfootholds;
   if (size != shape.getEncodedSize()) return msg::Reject::WrongSize;
   if (!decodeExactly(buf, size, m)) return msg::Reject::Undecodable;
 
@@ -137,6 +145,19 @@ msg::Reject decodeHorizon(const void* buf, int size, const msg::WireModel& model
       const double n = std::sqrt(q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6]);
       if (std::abs(n - 1.0) > msg::kQuaternionTolerance) return msg::Reject::NotUnitQuaternion;
     }
+  }
+  // Each foothold: finite, after the state, of an existing contact, from a known source. (Only the
+  // first nfootholds entries: a count of 0 leaves a reused message's old ones, which lcm-gen's
+  // decoder skips.)
+  for (int i = 0; i < m.nfootholds; ++i) {
+    const std::vector<double>& p = m.foothold[i];
+    if (!std::isfinite(m.foothold_time[i]) || !std::isfinite(p[0]) || !std::isfinite(p[1]) ||
+        !std::isfinite(p[2]))
+      return msg::Reject::NonFinite;
+    if (m.foothold_time[i] <= 0.0 || m.foothold_contact[i] < 0 ||
+        m.foothold_contact[i] >= ncontacts || m.foothold_source[i] < 0 ||
+        m.foothold_source[i] >= msg::kFootholdSources)
+      return msg::Reject::BadField;
   }
   return msg::Reject::None;
 }

@@ -18,9 +18,10 @@ namespace stride::viz {
 msg::Reject decodeModel(const void* buf, int size, robot_model_t& m);
 
 // horizon_t of `model` (hash, nq) with `ncontacts` contact frames: the counts on the bytes
-// (1 <= knots <= max_knots, nq, ncontacts and nf = 3 ncontacts the model's), the exact size they
-// imply, then the content: finite numbers, unit base quaternions (floating_base), masks of
-// existing contacts.
+// (1 <= knots <= max_knots, nq, ncontacts and nf = 3 ncontacts the model's, 0 <= nfootholds <=
+// msg::kHorizonFootholdsPerContact ncontacts), the exact size they imply, then the content: finite
+// numbers, unit base quaternions (floating_base), masks of existing contacts; footholds of existing
+// contacts, after the state (time > 0), of a known source (< msg::kFootholdSources).
 msg::Reject decodeHorizon(const void* buf, int size, const msg::WireModel& model, int ncontacts,
                           int max_knots, bool floating_base, horizon_t& m);
 

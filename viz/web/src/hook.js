@@ -2,7 +2,7 @@
 //   ready       true once the robot is loaded and bound to the model, and (log mode) the log is
 //               loaded and its first state shown; (live mode) once the model came
 //   snapshot()  {t, joint_names, joint_angles, urdf_joint_count, frames_received, mode, base,
-//               plan_t, planned_forces, force_scale, terrain}:
+//               plan_t, planned_forces, force_scale, terrain, chosen_footholds}:
 //               t the robot-clock stamp [s] of the state shown (null before any), joint_names
 //               the model's actuated joints in wire order, joint_angles their values read back
 //               from urdf-loader's joints (what is drawn), urdf_joint_count the movable joints
@@ -13,7 +13,9 @@
 //               force_scale the arrows' scale as the legend gives it (null before any force),
 //               terrain the elevation map drawn (null when none): {t, rows, cols, resolution,
 //               vertices (its known cells), triangles, bounds ([[x, y, z] min, [x, y, z] max]
-//               of the mesh, null when no cell is known), visible}
+//               of the mesh, null when no cell is known), visible}, chosen_footholds the rings
+//               drawn at the plan's chosen footholds ([] when none): [{position (the ring's [x, y,
+//               z] world, 3 mm above the foothold), contact, dt, source, color (hex number)}]
 //   seek(t)     log mode: pauses and shows the log at t seconds from its start (clamped to
 //               [0, duration()]): the newest state with stamp <= start + t; returns snapshot()
 //   duration()  seconds from the first frame to the last (log mode), of the frames kept (live)

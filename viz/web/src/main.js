@@ -292,6 +292,7 @@ class Viewer {
       planned_forces: plan?.forces ?? [],
       force_scale: this.overlays.scaleText(),
       terrain: this.terrain.describe(),
+      chosen_footholds: this.overlays.describeChosen(),
     };
   }
 

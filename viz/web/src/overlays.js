@@ -1,6 +1,7 @@
 // What the controller knows and plans, drawn over the robot: the contact frames (closed or open),
 // the contact forces as arrows (measured: estimated by stride-viz at the state; planned: the
-// horizon's knot 0), the footholds as discs on the ground, and the predicted base and feet paths
+// horizon's knot 0), the footholds as discs on the ground, the footholds the gait generator chose
+// as rings around them coloured by where they came from, and the predicted base and feet paths
 // as faint lines. Every object is made once and updated in place.
 
 import * as THREE from 'three';
@@ -13,7 +14,27 @@ export const COLORS = {
   contactOpen: 0x9aa4ad,
   // one per contact (footholds, feet paths), in the model's contact order
   perContact: [0xe0892b, 0x8e5bd1, 0x1b9aaa, 0xc2458a, 0x6a994e, 0xb5838d, 0x577590, 0xbc6c25],
+  // the chosen footholds, by source (horizon_t.foothold_source)
+  footholdBlind: 0x6b7480, // 0 measured, 1 blind: the ground the feet feel
+  footholdMap: 0x2fa84f, // 2 the map's nominal foothold
+  footholdMoved: 0xf2c12e, // 3 moved by the map to a steppable cell
+  footholdBad: 0xd62828, // 4 unreachable, 5 unknown to the map (and any other number)
 };
+
+/** The colour of a chosen foothold from its source (horizon_t.foothold_source). */
+export function sourceColor(source) {
+  switch (source) {
+    case 0:
+    case 1:
+      return COLORS.footholdBlind;
+    case 2:
+      return COLORS.footholdMap;
+    case 3:
+      return COLORS.footholdMoved;
+    default:
+      return COLORS.footholdBad;
+  }
+}
 
 export function contactColor(c) {
   return COLORS.perContact[c % COLORS.perContact.length];
@@ -66,6 +87,10 @@ export class Overlays {
     this.footholds = [];
     this.footholdGroup = new THREE.Group();
     this.root.add(this.footholdGroup);
+    this.chosen = []; // rings at the gait generator's footholds (plan.chosen_footholds)
+    this.chosenGroup = new THREE.Group();
+    this.chosenGroup.name = 'chosen-footholds';
+    this.root.add(this.chosenGroup);
     this.showPlan = true;
     this.showForces = true;
   }
@@ -171,6 +196,7 @@ export class Overlays {
       this.basePath.visible = false;
       for (const l of this.feetPaths) l.visible = false;
       for (const d of this.footholds) d.visible = false;
+      for (const m of this.chosen) m.visible = false;
       return;
     }
     setLine(this.basePath, plan.base ?? []);
@@ -197,5 +223,45 @@ export class Overlays {
       disc.material.color.setHex(contactColor(h[3] ?? 0));
       disc.visible = true;
     });
+    this.updateChosen(plan.chosen_footholds ?? []);
+  }
+
+  /** Rings around the footholds the gait generator chose ([x, y, z, contact, dt, source] each),
+   *  on the ground (or the map) where they are, coloured by source. */
+  updateChosen(chosen) {
+    const r = Math.max(0.01, 0.035 * this.size);
+    while (this.chosen.length < Math.min(chosen.length, MAX_FOOTHOLDS)) {
+      const ring = new THREE.Mesh(
+        new THREE.RingGeometry(1.15 * r, 1.6 * r, 32),
+        new THREE.MeshBasicMaterial({ color: COLORS.footholdBlind, transparent: true, opacity: 0.9,
+                                      depthWrite: false, side: THREE.DoubleSide }));
+      ring.name = 'chosen-foothold';
+      this.chosen.push(ring);
+      this.chosenGroup.add(ring);
+    }
+    this.chosen.forEach((ring, k) => {
+      const f = chosen[k];
+      if (!f || !(Number.isFinite(f[0]) && Number.isFinite(f[1]) && Number.isFinite(f[2]))) {
+        ring.visible = false;
+        ring.userData = {};
+        return;
+      }
+      ring.position.set(f[0], f[1], f[2] + 0.003); // over the discs and the terrain
+      ring.material.color.setHex(sourceColor(f[5]));
+      ring.userData = { contact: f[3], dt: f[4], source: f[5] };
+      ring.visible = true;
+    });
+  }
+
+  /** The chosen footholds drawn: [{position [x, y, z] of the ring (its z 3 mm above the
+   *  foothold's), contact, dt, source, color (hex number)}], the visible rings in plan order. */
+  describeChosen() {
+    return this.chosen.filter((m) => m.visible).map((m) => ({
+      position: [m.position.x, m.position.y, m.position.z],
+      contact: m.userData.contact,
+      dt: m.userData.dt,
+      source: m.userData.source,
+      color: m.material.color.getHex(),
+    }));
   }
 }

@@ -21,6 +21,12 @@
 //     before t (the first before them all) as a mesh of one vertex per known cell of that map,
 //     the triangles of its squares with at most one unknown corner, spanning the known cells'
 //     x, y and heights (window.stride.snapshot().terrain);
+//   - the footholds the controller's gait generator chose (horizon_t.foothold*, issue 31): every
+//     plan frame of GET /api/log made from a horizon of the log carries that horizon's footholds
+//     (position within 1e-6, contact, time, source), the log has some (the robot trots), and at
+//     each seek the page draws one ring per foothold of the horizon shown (plan_t), at its place
+//     (3 mm above it) and in its source's colour (window.stride.snapshot().chosen_footholds),
+//     each of the 6 sources at some seek (terrain_log.mjs gives them every source in turn);
 // and saves screenshots (OUT_DIR/viewer.png at 50 %; OUT_DIR/viewer-terrain.png, the map from
 // above, when there is one) and the snapshots (OUT_DIR/viewer.json).
 //
@@ -37,6 +43,10 @@ const TOLERANCE = 1e-6; // rad (or m for a prismatic joint)
 const TERRAIN_RATE = 2; // terrain frames per second of log time, at most (viz/README.md)
 const HEIGHT_STEP = 1e-3; // m: the terrain frames' rounding of heights
 const MAX_AGE = 0.03; // s: a state at most this much older than the seek time (log decimation)
+const RING_LIFT = 0.003; // m: the chosen footholds' rings above the foothold (overlays.js)
+// The rings' colours by horizon_t.foothold_source: measured and blind grey, the map's nominal
+// green, moved yellow, unreachable and unknown red.
+const SOURCE_COLORS = { 0: 0x6b7480, 1: 0x6b7480, 2: 0x2fa84f, 3: 0xf2c12e, 4: 0xd62828, 5: 0xd62828 };
 const READY_TIMEOUT_MS = 60000;
 const TOTAL_TIMEOUT_MS = 170000;
 
@@ -115,6 +125,53 @@ function expectedMesh(m) {
     }
   }
   return { vertices, triangles, lo, hi };
+}
+
+const logHorizons = session.horizons;
+const logFootholds = logHorizons.reduce((n, h) => n + h.nfootholds, 0);
+console.log(`browser_test: ${logHorizons.length} horizons, ${logFootholds} chosen footholds`);
+
+/** The log's horizon with this stamp [s], or null. */
+function logHorizonAt(t) {
+  return logHorizons.find((h) => Math.abs(h.t0 - t) < 0.5e-6) ?? null;
+}
+
+/** The chosen footholds of a log's horizon: [{p, contact, dt, source}]. */
+function footholdsOf(h) {
+  return h.foothold.slice(0, h.nfootholds).map((p, i) => ({
+    p, contact: h.foothold_contact[i], dt: h.foothold_time[i], source: h.foothold_source[i],
+  }));
+}
+
+/** The page draws the chosen footholds of the plan it shows (plan_t): one ring per foothold of
+ *  the log's horizon of that stamp, at its place and in its source's colour. Returns how many. */
+const coloursDrawn = new Set(); // the sources whose colour a seek drew
+
+function checkChosen(label, snap) {
+  const drawn = snap.chosen_footholds ?? [];
+  const h = snap.plan_t === null ? null : logHorizonAt(snap.plan_t);
+  if (!check(`${label}: the plan shown is a horizon of the log`, h !== null, `plan_t ${snap.plan_t}`)) {
+    return 0;
+  }
+  const want = footholdsOf(h);
+  if (!check(`${label}: ${want.length} chosen footholds drawn (the horizon's)`, drawn.length === want.length,
+             `page ${drawn.length}`)) {
+    return drawn.length;
+  }
+  const wrong = [];
+  want.forEach((f, i) => {
+    const d = drawn[i];
+    const off = Math.max(Math.abs(d.position[0] - f.p[0]), Math.abs(d.position[1] - f.p[1]),
+                         Math.abs(d.position[2] - RING_LIFT - f.p[2]));
+    if (!(off <= 1e-6) || d.contact !== f.contact || d.source !== f.source ||
+        d.color !== SOURCE_COLORS[f.source]) {
+      wrong.push(`${i}: page ${JSON.stringify(d)}, log ${JSON.stringify(f)}`);
+    } else {
+      coloursDrawn.add(f.source);
+    }
+  });
+  check(`${label}: each at its foothold, in its source's colour`, wrong.length === 0, wrong.slice(0, 3).join('; '));
+  return drawn.length;
 }
 
 /** The log's state with this stamp [s] (frames carry t = utime * 1e-6), or null. */
@@ -256,6 +313,28 @@ async function main() {
             `${wrong.slice(0, 5).join('; ')}; largest height error ${worst}`);
     }
 
+    // Every plan frame made from a horizon carries its chosen footholds, and the log has some.
+    check('log: the horizons carry chosen footholds (the robot trots)', logFootholds > 0,
+          `${logHorizons.length} horizons, none with a foothold`);
+    const planFrames = doc.frames.filter((f) => f.type === 'plan');
+    let fromHorizons = 0;
+    const wrongPlans = [];
+    for (const f of planFrames) {
+      const h = logHorizonAt(f.t);
+      if (!h) continue;
+      fromHorizons += 1;
+      const want = footholdsOf(h);
+      const got = f.chosen_footholds ?? [];
+      const same = got.length === want.length && want.every((w, i) =>
+        [0, 1, 2].every((k) => Math.abs(got[i][k] - w.p[k]) <= 1e-6) && got[i][3] === w.contact &&
+        Math.abs(got[i][4] - w.dt) <= 1e-6 && got[i][5] === w.source);
+      if (!same) wrongPlans.push(`t ${f.t}: ${JSON.stringify(got)} for ${JSON.stringify(want)}`);
+    }
+    check('api/log: each plan frame of a horizon carries its chosen footholds',
+          fromHorizons > 0 && wrongPlans.length === 0,
+          `${fromHorizons} plan frames of horizons; ${wrongPlans.slice(0, 2).join('; ')}`);
+
+    let chosenDrawn = 0;
     const snapshots = [];
     for (const fraction of [0.1, 0.5, 0.9]) {
       const offset = fraction * duration;
@@ -281,11 +360,16 @@ async function main() {
             `largest error ${worst} (${actuated[errs.indexOf(worst)]?.name}); page ` +
             `${JSON.stringify(snap.joint_angles)}, log ${JSON.stringify(want)}`);
       if (logMaps.length > 0) checkTerrain(label, snap.terrain, terrainFrames, target);
+      chosenDrawn += checkChosen(label, snap);
       if (fraction === 0.5) {
         await page.screenshot({ path: path.join(outDir, 'viewer.png') });
         console.log(`browser_test: screenshot ${path.join(outDir, 'viewer.png')}`);
       }
     }
+    check('page: chosen footholds drawn at some seek', chosenDrawn > 0, `${chosenDrawn} rings`);
+    // browser_test.sh gives the footholds every source in turn (terrain_log.mjs): all 6 drawn.
+    check('page: chosen footholds of every source drawn in its colour', coloursDrawn.size === 6,
+          `sources ${JSON.stringify([...coloursDrawn].sort())}`);
     if (logMaps.length > 0) {
       // The whole map from above and behind, at the middle of the log.
       const snap = await page.evaluate((o) => window.stride.seek(o), 0.5 * duration);

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # stride-viz's page in headless Chromium on a fresh log (viz/web/README.md, "Test"): stride-drive
 # drives the quadruped for 3 s in one process and logs every channel, terrain_log.mjs adds
-# elevation maps of a made-up world around the robot (STRIDE_TERRAIN, 10 Hz), then browser_test.mjs
+# elevation maps of a made-up world around the robot (STRIDE_TERRAIN, 10 Hz) and gives the
+# horizons' chosen footholds every source in turn, then browser_test.mjs
 # runs `stride-viz --log` on it and checks the page against its own reading of the log.
 #   browser_test.sh STRIDE_VIZ STRIDE_DRIVE CONFIG_DIR NODE NODE_MODULES OUT_DIR
 # Exit 77 (skipped) when there is no Chromium (tools/install-deps.sh installs Debian's).

@@ -66,6 +66,11 @@ export const horizonType = {
     ['contact_mask', 'int32_t', ['knots']],
     ['impulse', 'int8_t', ['knots']],
     ['force', 'double', ['knots', 'nf']],
+    ['nfootholds', 'int32_t'],
+    ['foothold_contact', 'int32_t', ['nfootholds']],
+    ['foothold_time', 'double', ['nfootholds']],
+    ['foothold', 'double', ['nfootholds', 3]],
+    ['foothold_source', 'int8_t', ['nfootholds']],
   ],
 };
 

@@ -81,7 +81,8 @@ function modelMessage() {
   return w.done();
 }
 
-// Two knots of the two_link robot (nq 9, one contact): arrays of arrays, row by row.
+// Two knots of the two_link robot (nq 9, one contact): arrays of arrays, row by row; two chosen
+// footholds (a fixed inner dimension: no count on the wire).
 function horizonMessage(utime) {
   const w = new Writer();
   w.u64(fingerprint(horizonType));
@@ -93,6 +94,11 @@ function horizonMessage(utime) {
   [1, 0].forEach((x) => w.i32(x));
   [0, 1].forEach((x) => w.i8(x));
   [[1, 2, 30], [0, 0, 0.5]].forEach((row) => row.forEach((x) => w.f64(x)));
+  w.i32(2);
+  [0, 0].forEach((x) => w.i32(x));
+  [0.25, 0.75].forEach((x) => w.f64(x));
+  [[0.5, 0.125, 0], [0.75, 0.125, 0.05]].forEach((row) => row.forEach((x) => w.f64(x)));
+  [1, 3].forEach((x) => w.i8(x));
   return w.done();
 }
 
@@ -151,6 +157,11 @@ test('a horizon reads back, its arrays of arrays row by row', () => {
   assert.deepEqual(h.contact_mask, [1, 0]);
   assert.deepEqual(h.impulse, [0, 1]);
   assert.deepEqual(h.force, [[1, 2, 30], [0, 0, 0.5]]);
+  assert.equal(h.nfootholds, 2);
+  assert.deepEqual(h.foothold_contact, [0, 0]);
+  assert.deepEqual(h.foothold_time, [0.25, 0.75]);
+  assert.deepEqual(h.foothold, [[0.5, 0.125, 0], [0.75, 0.125, 0.05]]);
+  assert.deepEqual(h.foothold_source, [1, 3]);
 });
 
 // A 2 x 3 map, one cell unknown, written by encode() and checked byte by byte where the format

@@ -12,15 +12,23 @@
 // on the 2 cm grid, at 10 Hz of the robot's clock: one after the first state at or past each
 // 0.1 s, stamped with that state's stamp. The maps the log already holds on STRIDE_TERRAIN
 // (stride-sim's, of its flat ground) are left out: the test's are the only ones.
+// The controller planned blind (it never saw these maps), so its horizons' chosen footholds
+// (horizon_t.foothold_source, issue 31) are all measured or blind: they are given every source in
+// turn instead (foothold i of the k-th horizon: (i + k) mod 6), so that the browser test sees each
+// source's colour drawn. Nothing else of a horizon changes.
 //
 //   node terrain_log.mjs IN OUT    writes IN with the maps added as OUT
 
 import { readFileSync, writeFileSync } from 'node:fs';
 import { fileURLToPath } from 'node:url';
-import { decode, encode, readLog, robotStateType, terrainType, writeLog } from './lcmlog.mjs';
+import {
+  decode, encode, horizonType, readLog, robotStateType, terrainType, writeLog,
+} from './lcmlog.mjs';
 
 export const MAP = { rows: 100, cols: 100, resolution: 0.02, period: 100000 /* us */ };
 export const CHANNEL = 'STRIDE_TERRAIN';
+export const HORIZON_CHANNEL = 'STRIDE_HORIZON';
+export const SOURCES = 6; // horizon_t.foothold_source: 0 measured ... 5 unknown to the map
 
 const inside = (v, lo, hi) => v > lo && v < hi;
 
@@ -57,9 +65,17 @@ export function addTerrain(bytes) {
   let next = null; // the stamp [us] of the next map
   let maps = 0;
   let dropped = 0;
+  let horizons = 0;
   for (const e of readLog(bytes)) {
     if (e.channel === CHANNEL) {
       dropped += 1;
+      continue;
+    }
+    if (e.channel === HORIZON_CHANNEL) {
+      const h = decode(horizonType, e.data);
+      h.foothold_source = h.foothold_source.map((_, i) => (i + horizons) % SOURCES);
+      horizons += 1;
+      out.push({ ...e, data: encode(horizonType, h) });
       continue;
     }
     out.push(e);
