@@ -175,6 +175,57 @@ TEST(ControllerNoAllocation, HorizonsWithFootholds) {
   EXPECT_LT(most, node.mpc().horizonFootholds());
 }
 
+// Ticks on an elevation map allocate nothing either (issue 31): maps arriving at 10 Hz of stamps
+// (decoded, checked, their steppability computed: after the first map of a size, whose decoding
+// sizes the message's rows), footholds chosen on them, swing arcs over their cells, and the
+// fallback to blind planning on a stale map. A planner's trot towards a 5 cm step.
+TEST(ControllerNoAllocation, TicksOnAMap) {
+  ControllerConfig config = loadControllerConfig(controller_cases::configPath("stride_quad"));
+  config.gait.plan_file = std::string(STRIDE_CONFIG_DIR) + "/plans/quad_trot_then_stand.yaml";
+  config.terrain.max_map_age = 0.3;
+  Sink out;
+  MpcNode node(config, out, TimeSource::Stamps);
+  robot_state_t s = controller_cases::standingState(node.mpc().robot(), 0);
+  std::vector<unsigned char> bytes(s.getEncodedSize());
+  terrain_t map;
+  msg::shape(map, 100, 100);
+  map.origin_x = map.origin_y = -0.99;
+  map.resolution = 0.02;
+  for (int r = 0; r < map.rows; ++r)
+    for (int c = 0; c < map.cols; ++c) map.height[r][c] = c >= 62 ? 0.05f : 0.0f;
+  std::vector<unsigned char> map_bytes(map.getEncodedSize());
+  auto send_map = [&](std::int64_t utime) {
+    map.utime = utime;
+    map.encode(map_bytes.data(), 0, static_cast<int>(map_bytes.size()));
+    lcm::ReceiveBuffer rbuf{map_bytes.data(), static_cast<uint32_t>(map_bytes.size()), 0};
+    node.onTerrain(&rbuf, config.terrain_channel);
+  };
+  auto tick = [&](std::int64_t utime) {
+    s.utime = utime;
+    s.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    lcm::ReceiveBuffer rbuf{bytes.data(), static_cast<uint32_t>(bytes.size()), 0};
+    node.onState(&rbuf, config.state_channel);
+    node.tick(Mpc::Clock::time_point::max());
+    node.prepare(Mpc::Clock::time_point::max());
+  };
+  send_map(0);
+  tick(0);  // start-up
+  const auto period = static_cast<std::int64_t>(1e6 / config.rate_hz);
+  for (std::int64_t t = period; t <= 1600000; t += period)
+    EXPECT_EQ(allocations([&] {
+                if (t % 100000 == 0 && t <= 1200000) send_map(t);  // none after 1.2 s: stale
+                tick(t);
+              }),
+              0)
+        << "at " << t << " us";
+  const MpcCounters& c = node.mpc().counters();
+  EXPECT_EQ(c.maps, 13);
+  EXPECT_GT(c.map_ticks, 0);
+  EXPECT_GT(c.stale_map_ticks, 0);
+  EXPECT_EQ(c.fallbacks, 0);
+  EXPECT_FALSE(node.mpc().plannedOnMap());
+}
+
 TEST(ControllerNoAllocation, QuadrupedTicks) {
   tickNoAllocation("stride_quad", 30);
 }
