@@ -39,8 +39,10 @@ Eigen::Vector2d rotate(double yaw, double x, double y) {
 
 // The smallest rotation that takes e_z to the unit vector n (exactly the identity for e_z: flat
 // ground plans the same bits as without a map).
+// Anything but an upward unit vector (never planned; a guard) counts as e_z.
 Eigen::Matrix3d alignZ(const Eigen::Vector3d& n) {
-  if (n.x() == 0.0 && n.y() == 0.0) return Eigen::Matrix3d::Identity();
+  if ((n.x() == 0.0 && n.y() == 0.0) || !n.allFinite() || !(n.z() > 0.0))
+    return Eigen::Matrix3d::Identity();
   return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n).toRotationMatrix();
 }
 
@@ -420,26 +422,16 @@ const Eigen::Vector3d& GaitGenerator::footNormal(int contact, double t) const {
   return s > 0.0 ? st[i + 1].normal : st[i].normal;
 }
 
-double GaitGenerator::groundAt(double t) const {
-  if (!map_) return ground_;
-  // The mean height of the feet's footholds over their nominal heights, each foot's on the swing's
-  // ramp between its footholds.
-  double sum = 0.0;
-  for (int c = 0; c < nc_; ++c) {
-    double s;
-    const int i = stanceAt(c, t, s);
-    const std::vector<Stance>& st = stances_[c];
-    double z = st[i].p.z();
-    if (s > 0.0) z += 0.5 * (1.0 - std::cos(kPi * s)) * (st[i + 1].p.z() - z);
-    sum += z - offset_[c].z();
-  }
-  return sum / nc_;
+Eigen::Matrix3d GaitGenerator::surfaceRotation(int contact, double t) const {
+  return alignZ(footNormal(contact, t));
 }
 
-Eigen::Vector3d GaitGenerator::groundNormalAt(double t) const {
-  if (!map_) return kUp;
+GaitGenerator::Ground GaitGenerator::groundAt(double t) const {
+  if (!map_) return {ground_, kUp};
+  // The feet's footholds at t (each foot's on the swing's ramp between them), on the ground.
   std::array<Eigen::Vector3d, kMaxFeet> feet;
   Eigen::Vector3d normals = Eigen::Vector3d::Zero();
+  double height = 0.0;
   for (int c = 0; c < nc_; ++c) {
     double s;
     const int i = stanceAt(c, t, s);
@@ -447,15 +439,17 @@ Eigen::Vector3d GaitGenerator::groundNormalAt(double t) const {
     feet[c] = st[i].p;
     if (s > 0.0) feet[c] += 0.5 * (1.0 - std::cos(kPi * s)) * (st[i + 1].p - st[i].p);
     feet[c].z() -= offset_[c].z();
+    height += feet[c].z();
     normals += s > 0.0 ? st[i + 1].normal : st[i].normal;
   }
-  // Across a line of feet (a biped, a trot's diagonal) the footholds' surfaces tell the slope.
+  // Their mean height, and the plane through them; across a line of feet (a biped, a trot's
+  // diagonal) the footholds' surfaces tell the slope.
   const Eigen::Vector3d n = normals.normalized();
   terrain::GroundPlane prior, plane;
   prior.b = -n.x() / n.z();
   prior.c = -n.y() / n.z();
   if (terrain::fitGroundPlane(feet.data(), nc_, prior, plane) == 0) plane = prior;
-  return plane.normal();
+  return {height / nc_, plane.normal()};
 }
 
 Eigen::Matrix3d GaitGenerator::footRotation(int contact, double t) const {
@@ -476,9 +470,10 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
   const Sample s = baseAt(t);
   x_ref[0] = s.x;
   x_ref[1] = s.y;
-  x_ref[2] = z_nominal_ + s.height + groundAt(t);
+  const Ground ground = groundAt(t);
+  x_ref[2] = z_nominal_ + s.height + ground.height;
   // The body tilts with the ground under the feet (flat: exactly the nominal tilt).
-  const Eigen::Quaterniond o = Eigen::Quaterniond(alignZ(groundNormalAt(t))) *
+  const Eigen::Quaterniond o = Eigen::Quaterniond(alignZ(ground.normal)) *
                                Eigen::AngleAxisd(s.yaw, Eigen::Vector3d::UnitZ()) * tilt_;
   x_ref.segment<4>(3) << o.x(), o.y(), o.z(), o.w();
   // The joints of the posture for this height (interpolated between the solved ones).
@@ -498,7 +493,7 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
 
 Eigen::Vector3d GaitGenerator::basePosition(double t) const {
   const Sample s = baseAt(t);
-  return {s.x, s.y, z_nominal_ + s.height + groundAt(t)};
+  return {s.x, s.y, z_nominal_ + s.height + groundAt(t).height};
 }
 
 double GaitGenerator::baseYaw(double t) const {
@@ -509,7 +504,7 @@ Eigen::Vector3d GaitGenerator::com(double t) const {
   const Sample s = baseAt(t);
   const Eigen::Vector2d xy =
       Eigen::Vector2d(s.x, s.y) + rotate(s.yaw, com_offset_.x(), com_offset_.y());
-  return {xy.x(), xy.y(), z_nominal_ + s.height + groundAt(t) + com_offset_.z()};
+  return {xy.x(), xy.y(), z_nominal_ + s.height + groundAt(t).height + com_offset_.z()};
 }
 
 }  // namespace stride

@@ -148,8 +148,10 @@ class GaitGenerator {
   // Its reference orientation: the nominal tilt of the foot, turned to the planned heading (and on
   // a map tilted onto the surface of its foothold).
   Eigen::Matrix3d footRotation(int contact, double t) const;
-  // The surface normal (world) where contact c stands at t, or where it lands when in the air.
+  // The surface normal (world) where contact c stands at t, or where it lands when in the air, and
+  // the smallest rotation that takes e_z to it (the identity on flat ground): its friction cone's.
   const Eigen::Vector3d& footNormal(int contact, double t) const;
+  Eigen::Matrix3d surfaceRotation(int contact, double t) const;
   void state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const;
   Eigen::Vector3d com(double t) const;
   // The base reference at t: position, yaw.
@@ -183,10 +185,13 @@ class GaitGenerator {
   };
   void sampleBase(double t, const Eigen::Vector2d& p0, double yaw0);
   Sample baseAt(double t) const;
-  // The height of the ground under the base at t (the feet's footholds on a map; else ground_),
-  // and the unit normal of the ground plane through the feet (up without a map).
-  double groundAt(double t) const;
-  Eigen::Vector3d groundNormalAt(double t) const;
+  // The ground under the base at t: on a map, the mean height of the feet's footholds and the
+  // normal of the plane through them; else ground_, level.
+  struct Ground {
+    double height;
+    Eigen::Vector3d normal;
+  };
+  Ground groundAt(double t) const;
   // The same command carried from the measured base instead (where footholds are planned).
   Sample robotAt(double t) const;
   // A planned stance's position and heading.

@@ -211,17 +211,9 @@ bool LocomotionProblem::update(double t0, const GaitGenerator& reference) {
       knot.contacts().setActive(c, closed);
       costs[cone_term_[c]].active = closed;
       // The cone along the surface normal where the foot stands (forces are world-aligned).
-      if (closed) {
-        const Eigen::Vector3d& n = reference.footNormal(c, t);
-        auto& cone = static_cast<FrictionConeResidual&>(*costs[cone_term_[c]].residual);
-        if ((n.x() == 0.0 && n.y() == 0.0) || !n.allFinite() || !(n.z() > 0.0)) {
-          if (!cone.surfaceRotation().isIdentity(0.0))
-            cone.setSurfaceRotation(Eigen::Matrix3d::Identity());
-        } else {
-          cone.setSurfaceRotation(
-              Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n).toRotationMatrix());
-        }
-      }
+      if (closed)
+        static_cast<FrictionConeResidual&>(*costs[cone_term_[c]].residual)
+            .setSurfaceRotation(reference.surfaceRotation(c, t));
       if (cop_term_[c] >= 0) {
         costs[cop_term_[c]].active = closed;
         // The sole's heading where it stands (or will land), for its centre of pressure.
