@@ -7,7 +7,12 @@
 // between ticks is not timed. The counter reused is the share of knots whose calcDiff in the
 // preparation took the contact solve of the rollout before it (KeptSolve, solver/ocp/README.md).
 // period_share and period_share_p99: a period's work (tick + preparation) over the period, median
-// and 99th percentile over the iterations (the budget: at most 0.5 and 0.8 on one core).
+// and 99th percentile over the iterations (the budget: at most 0.5 and 0.8 on one core); a
+// period's work includes the handling of its messages (state, command and, at 10 Hz, an elevation
+// map: decoded, checked, its steppability computed).
+// controller_tick/anymal_c_stairs: the same on the shipped stairs (config/terrain/
+// stairs_anymal_c.yaml) with the mock robot's maps, from 5.5 s of robot time (at the first stair)
+// over the 2 s of climbing that follow.
 // The public robots are read from the package view of ../shared (build/robot_packages); without
 // it they are skipped with a message.
 #include <benchmark/benchmark.h>
@@ -25,6 +30,7 @@
 #include "controller/statistics.hpp"
 #include "sim/sim_node.hpp"
 #include "solver/ocp/knot.hpp"
+#include "terrain/terrain_file.hpp"
 
 namespace stride::bench {
 namespace {
@@ -32,12 +38,13 @@ namespace {
 // stride-mpc's node and stride-sim's node on one in-process bus, the robot commanded into its gait
 // at once, walking forward (the hard ticks are the stepping ones).
 struct ClosedLoop {
-  explicit ClosedLoop(const char* robot)
+  // terrain: a name in config/terrain/ (the mock robot publishes its maps), or null: flat ground.
+  explicit ClosedLoop(const char* robot, const char* terrain = nullptr)
       : config(configFor(robot)),
         lcm("memq://"),
         publisher(lcm),
         mpc(config, publisher, TimeSource::Stamps),
-        sim(mpc.mpc().robot(), sim::SimOptions{}, simOptions(config), publisher) {
+        sim(mpc.mpc().robot(), worldOf(terrain), simOptions(config, terrain), publisher) {
     mpc.subscribe(lcm);
     sim.subscribe(lcm);
     reset();
@@ -48,27 +55,38 @@ struct ClosedLoop {
     c.robots_dirs = {STRIDE_ROBOT_PACKAGES};
     return c;
   }
-  static sim::SimNodeOptions simOptions(const ControllerConfig& c) {
+  static sim::SimOptions worldOf(const char* terrain) {
+    sim::SimOptions o;
+    if (terrain)
+      o.terrain = std::make_shared<const terrain::Terrain>(terrain::loadTerrainFile(
+          std::string(STRIDE_CONFIG_DIR) + "/terrain/" + terrain + ".yaml"));
+    return o;
+  }
+  // As stride-sim: maps at 10 Hz on a terrain, none on the default flat ground.
+  static sim::SimNodeOptions simOptions(const ControllerConfig& c, const char* terrain) {
     sim::SimNodeOptions o;
     o.state_rate_hz = c.rate_hz;
+    if (!terrain) o.map.rate_hz = 0.0;
     return o;
   }
   void reset() {
     const Robot& r = mpc.mpc().robot();
-    sim.reset(r.default_q, Eigen::VectorXd::Zero(r.model.nv));
+    sim.reset(sim::startingPose(r, sim.simulator().terrain()), Eigen::VectorXd::Zero(r.model.nv));
   }
-  // One period: a state out, the tick (state in → policy out: its duration returned), the
-  // preparation for the next state (its duration in prepare_seconds), the answer applied. False
-  // when the robot fell.
-  bool period(double& tick_seconds, double& prepare_seconds) {
+  // One period: a state out, its messages handled (their duration in handle_seconds), the tick
+  // (state in → policy out: its duration returned), the preparation for the next state (its
+  // duration in prepare_seconds), the answer applied. False when the robot fell.
+  bool period(double& tick_seconds, double& prepare_seconds, double& handle_seconds) {
     sim.publishState();
     command.utime = sim.utime();
     command.gait = mpc.mpc().gaits().size() > 2 ? "trot" : "walk";
     command.vx = sim.simulator().time() > 0.5 ? 0.3 : 0.0;
     lcm.publish(config.command_channel, &command);
+    const auto t_in = std::chrono::steady_clock::now();
     while (lcm.handleTimeout(0) > 0) {
     }
     const auto t0 = std::chrono::steady_clock::now();
+    handle_seconds = std::chrono::duration<double>(t0 - t_in).count();
     mpc.tick(Mpc::Clock::time_point::max());
     const auto t1 = std::chrono::steady_clock::now();
     mpc.prepare(Mpc::Clock::time_point::max());
@@ -79,8 +97,8 @@ struct ClosedLoop {
     return sim.advance(sim.stepsPerState());
   }
   bool period() {
-    double a = 0.0, b = 0.0;
-    return period(a, b);
+    double a = 0.0, b = 0.0, c = 0.0;
+    return period(a, b, c);
   }
 
   ControllerConfig config;
@@ -91,10 +109,11 @@ struct ClosedLoop {
   sim::SimNode sim;
 };
 
-void controllerTick(benchmark::State& state, const char* robot, double warmup) {
+void controllerTick(benchmark::State& state, const char* robot, double warmup,
+                    const char* terrain) {
   std::unique_ptr<ClosedLoop> made;
   try {
-    made = std::make_unique<ClosedLoop>(robot);
+    made = std::make_unique<ClosedLoop>(robot, terrain);
   } catch (const std::exception& e) {
     state.SkipWithError(e.what());  // a public robot whose description is not here
     return;
@@ -102,18 +121,18 @@ void controllerTick(benchmark::State& state, const char* robot, double warmup) {
   ClosedLoop& loop = *made;
   while (loop.sim.simulator().time() < warmup)
     if (!loop.period()) loop.reset();
-  double seconds = 0.0, prepare = 0.0, prepare_total = 0.0;
+  double seconds = 0.0, prepare = 0.0, prepare_total = 0.0, handle = 0.0;
   long backward = 0, forward = 0;
   double reused = 0.0, knots = 0.0;  // knots whose preparation took the rollout's contact solve
   std::vector<double> work;          // tick + preparation of each period [s]
   work.reserve(state.max_iterations);
   const Solver& solver = *loop.mpc.mpc().solver();
   for (auto _ : state) {
-    if (!loop.period(seconds, prepare))
+    if (!loop.period(seconds, prepare, handle))
       loop.reset();  // fell: start again, the timing is what matters
     state.SetIterationTime(seconds);
     prepare_total += prepare;
-    work.push_back(seconds + prepare);
+    work.push_back(handle + seconds + prepare);
     forward += solver.forwardPasses();
     backward += solver.backwardPasses();
     // Outside the timed part (manual time): did calcDiff reuse calc's solve (KeptSolve)?
@@ -130,6 +149,7 @@ void controllerTick(benchmark::State& state, const char* robot, double warmup) {
   state.counters["rollouts"] = per_tick(static_cast<double>(forward));
   state.counters["backward"] = per_tick(static_cast<double>(backward));
   state.counters["fell"] = loop.sim.stats().fell;
+  state.counters["maps"] = static_cast<double>(loop.mpc.mpc().counters().maps);
   // The other half of each iteration, run after the policy went out (ms per tick).
   state.counters["prepare_ms"] = 1e3 * per_tick(prepare_total);
   state.counters["unprepared"] = static_cast<double>(loop.mpc.mpc().counters().unprepared_solves);
@@ -184,10 +204,15 @@ const bool registered = [] {
                                                  {"talos_reduced", 100}};
   for (const auto& [robot, ticks] : configs)
     benchmark::RegisterBenchmark((std::string("controller_tick/") + robot).c_str(), controllerTick,
-                                 robot, 1.5)
+                                 robot, 1.5, nullptr)
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond)
         ->Iterations(ticks);
+  benchmark::RegisterBenchmark("controller_tick/anymal_c_stairs", controllerTick, "anymal_c", 5.5,
+                               "stairs_anymal_c")
+      ->UseManualTime()
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(400);
   return true;
 }();
 
