@@ -23,7 +23,8 @@
 #                     The mock robot publishes elevation maps of it on STRIDE_TERRAIN (--viz
 #                     draws them)
 #   --commands FILE   the command script stride-teleop plays on the robot's clock (default
-#                     config/commands/NAME.yaml; format in tools/README.md, "stride-teleop");
+#                     config/commands/NAME.yaml; with --terrain, config/commands/terrain_NAME.yaml:
+#                     straight on at 0.2-0.4 m/s; format in tools/README.md, "stride-teleop");
 #                     `--commands none`: no command source, the robot stands until you send
 #                     commands yourself (the demo prints how; default duration 60 s)
 #   --teleop          drive from the keyboard instead (real time, no time limit): arrows / WASD,
@@ -139,6 +140,10 @@ if [ "$teleop" = 1 ]; then
 elif [ "$commands" = none ]; then
   duration="${duration:-60}"
 else
+  # On a terrain, the robot's slower walk over it (config/commands/terrain_NAME.yaml) if it has one.
+  if [ -z "$commands" ] && [ -n "$terrain" ] && [ -f "$root/config/commands/terrain_$robot.yaml" ]; then
+    commands="$root/config/commands/terrain_$robot.yaml"
+  fi
   commands="${commands:-$root/config/commands/$robot.yaml}"
   [ -f "$commands" ] || { echo "demo.sh: no command script '$commands'" >&2; exit 2; }
   commands=$(cd "$(dirname "$commands")" && echo "$(pwd)/$(basename "$commands")")
