@@ -42,6 +42,7 @@ Mpc::Mpc(const ControllerConfig& config)
   for (const ContactSpec& c : robot_.contacts)
     contacts_.add(model, c.frame, c.dim, ReferenceFrame::LocalWorldAligned, 0.0, kContactDamping);
   config_.locomotion.sole_half_extents = kSoleMargin * robot_.sole_half_extents;
+  config_.generator.sole_half_length = robot_.sole_half_extents.x();
   gaits_ = gaitNames(static_cast<int>(robot_.contacts.size()));
   for (const std::string& g : gaits_) {  // a bad timing fails here, not at the first state
     const auto timing = config_.gait.timing.find(g);

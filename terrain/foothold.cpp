@@ -53,7 +53,7 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
   const double max_shift = reach.max_shift >= 0.0 ? reach.max_shift : -1.0;  // NaN: none
   const double max_shift2 = max_shift * max_shift + kTie;
   int best_r = -1, best_c = -1;
-  double best2 = kInf;
+  double best2 = kInf, best_cost = kInf;
   bool any_known = false;
   if (max_shift >= 0.0) {
     const double cells = std::ceil(max_shift / map.resolution());
@@ -64,7 +64,11 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
         const double d2 = (p - nominal).squaredNorm();
         if (d2 > max_shift2 || !in_reach(p) || std::isnan(map.height(r, c))) continue;
         any_known = true;
-        if (map.steppable(r, c) && d2 < best2 - kTie) {
+        // Backwards counts twice: (2 b)^2 = b^2 + 3 b^2 for the part b against the travel.
+        const double back = std::min(0.0, (p - nominal).dot(reach.forward));
+        const double cost = d2 + 3.0 * back * back;
+        if (map.steppable(r, c) && cost < best_cost - kTie) {
+          best_cost = cost;
           best2 = d2;
           best_r = r;
           best_c = c;

@@ -26,6 +26,11 @@ struct FootholdReach {
   double max_shift = 0.1;  // [m]
   Eigen::Vector2d hip = Eigen::Vector2d::Zero();
   double max_hip_distance = std::numeric_limits<double>::infinity();  // [m]
+  // The direction of travel (unit; zero: none). A move against it counts twice its length when
+  // the nearest safe cell is chosen: a foot that shortens its step before an unsafe band (a
+  // riser's edge) lands where the next nominal foothold falls before it again, and the body stalls
+  // behind it; one that lengthens it crosses.
+  Eigen::Vector2d forward = Eigen::Vector2d::Zero();
 };
 
 struct Foothold {
@@ -42,8 +47,8 @@ struct Foothold {
 // The foothold nearest `nominal` that is safe on `map`:
 // - Nominal when the nominal's cell is steppable, the point itself is at least min_edge_distance
 //   from every jump (Steppability::edgeDistanceAt) and within the hip's reach;
-// - otherwise Moved to the centre of the steppable cell nearest the nominal within the reach (ties:
-//   the lowest row, then the lowest column);
+// - otherwise Moved to the centre of the steppable cell nearest the nominal within the reach (a
+//   move against reach.forward counted twice; ties: the lowest row, then the lowest column);
 // - Unreachable (the nominal returned unchanged, never a far cell) when no steppable cell is within
 //   reach but a known one is, Unknown when the nominal is outside the map or nothing within reach
 //   is known.

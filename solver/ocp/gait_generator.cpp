@@ -25,6 +25,8 @@ constexpr double kLookahead = 2.0;
 constexpr double kHalfStanceCap = 0.5;
 // Body-height postures solved at construction (odd: one at the nominal height).
 constexpr int kCrouches = 9;
+// A base reference slower than this [m/s] has no direction of travel for the footholds.
+constexpr double kStill = 0.01;
 // Feet a generator plans for (the ground plane's fit takes them on the stack).
 constexpr int kMaxFeet = 8;
 
@@ -84,6 +86,7 @@ GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
   z_nominal_ = base.z();
   for (int c = 0; c < nc_; ++c) {
     frames_.push_back(contacts[c].frame);
+    contacts_dim_.push_back(contacts[c].dim);
     const Eigen::Vector3d p = data_.oMf[contacts[c].frame].p;
     Eigen::Vector3d off = unyaw * (p - base);
     off.z() = p.z();  // the foot's height on the ground, not relative to the base
@@ -238,6 +241,8 @@ GaitGenerator::Stance GaitGenerator::foothold(int contact, double touch_down, do
   // On the map: the nearest safe cell to the nominal foothold, at the map's height (issue 31).
   terrain::FootholdReach reach;
   reach.max_shift = options_.max_foothold_shift;
+  const Eigen::Vector2d travel = rotate(s.yaw, s.vx, s.vy);
+  if (travel.norm() > kStill) reach.forward = travel.normalized();
   const terrain::Foothold f = terrain::selectFoothold(*map_, xy, reach);
   switch (f.status) {
     case terrain::FootholdStatus::Nominal:
@@ -261,8 +266,17 @@ GaitGenerator::Stance GaitGenerator::foothold(int contact, double touch_down, do
 
 double GaitGenerator::swingHeight(int contact, const Stance& from, const Stance& to) const {
   if (!map_) return options_.swing_height;
-  const double lift =
-      terrain::swingLift(map_->map(), from.p, to.p, offset_[contact].z(), options_.swing_clearance);
+  const double foot = offset_[contact].z(), clearance = options_.swing_clearance;
+  double lift = terrain::swingLift(map_->map(), from.p, to.p, foot, clearance);
+  if (contacts_dim_[contact] == 6 && options_.sole_half_length > 0.0) {
+    // The toe and the heel on the same arc, shifted along the sole's heading at each end.
+    const double l = options_.sole_half_length;
+    const Eigen::Vector3d a(std::cos(from.yaw), std::sin(from.yaw), 0.0);
+    const Eigen::Vector3d b(std::cos(to.yaw), std::sin(to.yaw), 0.0);
+    lift = std::max(
+        {lift, terrain::swingLift(map_->map(), from.p + l * a, to.p + l * b, foot, clearance),
+         terrain::swingLift(map_->map(), from.p - l * a, to.p - l * b, foot, clearance)});
+  }
   return std::clamp(lift, options_.swing_height,
                     std::max(options_.swing_height, options_.max_swing_height));
 }

@@ -90,6 +90,9 @@ struct GaitGeneratorOptions {
   double max_foothold_shift = 0.08;
   double swing_clearance = 0.05;
   double max_swing_height = 0.25;
+  // Half the length of a surface contact's sole along its heading [m] (0: point feet): on a map its
+  // toe and heel clear the terrain as its centre does.
+  double sole_half_length = 0.0;
   // The longest span plan() is asked to cover (t_end - t_begin) [s], and the step of the base
   // trajectory's samples.
   double horizon = 1.0;
@@ -210,6 +213,7 @@ class GaitGenerator {
   GaitGeneratorOptions options_;
   int nc_;
   std::vector<int> frames_;
+  std::vector<int> contacts_dim_;  // 3: a point foot, 6: a sole
   Eigen::VectorXd x_nominal_;
   Eigen::Quaterniond tilt_;  // the nominal base orientation without its yaw
   double z_nominal_ = 0.0;

@@ -73,8 +73,8 @@ INSTANTIATE_TEST_SUITE_P(
     });
 
 // Forward at vx from 2 s to `until`, then stand.
-std::vector<ScriptedCommand> forwardUntil(double vx, double until) {
-  std::vector<ScriptedCommand> s = forward("trot", vx);
+std::vector<ScriptedCommand> forwardUntil(double vx, double until, const char* gait = "trot") {
+  std::vector<ScriptedCommand> s = forward(gait, vx);
   s[3].at = until;
   return s;
 }
@@ -107,6 +107,26 @@ TEST(TerrainWithMap, AnymalClimbsAndDescendsTheStairs) {
   EXPECT_GT(r.mpc.maps, 100);
   EXPECT_EQ(r.mpc.stale_map_ticks, 0);
   EXPECT_EQ(r.mpc.fallbacks, 0);
+}
+
+// With the map, a humanoid: talos_reduced walks at 0.2 m/s up the shipped 10 cm step (a box from
+// x = 0.8 to 1.8) and down its far side: each sole's centre 13 cm or more from the edges (none of
+// the sole on one), its toe and heel over the riser, no fall, no trip.
+TEST(TerrainWithMap, TalosStepsUpAndDown) {
+  ControllerConfig config = loadControllerConfig(controller_cases::configPath("talos_reduced"));
+  config.robots_dirs = {STRIDE_ROBOT_PACKAGES};
+  drive::Options o;
+  o.duration = 14.0;
+  o.script = forwardUntil(0.2, 13.5, "walk");
+  o.terrain = std::make_shared<const terrain::Terrain>(terrain::loadTerrainFile(
+      std::string(STRIDE_CONFIG_DIR) + "/terrain/step_talos_reduced.yaml"));
+  const drive::Run r = drive::run(config, o);
+  ASSERT_FALSE(r.fell());
+  EXPECT_GT(r.q_end[0], 2.0) << "up, across and down the step";
+  EXPECT_GE(forwardSpeed(r, 0.2), 0.7 * 0.2);
+  EXPECT_EQ(r.trips, 0);
+  EXPECT_EQ(r.edge_footholds, 0);
+  EXPECT_EQ(r.mpc.stale_map_ticks, 0);
 }
 
 // Blind (no map): solo12 trots at 0.3 m/s across a rough patch of 10 cm cells up to 2 cm high or

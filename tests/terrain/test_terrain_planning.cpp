@@ -219,6 +219,27 @@ TEST(Foothold, OnAnEdgeMovesToTheNearestSafeCell) {
   EXPECT_NEAR(h.shift, 0.005, 1e-12);
 }
 
+TEST(Foothold, AMoveAgainstTheTravelCountsTwice) {
+  // The box's side at x = 0.49: the nearest safe cells are 0.46 before it and 0.52 on the box
+  // (3 cm each way). From 0.485, 2.5 cm back or 3.5 cm on: without a direction the shorter step
+  // back; walking +x the longer one over the edge (2 x 2.5 > 3.5); walking -x, back.
+  const Steppability map = computed(boxMap());
+  FootholdReach reach;
+  EXPECT_NEAR(selectFoothold(map, {0.485, 0.3}, reach).position.x(), 0.46, 1e-12);
+  reach.forward = Eigen::Vector2d::UnitX();
+  Foothold f = selectFoothold(map, {0.485, 0.3}, reach);
+  EXPECT_EQ(f.status, FootholdStatus::Moved);
+  EXPECT_NEAR(f.position.x(), 0.52, 1e-12);
+  EXPECT_NEAR(f.position.z(), 0.05, 1e-7);
+  EXPECT_NEAR(f.shift, 0.035, 1e-12);  // the distance itself, not the weighted one
+  reach.forward = -Eigen::Vector2d::UnitX();
+  EXPECT_NEAR(selectFoothold(map, {0.485, 0.3}, reach).position.x(), 0.46, 1e-12);
+  // Still the nearest when the step back is less than half the one on: from 0.475, 1.5 cm back
+  // against 4.5 cm on.
+  reach.forward = Eigen::Vector2d::UnitX();
+  EXPECT_NEAR(selectFoothold(map, {0.475, 0.3}, reach).position.x(), 0.46, 1e-12);
+}
+
 TEST(Foothold, SafeCellsBeyondReachAreReportedNotTaken) {
   const Steppability s = computed(boxMap());
   const Eigen::Vector2d nominal(0.492, 0.30);
