@@ -351,6 +351,14 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
     timeline.switchTo(gait_pattern_[gait_], t);
   gen_->setCommand(command_);
   chooseMap(state->utime);
+  // The estimator's contacts, when it reports them (robot YAML order).
+  if (state->ncontacts == static_cast<std::int32_t>(robot_.contacts.size())) {
+    unsigned loaded = 0;
+    for (int c = 0; c < state->ncontacts; ++c) loaded |= (state->contact[c] != 0 ? 1u : 0u) << c;
+    gen_->setMeasuredContacts(loaded);
+  } else {
+    gen_->clearMeasuredContacts();
+  }
   status_.phase = static_cast<std::int32_t>(timeline.mask(t));
   const int in_force = timeline.patternAt(t);
   status_.gait = have_plan_ ? kPlanGait : gaits_[std::min<int>(in_force, gaits_.size() - 1)];

@@ -62,47 +62,4 @@ int fitGroundPlane(const Eigen::Vector3d* feet, int n, const GroundPlane& prior,
   return m.n;
 }
 
-GroundPlaneEstimator::GroundPlaneEstimator(const GroundPlaneOptions& options) : options_(options) {
-  if (!(options.time_constant >= 0.0) || !std::isfinite(options.time_constant))
-    throw std::invalid_argument("ground plane: time_constant must be finite and >= 0");
-}
-
-void GroundPlaneEstimator::reset() {
-  plane_ = fit_ = GroundPlane{};
-  initialized_ = false;
-}
-
-void GroundPlaneEstimator::reset(const GroundPlane& plane) {
-  plane_ = fit_ = plane;
-  initialized_ = true;
-}
-
-int GroundPlaneEstimator::update(const Eigen::Vector3d* feet, int n, double dt) {
-  const int used = fitGroundPlane(feet, n, plane_, fit_);
-  if (used == 0) return 0;
-  if (!initialized_) {
-    plane_ = fit_;
-    initialized_ = true;
-    return used;
-  }
-  if (!(dt > 0.0) || !std::isfinite(dt)) return used;
-  const double alpha =
-      options_.time_constant > 0.0 ? -std::expm1(-dt / options_.time_constant) : 1.0;
-  // Filtered at the feet's centroid (not at the origin: a slope's change would swing the height
-  // far from the origin), where the fit passes.
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-  int k = 0;
-  for (int i = 0; i < n; ++i)
-    if (feet[i].allFinite()) {
-      centre += feet[i].head<2>();
-      ++k;
-    }
-  centre /= k;
-  const double h0 = plane_.height(centre.x(), centre.y());
-  const double h = h0 + alpha * (fit_.height(centre.x(), centre.y()) - h0);
-  const Eigen::Vector2d g = plane_.gradient() + alpha * (fit_.gradient() - plane_.gradient());
-  plane_ = GroundPlane::through(centre.x(), centre.y(), h, g);
-  return used;
-}
-
 }  // namespace stride::terrain

@@ -104,6 +104,7 @@ GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
   latched_.assign(nc_, Eigen::Vector3d::Zero());
   latched_yaw_.assign(nc_, 0.0);
   latched_normal_.assign(nc_, kUp);
+  early_at_.assign(nc_, -ContactTimeline::kNever);
   samples_.assign(static_cast<size_t>(std::ceil((o.horizon + kLookahead) / o.sample_dt)) + 2,
                   Sample{});
   stances_.assign(nc_, std::vector<Stance>(kMaxStances));
@@ -233,7 +234,8 @@ GaitGenerator::Stance GaitGenerator::foothold(int contact, double touch_down, do
   const double n = lead.norm();
   if (n > options_.max_foothold_lead) lead *= options_.max_foothold_lead / n;
   const Eigen::Vector2d xy = on_robot + lead + correction;
-  Stance stance{touch_down, lift_off, Eigen::Vector3d(xy.x(), xy.y(), off.z() + ground_),
+  Stance stance{touch_down, lift_off,
+                Eigen::Vector3d(xy.x(), xy.y(), off.z() + blindHeight(xy.x(), xy.y())),
                 s.yaw + foot_yaw_[contact]};
   stance.source = StanceSource::Blind;
   stance.swing_height = options_.swing_height;
@@ -282,30 +284,61 @@ double GaitGenerator::swingHeight(int contact, const Stance& from, const Stance&
 }
 
 void GaitGenerator::updateGround(double t) {
-  // Blind: the ground is where the feet down stand (issue 31). The mean of their heights over
-  // their nominal ones, filtered across plans (a foot landing on a step moves it by a share).
-  double sum = 0.0;
+  // Blind: the ground is the plane the feet down stand on (issue 31): fitted through them
+  // (terrain::fitGroundPlane: across a line of feet, a trot's diagonal or a biped's soles, the
+  // slope known before is kept), its height at their centroid and its slope filtered across plans
+  // (a foot landing on a step moves it by a share); the filtered plane is carried to the new
+  // centroid before it is blended, so a robot walking up a slope does not lag behind it.
+  std::array<Eigen::Vector3d, kMaxFeet> feet;
   int down = 0;
   for (int c = 0; c < nc_; ++c)
     if (timeline_.closed(c, t)) {
-      sum += latched_[c].z() - offset_[c].z();
+      feet[down] = latched_[c];
+      feet[down].z() -= offset_[c].z();
       ++down;
     }
   if (down > 0) {
-    const double raw = sum / down;
+    const terrain::GroundPlane prior =
+        terrain::GroundPlane::through(0.0, 0.0, 0.0, slope_filtered_);
+    terrain::GroundPlane fit;
+    terrain::fitGroundPlane(feet.data(), down, prior, fit);
+    Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+    for (int k = 0; k < down; ++k) centroid += feet[k].head<2>();
+    centroid /= down;
+    const double raw = fit.height(centroid.x(), centroid.y());
     if (!ground_started_) {
       ground_filtered_ = raw;  // the robot starts standing on its ground
+      slope_filtered_ = fit.gradient();
       ground_started_ = true;
     } else {
       const double dt = std::clamp(t - ground_t_, 0.0, 1.0);
-      ground_filtered_ += dt / (options_.ground_time_constant + dt) * (raw - ground_filtered_);
+      const double k = dt / (options_.ground_time_constant + dt);
+      const double carried = ground_filtered_ + slope_filtered_.dot(centroid - centroid_);
+      ground_filtered_ = carried + k * (raw - carried);
+      slope_filtered_ += k * (fit.gradient() - slope_filtered_);
     }
+    centroid_ = centroid;
   }
   ground_t_ = t;
   const double band = options_.ground_dead_band;
   ground_ = ground_filtered_ > band    ? ground_filtered_ - band
             : ground_filtered_ < -band ? ground_filtered_ + band
                                        : 0.0;
+  const double g = slope_filtered_.norm(), slope_band = options_.ground_slope_dead_band;
+  slope_ = g > slope_band ? ((g - slope_band) / g * slope_filtered_).eval()
+                          : Eigen::Vector2d::Zero().eval();
+}
+
+bool GaitGenerator::landedEarly(int contact, double t, double lift_off, double touch_down) const {
+  // Blind only: on a map the touch-down is the map's foothold, and a foot loaded early there has
+  // met an edge on its way (stopping it there put soles and feet on edges).
+  return !map_ && measured_known_ && ((measured_ >> contact) & 1u) &&
+         !timeline_.closed(contact, t) && lift_off <= t && touch_down > t &&
+         t - lift_off >= 0.5 * (touch_down - lift_off);
+}
+
+double GaitGenerator::blindHeight(double x, double y) const {
+  return ground_ + slope_.dot(Eigen::Vector2d(x, y) - centroid_);
 }
 
 bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, double t_begin,
@@ -388,6 +421,17 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
         st[count] = {touch_down, next_lift_off, latched_[c], latched_yaw_[c]};
         st[count].normal = latched_normal_[c];
         st[count].swing_height = options_.swing_height;
+      } else if (next && landedEarly(c, t, lift_off, touch_down)) {
+        // On the ground already: the touch-down where the foot is (the timeline unchanged).
+        const SE3& M = data_.oMf[frames_[c]];
+        st[count] = {touch_down, next_lift_off, M.p, std::atan2(M.R(1, 0), M.R(0, 0))};
+        st[count].normal = st[count - 1].normal;
+        st[count].early = true;
+        if (early_at_[c] != touch_down) {
+          early_at_[c] = touch_down;
+          ++early_touch_downs_;
+        }
+        next = false;
       } else {
         st[count] = foothold(c, touch_down, next_lift_off,
                              next ? correction : Eigen::Vector2d::Zero().eval());
@@ -423,7 +467,8 @@ Eigen::Vector3d GaitGenerator::foot(int contact, double t) const {
   double s;
   const int i = stanceAt(contact, t, s);
   const std::vector<Stance>& st = stances_[contact];
-  if (s <= 0.0) return st[i].p;  // down, or no touch-down known: hold the lift-off point
+  if (s <= 0.0) return st[i].p;             // down, or no touch-down known: hold the lift-off point
+  if (st[i + 1].early) return st[i + 1].p;  // landed before its time: stay
   Eigen::Vector3d p = st[i].p + 0.5 * (1.0 - std::cos(kPi * s)) * (st[i + 1].p - st[i].p);
   p.z() += st[i + 1].swing_height * std::sin(kPi * s);
   return p;
@@ -441,7 +486,11 @@ Eigen::Matrix3d GaitGenerator::surfaceRotation(int contact, double t) const {
 }
 
 GaitGenerator::Ground GaitGenerator::groundAt(double t) const {
-  if (!map_) return {ground_, kUp};
+  if (!map_) {
+    // Blind: the plane the feet feel, under the base reference.
+    const Sample b = baseAt(t);
+    return {blindHeight(b.x, b.y), Eigen::Vector3d(-slope_.x(), -slope_.y(), 1.0).normalized()};
+  }
   // The feet's footholds at t (each foot's on the swing's ramp between them), on the ground.
   std::array<Eigen::Vector3d, kMaxFeet> feet;
   Eigen::Vector3d normals = Eigen::Vector3d::Zero();

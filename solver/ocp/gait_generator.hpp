@@ -84,6 +84,9 @@ struct GaitGeneratorOptions {
   // (z = 0) are taken as the nominal ground, so that a flat floor plans exactly as without it.
   double ground_time_constant = 0.3;
   double ground_dead_band = 0.005;
+  // Its slope: the plane through the feet down, filtered alike; a gradient within this of level
+  // (1.7 degrees) is level, beyond it the band is subtracted.
+  double ground_slope_dead_band = 0.03;
   // On a map (setMap): how far a foothold may move from the nominal one to a steppable cell [m],
   // the swing's clearance over the terrain between its footholds [m], and the highest apex a swing
   // may take above the line between them [m].
@@ -141,6 +144,21 @@ class GaitGenerator {
   // state, a wrong size, or a window longer than options.horizon.
   bool plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, double t_begin, double t_end);
 
+  // The contacts the robot's estimator reports loaded (bit c: contact c), for the next plan()s; or
+  // none known (the default). Blind (no map), a foot in the second half of its swing that is
+  // reported loaded has landed early (higher ground than planned): its touch-down stays where the
+  // timeline has it (the horizon's contact sequence does not change), but its reference holds the
+  // place it landed on instead of going on down the arc. A foot that is late (still in the air at
+  // its touch-down time) is closed by the clock, latched where it is measured, and the ground the
+  // feet feel follows it down (controller/README.md, "Terrain").
+  void setMeasuredContacts(unsigned mask) {
+    measured_ = mask;
+    measured_known_ = true;
+  }
+  void clearMeasuredContacts() { measured_known_ = false; }
+  // Swings ended early by a reported touch-down, counted once each.
+  long earlyTouchDowns() const { return early_touch_downs_; }
+
   // After plan(): contact c closed at time t (the timeline's), its reference position (foothold
   // or swing arc), the state reference (base pose and twist; joints at the posture of the body
   // height, at
@@ -159,9 +177,11 @@ class GaitGenerator {
   Eigen::Vector3d com(double t) const;
   // The base reference at t: position, yaw.
   Eigen::Vector3d basePosition(double t) const;
-  // The ground height the feet feel (options.ground_time_constant), beyond the dead band: the
-  // height every foothold, the base and the centre of mass are planned on [m].
+  // The ground the feet feel, blind (options.ground_time_constant), beyond the dead bands: its
+  // height at the centroid of the feet down [m] and its slope (dz/dx, dz/dy); every blind
+  // foothold, the base and the centre of mass are planned on that plane.
   double ground() const { return ground_; }
+  const Eigen::Vector2d& groundSlope() const { return slope_; }
   double baseYaw(double t) const;
 
   // The planned stances of a foot: touch-down, lift-off (±infinity when outside the timeline's
@@ -176,6 +196,7 @@ class GaitGenerator {
     StanceSource source = StanceSource::Measured;
     Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // the surface's there (world, up)
     double swing_height = 0.0;  // the apex of the swing that lands here, above the line [m]
+    bool early = false;         // landed before its touch-down time: the swing to it is over
   };
   int stances(int contact) const { return n_stances_[contact]; }
   const Stance& stance(int contact, int i) const { return stances_[contact][i]; }
@@ -202,6 +223,9 @@ class GaitGenerator {
                   const Eigen::Vector2d& correction) const;
   // The apex of the swing from `from` to `to` (swing_height; on a map, high enough to clear it).
   double swingHeight(int contact, const Stance& from, const Stance& to) const;
+  // Whether contact c, in the air at t on its swing from lift_off to touch_down, is reported
+  // loaded in the second half of that swing (setMeasuredContacts).
+  bool landedEarly(int contact, double t, double lift_off, double touch_down) const;
   // The ground the feet down feel at plan time t (ground_).
   void updateGround(double t);
   // The stance in force (or last lifted from) at t, and how far along the swing to the next one
@@ -232,11 +256,21 @@ class GaitGenerator {
   // The filtered mean height of the feet down relative to their nominal height, and the last
   // plan's time; ground_: it past the dead band.
   double ground_filtered_ = 0.0, ground_ = 0.0, ground_t_ = 0.0;
+  // The plane's gradient, filtered and past its dead band, and the centroid of the feet down at
+  // the last plan (where ground_ is the plane's height).
+  Eigen::Vector2d slope_filtered_ = Eigen::Vector2d::Zero(), slope_ = Eigen::Vector2d::Zero();
+  Eigen::Vector2d centroid_ = Eigen::Vector2d::Zero();
+  // The blind ground's height at (x, y): ground_ at the centroid, along slope_.
+  double blindHeight(double x, double y) const;
   bool ground_started_ = false;
   std::vector<Eigen::Vector3d> latched_;  // where each foot was last measured while down
   std::vector<double> latched_yaw_;
   std::vector<Eigen::Vector3d> latched_normal_;  // the map's normal where the foot stands
   const terrain::Steppability* map_ = nullptr;
+  unsigned measured_ = 0;
+  bool measured_known_ = false;
+  long early_touch_downs_ = 0;
+  std::vector<double> early_at_;  // the touch-down time of each contact's last early landing
   double t_anchor_ = 0.0;
   Eigen::Vector2d robot_xy_ = Eigen::Vector2d::Zero();  // measured base at t_anchor_
   double robot_turn_ = 0.0;                             // measured yaw - reference yaw there

@@ -732,6 +732,79 @@ TEST(GaitGenerator, TheGroundTheFeetFeel) {
   EXPECT_NEAR(step->ground(), 0.025, 1e-12);  // 3 cm, less the band
 }
 
+// Blind, on a slope (issue 31): the robot standing pitched nose-up by 10 degrees (its feet, coplanar
+// in the body, on a plane of slope tan 10 degrees along x): the ground the feet feel has that slope
+// less the 0.03 dead band, every planned touch-down lies on it, and the base pitches with it. At
+// 1 degree (within the band) everything is as on level ground.
+TEST(GaitGenerator, BlindTheGroundIsThePlaneTheFeetStandOn) {
+  const Nominal n;
+  auto pitched = [&](double deg) {
+    Eigen::VectorXd x = placed(0.0, 0.0, 0.0);
+    const Eigen::Quaterniond o(Eigen::AngleAxisd(-deg * kPi / 180.0, Eigen::Vector3d::UnitY()));
+    x.segment<4>(3) << o.x(), o.y(), o.z(), o.w();
+    return x;
+  };
+  Generator g;
+  g->setCommand(velocity(0.3));
+  ASSERT_TRUE(g->plan(0.0, pitched(10.0), 0.0, 1.0));
+  const double slope = std::tan(10.0 * kPi / 180.0) - 0.03;
+  EXPECT_NEAR(g->groundSlope().x(), slope, 1e-9);
+  EXPECT_NEAR(g->groundSlope().y(), 0.0, 1e-9);
+  // The plane through the touch-downs: their heights differ by the slope times their distance.
+  const GaitGenerator::Stance &a = g->stance(FL, 1), &b = g->stance(HL, 1);
+  EXPECT_NEAR((a.p.z() - n.foot[FL].z()) - (b.p.z() - n.foot[HL].z()),
+              slope * (a.p.x() - b.p.x()), 1e-9);
+  EXPECT_EQ(a.source, StanceSource::Blind);
+  Eigen::VectorXd x(quad().x_nominal.size());
+  g->state(0.5, x);
+  const Eigen::Vector3d nose =
+      Eigen::Quaterniond(x[6], x[3], x[4], x[5]) * Eigen::Vector3d::UnitX();
+  EXPECT_NEAR(std::atan2(nose.z(), nose.x()), std::atan(slope), 1e-9);
+  Generator level;
+  level->setCommand(velocity(0.3));
+  ASSERT_TRUE(level->plan(0.0, pitched(1.0), 0.0, 1.0));
+  EXPECT_EQ(level->groundSlope(), Eigen::Vector2d::Zero());
+  level->state(0.5, x);
+  EXPECT_EQ(Eigen::Quaterniond(x[6], x[3], x[4], x[5]).w(), 1.0);
+}
+
+// A foot reported loaded in the second half of its swing has landed early: its reference stays
+// where it is until its touch-down time (the timeline unchanged), counted once; in the first half,
+// or not reported, the arc goes on.
+TEST(GaitGenerator, AFootThatLandsEarlyStaysWhereItLanded) {
+  Generator g, arc;
+  g->setCommand(velocity(0.3));
+  arc->setCommand(velocity(0.3));
+  const Eigen::VectorXd x = placed(0.0, 0.0, 0.0);  // FL measured at its nominal place
+  const Nominal n;
+  // FL and HR swing from 0.1 to 0.3 (trot); FL (with FR and HL, down) reported loaded, HR not. At
+  // 0.15 (first half) the report changes nothing.
+  g->setMeasuredContacts(0b0111);
+  ASSERT_TRUE(g->plan(0.15, x, 0.15, 1.15));
+  ASSERT_TRUE(arc->plan(0.15, x, 0.15, 1.15));
+  EXPECT_FALSE(g->stance(FL, 1).early);
+  EXPECT_NEAR((g->foot(FL, 0.25) - arc->foot(FL, 0.25)).norm(), 0.0, 1e-12);
+  // At 0.22 (past half): landed early, where it is measured, until 0.3; the other feet as planned.
+  ASSERT_TRUE(g->plan(0.22, x, 0.22, 1.22));
+  ASSERT_TRUE(arc->plan(0.22, x, 0.22, 1.22));
+  EXPECT_TRUE(g->stance(FL, 1).early);
+  EXPECT_EQ(g->stance(FL, 1).touch_down, arc->stance(FL, 1).touch_down);
+  for (double t : {0.22, 0.26, 0.29})
+    EXPECT_NEAR((g->foot(FL, t) - n.foot[FL]).norm(), 0.0, 1e-9) << t;
+  EXPECT_GT((arc->foot(FL, 0.26) - n.foot[FL]).norm(), 0.01);
+  EXPECT_NEAR((g->foot(HR, 0.26) - arc->foot(HR, 0.26)).norm(), 0.0, 1e-12);
+  ASSERT_TRUE(g->plan(0.25, x, 0.25, 1.25));
+  EXPECT_EQ(g->earlyTouchDowns(), 1);
+  // Not reported loaded: the arc again.
+  g->setMeasuredContacts(0b0110);
+  ASSERT_TRUE(g->plan(0.26, x, 0.26, 1.26));
+  EXPECT_FALSE(g->stance(FL, 1).early);
+  g->clearMeasuredContacts();
+  ASSERT_TRUE(g->plan(0.27, x, 0.27, 1.27));
+  EXPECT_FALSE(g->stance(FL, 1).early);
+  EXPECT_EQ(g->earlyTouchDowns(), 1);
+}
+
 // The velocity beyond the command moves each foot's next touch-down, and only that one.
 TEST(GaitGenerator, RaibertCorrectionOfTheNextTouchDown) {
   const Nominal n;
