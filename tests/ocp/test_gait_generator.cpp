@@ -732,10 +732,10 @@ TEST(GaitGenerator, TheGroundTheFeetFeel) {
   EXPECT_NEAR(step->ground(), 0.025, 1e-12);  // 3 cm, less the band
 }
 
-// Blind, on a slope (issue 31): the robot standing pitched nose-up by 10 degrees (its feet, coplanar
-// in the body, on a plane of slope tan 10 degrees along x): the ground the feet feel has that slope
-// less the 0.03 dead band, every planned touch-down lies on it, and the base pitches with it. At
-// 1 degree (within the band) everything is as on level ground.
+// Blind, on a slope (issue 31): the robot standing pitched nose-up by 10 degrees (its feet,
+// coplanar in the body, on a plane of slope tan 10 degrees along x): the ground the feet feel has
+// that slope less the 0.03 dead band, every planned touch-down lies on it, and the base pitches
+// with it. At 1 degree (within the band) everything is as on level ground.
 TEST(GaitGenerator, BlindTheGroundIsThePlaneTheFeetStandOn) {
   const Nominal n;
   auto pitched = [&](double deg) {
@@ -752,8 +752,8 @@ TEST(GaitGenerator, BlindTheGroundIsThePlaneTheFeetStandOn) {
   EXPECT_NEAR(g->groundSlope().y(), 0.0, 1e-9);
   // The plane through the touch-downs: their heights differ by the slope times their distance.
   const GaitGenerator::Stance &a = g->stance(FL, 1), &b = g->stance(HL, 1);
-  EXPECT_NEAR((a.p.z() - n.foot[FL].z()) - (b.p.z() - n.foot[HL].z()),
-              slope * (a.p.x() - b.p.x()), 1e-9);
+  EXPECT_NEAR((a.p.z() - n.foot[FL].z()) - (b.p.z() - n.foot[HL].z()), slope * (a.p.x() - b.p.x()),
+              1e-9);
   EXPECT_EQ(a.source, StanceSource::Blind);
   Eigen::VectorXd x(quad().x_nominal.size());
   g->state(0.5, x);
