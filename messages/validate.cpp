@@ -274,7 +274,10 @@ Reject checkTerrain(const terrain_t& m) {
       if (std::isinf(h)) return Reject::NonFinite;  // NaN is an unknown cell, infinity nothing
   }
   if (!std::isfinite(m.origin_x) || !std::isfinite(m.origin_y)) return Reject::NonFinite;
-  if (!std::isfinite(m.resolution) || m.resolution <= 0.0) return Reject::BadField;
+  // A cell between 0.1 mm and 100 m: finer or coarser is no map (and grid coordinates from a
+  // denormal resolution would overflow).
+  if (!(m.resolution >= kMinTerrainResolution && m.resolution <= kMaxTerrainResolution))
+    return Reject::BadField;
   return m.utime >= 0 ? Reject::None : Reject::BadField;
 }
 

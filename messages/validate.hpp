@@ -90,8 +90,9 @@ Reject checkPlan(const contact_plan_t& m);
 // Finite numbers, a stamp >= 0. The gait name and the limits are the receiver's (its robot's gaits,
 // its configuration's limits).
 Reject checkCommand(const command_t& m);
-// Finite origin, a finite resolution > 0, a stamp >= 0, the arrays of the counts' sizes; heights
-// NaN (unknown cells) or finite, never infinite.
+// Finite origin, a resolution within [kMinTerrainResolution, kMaxTerrainResolution], a stamp >= 0,
+// the arrays of the counts' sizes; heights NaN (unknown cells) or finite, never infinite.
+constexpr double kMinTerrainResolution = 1e-4, kMaxTerrainResolution = 100.0;  // [m]
 Reject checkTerrain(const terrain_t& m);
 
 // The encoded size of a state / policy / map with these dimensions (hash included): what a

@@ -240,7 +240,7 @@ class Corpus {
     add(Channel::VizStatus, "cause_length_zero", poke32(encode(st), cause_at, 0));
     const Bytes trot_status = encode(st);
     add(Channel::VizStatus, "gait_length_past_end",
-        poke32(trot_status, trot_status.size() - 4 * 8 - 5 - 4, 1000));
+        poke32(trot_status, trot_status.size() - 57 - 5 - 4, 1000));  // 57: the fields after gait
     add(Channel::VizCommand, "trot", encode(command(2000000, "trot", 0.5)));
     // Elevation maps (stamps increasing in the files' name order: a map older than the last one
     // accepted is refused): a box step with unknown cells, and the cases the checks exist for.
@@ -264,6 +264,18 @@ class Corpus {
         poke32(poke32(Bytes(one.begin(), one.end() - 4), rows_at, 65536), rows_at + 4, 65536));
     const Bytes map = encode(terrain(1001000, 12, 16));
     add(Channel::VizTerrain, "truncated", Bytes(map.begin(), map.end() - 3));
+    // The same maps to the controller (MpcNode::onTerrain), and a resolution too fine to be one
+    // (a denormal: grid coordinates would overflow).
+    add(Channel::MpcTerrain, "box_step", encode(terrain(1000000, 12, 16)));
+    add(Channel::MpcTerrain, "box_step_older", encode(terrain(999000, 12, 16)));
+    add(Channel::MpcTerrain, "cols_2e31",
+        poke32(encode(terrain(1001000, 12, 16)), rows_at + 4, kHuge));
+    add(Channel::MpcTerrain, "rows_cols_wrapping",
+        poke32(poke32(Bytes(one.begin(), one.end() - 4), rows_at, 65536), rows_at + 4, 65536));
+    add(Channel::MpcTerrain, "truncated", Bytes(map.begin(), map.end() - 3));
+    t = terrain(1002000, 12, 16);
+    t.resolution = 1e-310;
+    add(Channel::MpcTerrain, "resolution_denormal", encode(t));
     return files;
   }
 

@@ -20,15 +20,18 @@ enum class Channel : std::uint8_t {
   VizHorizon,
   VizStatus,
   VizCommand,
-  VizTerrain,  // last: the corpus's channel bytes of the others stay what they were
+  VizTerrain,
+  MpcTerrain,  // MpcNode::onTerrain; last: the corpus's channel bytes of the others stay as they
+               // were
 };
-constexpr int kFuzzChannels = static_cast<int>(Channel::VizTerrain) + 1;
+constexpr int kFuzzChannels = static_cast<int>(Channel::MpcTerrain) + 1;
 
 // The corpus files' names start with it ("mpc_state-standing").
 inline const char* name(Channel c) {
   constexpr const char* kNames[kFuzzChannels] = {
-      "mpc_state", "mpc_plan",   "mpc_command", "mpc_policy", "sim_policy",  "viz_model",
-      "viz_state", "viz_policy", "viz_horizon", "viz_status", "viz_command", "viz_terrain"};
+      "mpc_state",   "mpc_plan",    "mpc_command", "mpc_policy",  "sim_policy",
+      "viz_model",   "viz_state",   "viz_policy",  "viz_horizon", "viz_status",
+      "viz_command", "viz_terrain", "mpc_terrain"};
   return kNames[static_cast<int>(c)];
 }
 

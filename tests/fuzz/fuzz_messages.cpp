@@ -98,6 +98,14 @@ void toMpc(Harness& h, Channel channel, const lcm::ReceiveBuffer& rbuf) {
       node.onPlan(&rbuf, node.config().plan_channel);
       node.applyPendingPlan();
       break;
+    case Channel::MpcTerrain: {
+      // Refused by the node (malformed, out of order, too large: counted by reason) or taken.
+      const std::int64_t maps = node.rejected() + node.mpc().counters().maps;
+      node.onTerrain(&rbuf, node.config().terrain_channel);
+      if (node.rejected() + node.mpc().counters().maps != maps + 1)
+        Harness::fail("MpcNode: a map neither taken nor counted as refused");
+      return;
+    }
     case Channel::MpcCommand: {
       // Refused by the node (malformed, out of order, an unknown gait: counted by reason) or
       // accepted by its command filter.

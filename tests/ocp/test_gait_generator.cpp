@@ -1033,7 +1033,9 @@ TEST(GaitGenerator, OnARampTheBodyAndTheConesFollowTheSurface) {
   const Eigen::Vector3d nose = o * Eigen::Vector3d::UnitX();
   EXPECT_NEAR(std::atan2(nose.z(), nose.x()), std::atan(slope), 0.01);
   for (int c = 0; c < 4; ++c)
-    if (g->closed(c, t)) EXPECT_NEAR((g->footNormal(c, t) - up_the_ramp).norm(), 0.0, 1e-4);
+    if (g->closed(c, t)) {
+      EXPECT_NEAR((g->footNormal(c, t) - up_the_ramp).norm(), 0.0, 1e-4);
+    }
   // Without the map: level, on the ground the feet feel.
   g->setMap(nullptr);
   ASSERT_TRUE(g->plan(0.0, placed(0.0, 0.0, 0.0), 0.0, 1.0));
