@@ -37,9 +37,20 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
     return (p - reach.hip).norm() <= reach.max_hip_distance;  // NaN or a NaN hip: not in reach
   };
   const bool nominal_known = !std::isnan(map.height(r0, c0));
-
-  if (map.steppable(r0, c0) && in_reach(nominal) &&
-      map.edgeDistanceAt(nominal.x(), nominal.y()) >= map.options().min_edge_distance - 1e-6) {
+  // Nearer an edge than the search radius costs as much as a shift of the same length: a foothold
+  // just past min_edge_distance is taken only when nothing clearer is near. A foot lands a
+  // centimetre or so off its foothold and the map places an edge only to within half a cell: one
+  // planned at the minimum then lands on the edge.
+  const double radius = map.options().edge_search_radius;
+  const auto edge_cost = [radius](double edge_distance) {
+    const double inside = std::max(0.0, radius - std::min(edge_distance, radius));
+    return inside * inside;
+  };
+  const double nominal_edge = map.edgeDistanceAt(nominal.x(), nominal.y());
+  const bool nominal_safe = map.steppable(r0, c0) && in_reach(nominal) &&
+                            nominal_edge >= map.options().min_edge_distance - 1e-6;
+  const double nominal_cost = nominal_safe ? edge_cost(nominal_edge) : kInf;
+  const auto take_nominal = [&]() {
     // The point, not its cell's centre: no quantisation of footholds where nothing is in the way.
     const Eigen::Vector2d offset = nominal - map.cellCenter(r0, c0);
     out.status = FootholdStatus::Nominal;
@@ -48,12 +59,13 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
     out.row = r0;
     out.col = c0;
     return out;
-  }
+  };
+  if (nominal_safe && nominal_cost == 0.0) return take_nominal();
 
   const double max_shift = reach.max_shift >= 0.0 ? reach.max_shift : -1.0;  // NaN: none
   const double max_shift2 = max_shift * max_shift + kTie;
   int best_r = -1, best_c = -1;
-  double best2 = kInf, best_cost = kInf;
+  double best2 = kInf, best_cost = nominal_cost;
   bool any_known = false;
   if (max_shift >= 0.0) {
     const double cells = std::ceil(max_shift / map.resolution());
@@ -66,7 +78,7 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
         any_known = true;
         // Backwards counts twice: (2 b)^2 = b^2 + 3 b^2 for the part b against the travel.
         const double back = std::min(0.0, (p - nominal).dot(reach.forward));
-        const double cost = d2 + 3.0 * back * back;
+        const double cost = d2 + 3.0 * back * back + edge_cost(map.edgeDistance(r, c));
         if (map.steppable(r, c) && cost < best_cost - kTie) {
           best_cost = cost;
           best2 = d2;
@@ -75,6 +87,7 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
         }
       }
   }
+  if (best_r < 0 && nominal_safe) return take_nominal();  // near an edge, nothing clearer near
   if (best_r >= 0) {
     out.status = FootholdStatus::Moved;
     out.position << map.cellCenter(best_r, best_c), map.height(best_r, best_c);

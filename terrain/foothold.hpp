@@ -44,11 +44,15 @@ struct Foothold {
   int row = -1, col = -1;  // the cell stepped on (the nominal's for Unreachable), -1 when none
 };
 
-// The foothold nearest `nominal` that is safe on `map`:
+// The safe foothold on `map` that costs least, a place's cost being its squared distance from
+// `nominal` (the part against reach.forward counted twice) plus the square of how much nearer
+// than edge_search_radius it is to a jump (within the radius, a metre clearer of an edge is worth
+// a metre of shift):
 // - Nominal when the nominal's cell is steppable, the point itself is at least min_edge_distance
-//   from every jump (Steppability::edgeDistanceAt) and within the hip's reach;
-// - otherwise Moved to the centre of the steppable cell nearest the nominal within the reach (a
-//   move against reach.forward counted twice; ties: the lowest row, then the lowest column);
+//   from every jump (Steppability::edgeDistanceAt) and within the hip's reach, and no cell is
+//   cheaper;
+// - otherwise Moved to the centre of the cheapest steppable cell within the reach (ties: the
+//   lowest row, then the lowest column);
 // - Unreachable (the nominal returned unchanged, never a far cell) when no steppable cell is within
 //   reach but a known one is, Unknown when the nominal is outside the map or nothing within reach
 //   is known.

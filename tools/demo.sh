@@ -10,7 +10,7 @@
 #                 [--realtime | --lockstep] [--robots-dir DIR]... [--check-tracking]
 #                 [--host-network] [--out DIR] [--summary FILE] [--spy] [--viz [--viz-port P]]
 #                 [--slow-host F] [--kill-controller T] [--kill-sim T] [--flood RATE] [--rival]
-#                 [--terrain NAME|FILE]
+#                 [--terrain NAME|FILE [--map-rate HZ]]
 #
 #   --robot NAME      stride_quad (default), solo12, anymal_c, stride_humanoid, talos_reduced:
 #                     config/controller/NAME.yaml; solo12, anymal_c and talos_reduced need
@@ -22,6 +22,8 @@
 #                     step_talos_reduced, ...; format in terrain/README.md); default flat ground.
 #                     The mock robot publishes elevation maps of it on STRIDE_TERRAIN (--viz
 #                     draws them)
+#   --map-rate HZ     the mock robot's elevation maps per second (default 10 with --terrain);
+#                     0: none, the controller walks blind (controller/README.md, "Terrain")
 #   --commands FILE   the command script stride-teleop plays on the robot's clock (default
 #                     config/commands/NAME.yaml; with --terrain, config/commands/terrain_NAME.yaml:
 #                     straight on at 0.2-0.4 m/s; format in tools/README.md, "stride-teleop");
@@ -78,7 +80,7 @@ build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
 spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood="" kill_sim="" rival=0
-terrain=""
+terrain="" map_rate=""
 robots_dirs=()
 args=("$@")
 need_value() { [ $# -ge 2 ] || { echo "demo.sh: $1 needs a value (--help)" >&2; exit 2; }; }
@@ -87,6 +89,7 @@ while [ $# -gt 0 ]; do
     --robot) need_value "$@"; robot="$2"; shift 2 ;;
     --humanoid) robot=stride_humanoid; shift ;;
     --terrain) need_value "$@"; terrain="$2"; shift 2 ;;
+    --map-rate) need_value "$@"; map_rate="$2"; shift 2 ;;
     --commands) need_value "$@"; commands="$2"; shift 2 ;;
     --teleop) teleop=1; shift ;;
     --duration) need_value "$@"; duration="$2"; shift 2 ;;
@@ -272,7 +275,8 @@ started() {  # FILE PATTERN PID NAME
 # Two cores: the controller on one, alone; the mock robot on the other, with lcm-logger and
 # stride-teleop (light: floating, they sometimes landed on the controller's core and delayed a
 # tick by up to 5 ms, 12 misses in a 60 s run). A wall-clock safety net on every process, except
-# when driving by keyboard.
+# when driving by keyboard. The limit's SIGTERM is followed by SIGKILL 10 s later: a process stuck in
+# its exit (LeakSanitizer's scan, tests/README.md) must not outlast it.
 cpus=$(nproc)
 mpc_cpu=$((cpus > 1 ? 1 : 0))
 side=(taskset -c 0)
@@ -286,10 +290,10 @@ else
 fi
 started=$(date +%s.%N)
 
-timeout "$limit" "${side[@]}" lcm-logger --quiet "$log" &
+timeout -k 10 "$limit" "${side[@]}" lcm-logger --quiet "$log" &
 pids+=($!)
 if [ "$spy" = 1 ]; then
-  timeout "$limit" "$root/tools/lcm-spy.sh" --lcm-url="$LCM_DEFAULT_URL" > "$out/lcm-spy.txt" 2>&1 &
+  timeout -k 10 "$limit" "$root/tools/lcm-spy.sh" --lcm-url="$LCM_DEFAULT_URL" > "$out/lcm-spy.txt" 2>&1 &
   pids+=($!)
   sleep 3  # the JVM starts slowly
 fi
@@ -297,13 +301,13 @@ if [ "$viz" = 1 ]; then
   # Another LCM subscriber, on the side core: it never slows the controller (a slow browser drops
   # frames in stride-viz, never in the loop). Inside the namespace it listens on the namespace's
   # loopback, joined to the host's by the forward above.
-  timeout "$limit" "${side[@]}" "$build/viz/stride-viz" --url "$LCM_DEFAULT_URL" \
+  timeout -k 10 "$limit" "${side[@]}" "$build/viz/stride-viz" --url "$LCM_DEFAULT_URL" \
     --robot "$robot_yaml" "${dirs_args[@]}" --port "$viz_port" > "$out/viz.txt" 2>&1 &
   viz_pid=$!
   pids+=($viz_pid)
   started "$out/viz.txt" "^stride-viz: http" "$viz_pid" stride-viz
   if [ -n "${STRIDE_DEMO_INSIDE:-}" ]; then
-    timeout "$limit" socat "UNIX-LISTEN:$out/viz.sock,fork,unlink-early" "TCP:127.0.0.1:$viz_port" \
+    timeout -k 10 "$limit" socat "UNIX-LISTEN:$out/viz.sock,fork,unlink-early" "TCP:127.0.0.1:$viz_port" \
       2> "$out/viz-forward-inside.txt" &
     pids+=($!)
   fi
@@ -315,6 +319,7 @@ mpc_args=(--config "$config" "${dirs_args[@]}" --summary "$out/mpc.json")
 sim_args=(--robot "$robot_yaml" "${dirs_args[@]}" --duration "$sim_duration"
   --summary "$out/sim.json")
 [ -n "$terrain" ] && sim_args+=(--terrain "$terrain")
+[ -n "$map_rate" ] && sim_args+=(--map-rate "$map_rate")
 rm -f "$out/sim.json" "$out/sim-restarted.json"
 if [ "$mode" = lockstep ]; then
   mpc_args+=(--lockstep)
@@ -322,7 +327,7 @@ if [ "$mode" = lockstep ]; then
 else
   sim_args+=(--rate 1000)
 fi
-timeout "$limit" taskset -c "$mpc_cpu" "$build/controller/stride-mpc" "${mpc_args[@]}" \
+timeout -k 10 "$limit" taskset -c "$mpc_cpu" "$build/controller/stride-mpc" "${mpc_args[@]}" \
   > "$out/mpc.txt" 2>&1 &
 mpc_pid=$!
 pids+=($mpc_pid)
@@ -354,7 +359,7 @@ teleop_bin="$build/tools/stride-teleop"
 if [ -n "$flood" ]; then
   # A rogue publisher on the robot's network: its own cost is small (it would run elsewhere);
   # what counts is every subscriber's, the kernel's delivery and the refusal on the raw bytes.
-  timeout "$limit" nice -n 10 "${side[@]}" "$build/tools/stride-flood" --rate "$flood" \
+  timeout -k 10 "$limit" nice -n 10 "${side[@]}" "$build/tools/stride-flood" --rate "$flood" \
     > "$out/flood.txt" 2>&1 &
   pids+=($!)
 fi
@@ -370,7 +375,7 @@ if [ "$rival" = 1 ]; then
   grep -q '^lcm:' "$rival_yaml" || printf 'lcm:\n  command: STRIDE_RIVAL_COMMAND\n' >> "$rival_yaml"
   rival_args=(--config "$rival_yaml" "${dirs_args[@]}" --summary "$out/mpc-rival.json")
   [ "$mode" = lockstep ] && rival_args+=(--lockstep)
-  timeout "$limit" nice -n 10 "${side[@]}" "$build/controller/stride-mpc" "${rival_args[@]}" \
+  timeout -k 10 "$limit" nice -n 10 "${side[@]}" "$build/controller/stride-mpc" "${rival_args[@]}" \
     > "$out/mpc-rival.txt" 2>&1 &
   rival_pid=$!
   pids+=($rival_pid)
@@ -389,7 +394,7 @@ if [ -n "$kill_controller" ]; then
       [ "$a" = "$out/mpc.json" ] && a="$out/mpc-restarted.json"
       restarted+=("$a")
     done
-    exec timeout "$limit" taskset -c "$mpc_cpu" "$build/controller/stride-mpc" "${restarted[@]}" \
+    exec timeout -k 10 "$limit" taskset -c "$mpc_cpu" "$build/controller/stride-mpc" "${restarted[@]}" \
       > "$out/mpc-restarted.txt" 2>&1
   ) &
   restart_pid=$!
@@ -409,11 +414,11 @@ if [ "$commands" = none ]; then
   echo "  ${join}env LCM_DEFAULT_URL='$LCM_DEFAULT_URL' $teleop_bin --gaits $gaits"
   echo "logging to $log"
   sim_status=0
-  timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 ||
+  timeout -k 10 "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 ||
     sim_status=$?
 elif [ "$teleop" = 0 ]; then
   # The script's t = 0 is the first state the teleop receives: it listens before the sim starts.
-  timeout "$limit" "${side[@]}" "$teleop_bin" --commands "$commands" --gaits "$gaits" \
+  timeout -k 10 "$limit" "${side[@]}" "$teleop_bin" --commands "$commands" --gaits "$gaits" \
     > "$out/teleop.txt" 2>&1 &
   teleop_pid=$!
   pids+=($teleop_pid)
@@ -423,7 +428,7 @@ elif [ "$teleop" = 0 ]; then
   if [ -n "$kill_sim" ]; then
     # The mock robot killed while it walks and a new one started a second later for the rest of
     # the duration: a robot whose state estimator restarted, found standing at the origin.
-    timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 &
+    timeout -k 10 "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 &
     sim_pid=$!
     pids+=($sim_pid)
     sleep "$kill_sim"
@@ -438,16 +443,16 @@ elif [ "$teleop" = 0 ]; then
       restarted+=("$a")
       prev=$a
     done
-    timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${restarted[@]}" \
+    timeout -k 10 "$limit" taskset -c 0 "$build/sim/stride-sim" "${restarted[@]}" \
       > "$out/sim-restarted.txt" 2>&1 || sim_status=$?
   else
-    timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 ||
+    timeout -k 10 "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 ||
       sim_status=$?
   fi
   kill -TERM "$teleop_pid" 2>/dev/null || true
   wait "$teleop_pid" 2>/dev/null || true
 else
-  timeout "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 &
+  timeout -k 10 "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 &
   sim_pid=$!
   pids+=($sim_pid)
   echo "demo: $robot, real time, driven from the keyboard until you quit (x); logging to $log"

@@ -105,6 +105,8 @@ GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
   latched_yaw_.assign(nc_, 0.0);
   latched_normal_.assign(nc_, kUp);
   early_at_.assign(nc_, -ContactTimeline::kNever);
+  held_.assign(nc_, Stance{});
+  held_at_.assign(nc_, -ContactTimeline::kNever);
   samples_.assign(static_cast<size_t>(std::ceil((o.horizon + kLookahead) / o.sample_dt)) + 2,
                   Sample{});
   stances_.assign(nc_, std::vector<Stance>(kMaxStances));
@@ -432,10 +434,19 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
           ++early_touch_downs_;
         }
         next = false;
+      } else if (next && map_ && held_at_[c] == touch_down && lift_off <= t &&
+                 t - lift_off >= options_.foothold_hold * (touch_down - lift_off)) {
+        st[count] = held_[c];  // past the swing's middle on a map: where it was going
+        st[count].lift_off = next_lift_off;
+        next = false;
       } else {
         st[count] = foothold(c, touch_down, next_lift_off,
                              next ? correction : Eigen::Vector2d::Zero().eval());
         st[count].swing_height = swingHeight(c, st[count - 1], st[count]);
+        if (next && map_ && lift_off <= t) {
+          held_[c] = st[count];
+          held_at_[c] = touch_down;
+        }
         next = false;
       }
       ++count;

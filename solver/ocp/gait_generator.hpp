@@ -93,6 +93,10 @@ struct GaitGeneratorOptions {
   double max_foothold_shift = 0.08;
   double swing_clearance = 0.05;
   double max_swing_height = 0.25;
+  // On a map, a swing's foothold is chosen again at every plan until this part of the swing has
+  // passed, then held: a target that jumps between cells (the nominal crossing from one to the
+  // next) late in a swing is one the foot cannot reach, and it lands between them, on the edge.
+  double foothold_hold = 0.5;
   // Half the length of a surface contact's sole along its heading [m] (0: point feet): on a map its
   // toe and heel clear the terrain as its centre does.
   double sole_half_length = 0.0;
@@ -271,6 +275,10 @@ class GaitGenerator {
   bool measured_known_ = false;
   long early_touch_downs_ = 0;
   std::vector<double> early_at_;  // the touch-down time of each contact's last early landing
+  // On a map, the foothold of each foot's swing in progress, held from the swing's middle on
+  // (held_at_: its touch-down time; -kNever: none).
+  std::vector<Stance> held_;
+  std::vector<double> held_at_;
   double t_anchor_ = 0.0;
   Eigen::Vector2d robot_xy_ = Eigen::Vector2d::Zero();  // measured base at t_anchor_
   double robot_turn_ = 0.0;                             // measured yaw - reference yaw there

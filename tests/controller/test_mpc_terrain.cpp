@@ -118,7 +118,8 @@ TEST(TerrainMap, FootholdsLandOnTheMapsStepAwayFromItsEdge) {
       if (x.source == StanceSource::Measured) continue;
       ASSERT_TRUE(x.source == StanceSource::Nominal || x.source == StanceSource::Moved)
           << c << " " << i << ": source " << static_cast<int>(x.source);
-      EXPECT_GE(st.edgeDistanceAt(x.p.x(), x.p.y()), 0.03 - 1e-9) << c << " " << i;
+      EXPECT_GE(st.edgeDistanceAt(x.p.x(), x.p.y()), st.options().min_edge_distance - 1e-9)
+          << c << " " << i;
       EXPECT_GE(std::abs(x.p.x() - step_x + 0.01), 0.03 - 1e-9) << c << " " << i;
       const double surface = x.p.x() > step_x - 0.01 ? 0.05 : 0.0;
       EXPECT_NEAR(x.p.z() - foot_z, surface, 1e-6) << c << " " << i;

@@ -89,7 +89,7 @@ double forwardSpeed(const drive::Run& r, double vx) {
 // With the elevation map (issue 31): anymal_c trots at 0.4 m/s up the shipped 17 cm x 29 cm
 // stairs (4 steps from x = 1.5), across the 1 m landing and down the 4 steps on the other side
 // (to the ground from x = 4.82): no fall, at least 70 % of the command, at most one trip on a
-// riser, every tick planned on a fresh map.
+// riser, no touch-down within 2 cm of an edge, every tick planned on a fresh map.
 TEST(TerrainWithMap, AnymalClimbsAndDescendsTheStairs) {
   ControllerConfig config = loadControllerConfig(controller_cases::configPath("anymal_c"));
   config.robots_dirs = {STRIDE_ROBOT_PACKAGES};
@@ -104,6 +104,7 @@ TEST(TerrainWithMap, AnymalClimbsAndDescendsTheStairs) {
   EXPECT_NEAR(r.base_above_terrain, r.samples.front().q[2], 0.03);
   EXPECT_GE(forwardSpeed(r, 0.4), 0.7 * 0.4);
   EXPECT_LE(r.trips, 1);
+  EXPECT_EQ(r.edge_footholds, 0);
   EXPECT_GT(r.mpc.maps, 100);
   EXPECT_EQ(r.mpc.stale_map_ticks, 0);
   EXPECT_EQ(r.mpc.fallbacks, 0);

@@ -1078,5 +1078,33 @@ TEST(GaitGenerator, OnAMapTheSwingClearsABox) {
   EXPECT_TRUE(blind_hits);
 }
 
+TEST(GaitGenerator, OnAMapASwingsFootholdIsHeldFromItsMiddle) {
+  // FL swings from 0.1 s to 0.3 s. A command raised from 0.3 to 0.6 m/s moves that swing's
+  // foothold when it is planned again before the swing's middle (0.2 s), and blind at any time; on
+  // a map, from the middle on, the foothold stays where it was going (a target that jumps late is
+  // one the foot cannot reach). FR's next step is still planned afresh.
+  const terrain::Steppability flat = mapOf([](double, double) { return 0.0; });
+  struct Moves {
+    double fl, fr;
+  };
+  auto after = [&](const terrain::Steppability* map, double t) {
+    Generator g;
+    g->setCommand(velocity(0.3));
+    if (map) g->setMap(map);
+    EXPECT_TRUE(g->plan(0.0, placed(0.0, 0.0, 0.0), 0.0, 1.0));
+    EXPECT_TRUE(g->plan(0.15, placed(0.045, 0.0, 0.0), 0.15, 1.15));
+    const Eigen::Vector3d fl = g->stance(FL, 1).p, fr = g->stance(FR, 1).p;
+    g->setCommand(velocity(0.6));
+    EXPECT_TRUE(g->plan(t, placed(0.3 * t, 0.0, 0.0), t, t + 1.0));
+    EXPECT_NEAR(g->stance(FL, 1).touch_down, 0.3, 1e-9);
+    return Moves{g->stance(FL, 1).p.x() - fl.x(), g->stance(FR, 1).p.x() - fr.x()};
+  };
+  const Moves early = after(&flat, 0.18), late = after(&flat, 0.22), blind = after(nullptr, 0.22);
+  EXPECT_GT(early.fl, 0.005);  // before the middle: moved with the command
+  EXPECT_EQ(late.fl, 0.0);     // after it: held, bit for bit
+  EXPECT_GT(blind.fl, 0.005);  // blind: as before (flat ground plans as it did)
+  EXPECT_GT(late.fr, 0.005);
+}
+
 }  // namespace
 }  // namespace stride

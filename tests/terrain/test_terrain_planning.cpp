@@ -47,7 +47,16 @@ ElevationMap boxMap(float height = 0.05f) {
   return map;
 }
 
-Steppability computed(const ElevationMap& map, SteppabilityOptions options = {}) {
+// The thresholds these cases were drawn for (the shipped default min_edge_distance is 4 cm:
+// terrain/steppability.hpp): edges within 3 cm, searched within 6 cm.
+SteppabilityOptions threeCentimetres() {
+  SteppabilityOptions o;
+  o.min_edge_distance = 0.03;
+  o.edge_search_radius = 0.06;
+  return o;
+}
+
+Steppability computed(const ElevationMap& map, SteppabilityOptions options = threeCentimetres()) {
   Steppability s(options, map.rows * map.cols);
   EXPECT_TRUE(s.update(map));
   return s;
@@ -85,14 +94,14 @@ TEST(Steppability, FlatMapSteppableAwayFromItsUnknownBorder) {
   EXPECT_TRUE(std::isinf(s.edgeDistance(10, 15)));
 
   // Unknown cells as no edge: every known cell is steppable, the map's own border included.
-  SteppabilityOptions lenient;
+  SteppabilityOptions lenient = threeCentimetres();
   lenient.unknown_is_edge = false;
   EXPECT_EQ(computed(map, lenient).steppableCount(), 16 * 26);
 }
 
 TEST(Steppability, BoxStepUnsteppableWithinMinEdgeDistanceOnBothSides) {
   const ElevationMap map = boxMap(0.05f);
-  SteppabilityOptions options;
+  SteppabilityOptions options = threeCentimetres();
   options.min_edge_distance = 0.04;
   const Steppability s = computed(map, options);
   // Cell centres are 1 and 3 cm from the side on either side (columns 24, 23 below, 25, 26 on the
@@ -133,7 +142,7 @@ TEST(Steppability, RampSlopeAndNormal) {
                                         (c * kRes * std::cos(dir) + r * kRes * std::sin(dir)));
   const Eigen::Vector3d n(-std::sin(slope) * std::cos(dir), -std::sin(slope) * std::sin(dir),
                           std::cos(slope));
-  SteppabilityOptions options;
+  SteppabilityOptions options = threeCentimetres();
   options.max_slope = deg(30);
   const Steppability s = computed(map, options);
   // All but the border ring (1 cm from the map's edge).
@@ -152,7 +161,7 @@ TEST(Steppability, RampSlopeAndNormal) {
 }
 
 TEST(Steppability, RefusesMapsItCannotHold) {
-  Steppability s({}, 100);
+  Steppability s(threeCentimetres(), 100);
   ElevationMap big = flatMap(11, 10);
   EXPECT_FALSE(s.update(big));
   EXPECT_FALSE(s.valid());
@@ -211,12 +220,40 @@ TEST(Foothold, OnAnEdgeMovesToTheNearestSafeCell) {
   EXPECT_NEAR(g.position.z(), 0.0, 1e-12);
 
   // In a steppable cell (centre 3 cm from the side) but the point itself 2.5 cm from it: moved to
-  // that cell's centre.
+  // the cell 5 cm from the side (2.5 cm away), not to its own cell's centre 3 cm from it (5 mm
+  // away): within the search radius (6 cm) a centimetre nearer the edge costs as a centimetre of
+  // shift, 2.5^2 + 1^2 < 0.5^2 + 3^2.
   const Foothold h = selectFoothold(s, {0.465, 0.30}, reach);
   EXPECT_EQ(h.status, FootholdStatus::Moved);
   EXPECT_EQ(h.row, 15);
-  EXPECT_EQ(h.col, 23);
-  EXPECT_NEAR(h.shift, 0.005, 1e-12);
+  EXPECT_EQ(h.col, 22);
+  EXPECT_NEAR(h.shift, 0.025, 1e-12);
+}
+
+TEST(Foothold, AClearerCellIsWorthItsShift) {
+  // The box's side at x = 0.49, edges within 3 cm unsafe, searched within 6 cm.
+  const Steppability s = computed(boxMap());
+  FootholdReach reach;
+  reach.max_shift = 0.1;
+  // A safe nominal 5.5 cm from the side: kept (0.5^2 beats any move: the cell 0.44, 5 cm from the
+  // side, costs 0.5^2 + 1^2, the first past the radius, 0.42, 1.5^2).
+  Foothold f = selectFoothold(s, {0.435, 0.30}, reach);
+  EXPECT_EQ(f.status, FootholdStatus::Nominal);
+  EXPECT_EQ(f.position.x(), 0.435);
+  // 3.2 cm from it: to the cell at 5 cm (1.8^2 + 1^2 < 2.8^2).
+  f = selectFoothold(s, {0.458, 0.30}, reach);
+  EXPECT_EQ(f.status, FootholdStatus::Moved);
+  EXPECT_NEAR(f.position.x(), 0.44, 1e-12);
+  EXPECT_GE(s.edgeDistanceAt(f.position.x(), f.position.y()), 0.05 - 1e-9);
+  // 6 cm or more from every edge: the nominal point itself, not a cell's centre.
+  f = selectFoothold(s, {0.421, 0.30}, reach);
+  EXPECT_EQ(f.status, FootholdStatus::Nominal);
+  EXPECT_EQ(f.position.x(), 0.421);
+  // Nothing clearer within reach: a safe nominal near the edge is kept as it is.
+  reach.max_shift = 0.0;
+  f = selectFoothold(s, {0.458, 0.30}, reach);
+  EXPECT_EQ(f.status, FootholdStatus::Nominal);
+  EXPECT_EQ(f.position.x(), 0.458);
 }
 
 TEST(Foothold, AMoveAgainstTheTravelCountsTwice) {
