@@ -46,9 +46,11 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
     const double inside = std::max(0.0, radius - std::min(edge_distance, radius));
     return inside * inside;
   };
-  const double nominal_edge = map.edgeDistanceAt(nominal.x(), nominal.y());
-  const bool nominal_safe = map.steppable(r0, c0) && in_reach(nominal) &&
-                            nominal_edge >= map.options().min_edge_distance - 1e-6;
+  // The point's own edge distance only where its cell may be stepped on (a bounded search).
+  const bool nominal_stands = map.steppable(r0, c0) && in_reach(nominal);
+  const double nominal_edge = nominal_stands ? map.edgeDistanceAt(nominal.x(), nominal.y()) : 0.0;
+  const bool nominal_safe =
+      nominal_stands && nominal_edge >= map.options().min_edge_distance - 1e-6;
   const double nominal_cost = nominal_safe ? edge_cost(nominal_edge) : kInf;
   const auto take_nominal = [&]() {
     // The point, not its cell's centre: no quantisation of footholds where nothing is in the way.
