@@ -56,6 +56,7 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
     // The point, not its cell's centre: no quantisation of footholds where nothing is in the way.
     const Eigen::Vector2d offset = nominal - map.cellCenter(r0, c0);
     out.status = FootholdStatus::Nominal;
+    out.edge_distance = nominal_edge;
     out.position.z() = map.height(r0, c0) + map.gradient(r0, c0).dot(offset);
     out.normal = map.normal(r0, c0);
     out.row = r0;
@@ -69,25 +70,32 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
   int best_r = -1, best_c = -1;
   double best2 = kInf, best_cost = nominal_cost;
   bool any_known = false;
+  const auto consider = [&](int r, int c, double limit2) {
+    const Eigen::Vector2d p = map.cellCenter(r, c);
+    const double d2 = (p - nominal).squaredNorm();
+    if (d2 > limit2 || !in_reach(p) || std::isnan(map.height(r, c))) return;
+    any_known = true;
+    // Backwards counts twice: (2 b)^2 = b^2 + 3 b^2 for the part b against the travel.
+    const double back = std::min(0.0, (p - nominal).dot(reach.forward));
+    const double cost = d2 + 3.0 * back * back + edge_cost(map.edgeDistance(r, c));
+    if (map.steppable(r, c) && cost < best_cost - kTie) {
+      best_cost = cost;
+      best2 = d2;
+      best_r = r;
+      best_c = c;
+    }
+  };
   if (max_shift >= 0.0) {
+    // The last choice first, with its longer reach: a tie keeps it.
+    int kept_r = -1, kept_c = -1;
+    const double kept_shift = std::max(max_shift, reach.kept_max_shift);  // NaN: max_shift
+    if (reach.kept.allFinite() && map.cellOf(reach.kept.x(), reach.kept.y(), kept_r, kept_c))
+      consider(kept_r, kept_c, kept_shift * kept_shift + kTie);
     const double cells = std::ceil(max_shift / map.resolution());
     const int k = static_cast<int>(std::min<double>(cells, std::max(map.rows(), map.cols())));
     for (int r = std::max(0, r0 - k); r <= std::min(map.rows() - 1, r0 + k); ++r)
-      for (int c = std::max(0, c0 - k); c <= std::min(map.cols() - 1, c0 + k); ++c) {
-        const Eigen::Vector2d p = map.cellCenter(r, c);
-        const double d2 = (p - nominal).squaredNorm();
-        if (d2 > max_shift2 || !in_reach(p) || std::isnan(map.height(r, c))) continue;
-        any_known = true;
-        // Backwards counts twice: (2 b)^2 = b^2 + 3 b^2 for the part b against the travel.
-        const double back = std::min(0.0, (p - nominal).dot(reach.forward));
-        const double cost = d2 + 3.0 * back * back + edge_cost(map.edgeDistance(r, c));
-        if (map.steppable(r, c) && cost < best_cost - kTie) {
-          best_cost = cost;
-          best2 = d2;
-          best_r = r;
-          best_c = c;
-        }
-      }
+      for (int c = std::max(0, c0 - k); c <= std::min(map.cols() - 1, c0 + k); ++c)
+        if (r != kept_r || c != kept_c) consider(r, c, max_shift2);
   }
   if (best_r < 0 && nominal_safe) return take_nominal();  // near an edge, nothing clearer near
   if (best_r >= 0) {
@@ -95,6 +103,7 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
     out.position << map.cellCenter(best_r, best_c), map.height(best_r, best_c);
     out.normal = map.normal(best_r, best_c);
     out.shift = std::sqrt(best2);
+    out.edge_distance = map.edgeDistance(best_r, best_c);
     out.row = best_r;
     out.col = best_c;
     return out;

@@ -31,6 +31,13 @@ struct FootholdReach {
   // riser's edge) lands where the next nominal foothold falls before it again, and the body stalls
   // behind it; one that lengthens it crosses.
   Eigen::Vector2d forward = Eigen::Vector2d::Zero();
+  // The place chosen for this same touch-down the last time (NaN: none). Its cell stays a
+  // candidate up to `kept_max_shift` from the nominal (at least max_shift): with one hard limit,
+  // a choice between two cells on either side of an unsafe band (short of a riser, or past it)
+  // flipped back and forth as the nominal drifted across the point where the far one left reach,
+  // and the swinging foot's target jumped by the band's width from one tick to the next.
+  Eigen::Vector2d kept = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  double kept_max_shift = 0.0;  // [m]
 };
 
 struct Foothold {
@@ -41,6 +48,9 @@ struct Foothold {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // the fitted plane's, up when unknown
   double shift = 0.0;                                 // [m] horizontal distance from the nominal
+  // [m] Nominal, Moved: from the nearest jump, as far as edge_search_radius looks (+inf: none
+  // within it); else +inf.
+  double edge_distance = std::numeric_limits<double>::infinity();
   int row = -1, col = -1;  // the cell stepped on (the nominal's for Unreachable), -1 when none
 };
 
@@ -51,13 +61,14 @@ struct Foothold {
 // - Nominal when the nominal's cell is steppable, the point itself is at least min_edge_distance
 //   from every jump (Steppability::edgeDistanceAt) and within the hip's reach, and no cell is
 //   cheaper;
-// - otherwise Moved to the centre of the cheapest steppable cell within the reach (ties: the
-//   lowest row, then the lowest column);
+// - otherwise Moved to the centre of the cheapest steppable cell within the reach, the kept
+//   cell's reach being kept_max_shift (ties: the kept cell, then the lowest row, then the lowest
+//   column);
 // - Unreachable (the nominal returned unchanged, never a far cell) when no steppable cell is within
 //   reach but a known one is, Unknown when the nominal is outside the map or nothing within reach
 //   is known.
-// Scans the (2k + 1)^2 cells around the nominal, k = ceil(max_shift / resolution) (clipped to the
-// map).
+// Scans the kept cell and the (2k + 1)^2 cells around the nominal, k = ceil(max_shift /
+// resolution) (clipped to the map).
 Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
                         const FootholdReach& reach);
 

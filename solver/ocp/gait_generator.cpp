@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "solver/multibody/center_of_mass.hpp"
@@ -25,6 +26,14 @@ constexpr double kLookahead = 2.0;
 constexpr double kHalfStanceCap = 0.5;
 // Body-height postures solved at construction (odd: one at the nominal height).
 constexpr int kCrouches = 9;
+// On a map, the foothold chosen for a touch-down at the last plan stays a candidate to this many
+// times max_foothold_shift from the nominal (terrain::FootholdReach::kept): a hysteresis, so that
+// a choice between stepping short of an unsafe band and across it does not flip with every
+// centimetre the body lags or leads (the swing's target jumped by the band's width, 30 cm on
+// stride_humanoid's box, from one tick to the next).
+constexpr double kKeptReach = 1.5;
+const Eigen::Vector2d kNoPlace =
+    Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
 // A base reference slower than this [m/s] has no direction of travel for the footholds.
 constexpr double kStill = 0.01;
 // Feet a generator plans for (the ground plane's fit takes them on the stack).
@@ -226,7 +235,8 @@ GaitGenerator::Sample GaitGenerator::robotAt(double t) const {
 }
 
 GaitGenerator::Stance GaitGenerator::foothold(int contact, double touch_down, double lift_off,
-                                              const Eigen::Vector2d& correction) const {
+                                              const Eigen::Vector2d& correction,
+                                              const Eigen::Vector2d& kept) const {
   const double mid = touch_down + std::min(0.5 * (lift_off - touch_down), kHalfStanceCap);
   const Sample s = baseAt(mid), r = robotAt(mid);
   const Eigen::Vector3d& off = offset_[contact];
@@ -245,6 +255,8 @@ GaitGenerator::Stance GaitGenerator::foothold(int contact, double touch_down, do
   // On the map: the nearest safe cell to the nominal foothold, at the map's height (issue 31).
   terrain::FootholdReach reach;
   reach.max_shift = options_.max_foothold_shift;
+  reach.kept = kept;
+  reach.kept_max_shift = kKeptReach * options_.max_foothold_shift;
   const Eigen::Vector2d travel = rotate(s.yaw, s.vx, s.vy);
   if (travel.norm() > kStill) reach.forward = travel.normalized();
   const terrain::Foothold f = terrain::selectFoothold(*map_, xy, reach);
@@ -255,6 +267,7 @@ GaitGenerator::Stance GaitGenerator::foothold(int contact, double touch_down, do
       stance.normal = f.normal;
       stance.source = f.status == terrain::FootholdStatus::Nominal ? StanceSource::Nominal
                                                                    : StanceSource::Moved;
+      stance.near_edge = f.edge_distance < map_->options().edge_search_radius;
       break;
     case terrain::FootholdStatus::Unreachable:
       // No safe cell within reach: the nominal place, at the map's height when it knows it.
@@ -440,10 +453,12 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
         st[count].lift_off = next_lift_off;
         next = false;
       } else {
+        const bool again = next && map_ && held_at_[c] == touch_down;
         st[count] = foothold(c, touch_down, next_lift_off,
-                             next ? correction : Eigen::Vector2d::Zero().eval());
+                             next ? correction : Eigen::Vector2d::Zero().eval(),
+                             again ? held_[c].p.head<2>().eval() : kNoPlace);
         st[count].swing_height = swingHeight(c, st[count - 1], st[count]);
-        if (next && map_ && lift_off <= t) {
+        if (next && map_) {
           held_[c] = st[count];
           held_at_[c] = touch_down;
         }
@@ -490,6 +505,13 @@ const Eigen::Vector3d& GaitGenerator::footNormal(int contact, double t) const {
   const int i = stanceAt(contact, t, s);
   const std::vector<Stance>& st = stances_[contact];
   return s > 0.0 ? st[i + 1].normal : st[i].normal;
+}
+
+bool GaitGenerator::footholdNearEdge(int contact, double t) const {
+  double s;
+  const int i = stanceAt(contact, t, s);
+  const std::vector<Stance>& st = stances_[contact];
+  return s > 0.0 ? st[i + 1].near_edge : st[i].near_edge;
 }
 
 Eigen::Matrix3d GaitGenerator::surfaceRotation(int contact, double t) const {

@@ -177,6 +177,9 @@ class GaitGenerator {
   // the smallest rotation that takes e_z to it (the identity on flat ground): its friction cone's.
   const Eigen::Vector3d& footNormal(int contact, double t) const;
   Eigen::Matrix3d surfaceRotation(int contact, double t) const;
+  // Whether the foothold contact c stands on at t, or lands on when in the air, is a map's near
+  // an edge (Stance::near_edge): one the foot must land on, not a few cm off.
+  bool footholdNearEdge(int contact, double t) const;
   void state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const;
   Eigen::Vector3d com(double t) const;
   // The base reference at t: position, yaw.
@@ -201,6 +204,8 @@ class GaitGenerator {
     Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // the surface's there (world, up)
     double swing_height = 0.0;  // the apex of the swing that lands here, above the line [m]
     bool early = false;         // landed before its touch-down time: the swing to it is over
+    // On a map, chosen (Nominal or Moved) within the map's edge_search_radius of an edge.
+    bool near_edge = false;
   };
   int stances(int contact) const { return n_stances_[contact]; }
   const Stance& stance(int contact, int i) const { return stances_[contact][i]; }
@@ -222,9 +227,10 @@ class GaitGenerator {
   Ground groundAt(double t) const;
   // The same command carried from the measured base instead (where footholds are planned).
   Sample robotAt(double t) const;
-  // A planned stance's position and heading.
+  // A planned stance's position and heading; `kept`: on a map, where the last plan put this
+  // touch-down (NaN: nowhere), kept within a longer reach (kKeptReach).
   Stance foothold(int contact, double touch_down, double lift_off,
-                  const Eigen::Vector2d& correction) const;
+                  const Eigen::Vector2d& correction, const Eigen::Vector2d& kept) const;
   // The apex of the swing from `from` to `to` (swing_height; on a map, high enough to clear it).
   double swingHeight(int contact, const Stance& from, const Stance& to) const;
   // Whether contact c, in the air at t on its swing from lift_off to touch_down, is reported
@@ -275,8 +281,8 @@ class GaitGenerator {
   bool measured_known_ = false;
   long early_touch_downs_ = 0;
   std::vector<double> early_at_;  // the touch-down time of each contact's last early landing
-  // On a map, the foothold of each foot's swing in progress, held from the swing's middle on
-  // (held_at_: its touch-down time; -kNever: none).
+  // On a map, the foothold the last plan chose for each foot's next touch-down (held_at_: its
+  // touch-down time; -kNever: none): kept within a longer reach, and held from the swing's middle.
   std::vector<Stance> held_;
   std::vector<double> held_at_;
   double t_anchor_ = 0.0;

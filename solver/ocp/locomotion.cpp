@@ -126,6 +126,8 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   swing_rot_term_.assign(nc, -1);
   const bool with_cop = options.sole_half_extents.minCoeff() > 0.0;
   const double swing_xy = w.swing_horizontal >= 0.0 ? w.swing_horizontal : w.swing;
+  swing_ = w.swing;
+  swing_xy_ = swing_xy;
   std::vector<std::unique_ptr<ActionModel>> running;
   // One multibody workspace per thread the problem may use (knots.hpp, SharedWorkspace).
   auto workspace = std::make_shared<SharedWorkspace>(model, std::max(omp_get_max_threads(), 2));
@@ -223,8 +225,11 @@ bool LocomotionProblem::update(double t0, const GaitGenerator& reference) {
       }
       CostTerm& swing = costs[swing_term_[c]];
       swing.active = !closed || lands;
-      if (swing.active)
+      if (swing.active) {
         static_cast<FrameTranslationResidual&>(*swing.residual).setReference(reference.foot(c, t));
+        swing.activation.weights.head<2>().setConstant(
+            reference.footholdNearEdge(c, t) ? swing_ : swing_xy_);
+      }
       if (swing_rot_term_[c] >= 0) {
         CostTerm& turn = costs[swing_rot_term_[c]];
         turn.active = swing.active;

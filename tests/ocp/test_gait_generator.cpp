@@ -989,7 +989,7 @@ TEST(GaitGenerator, ConstructionRefusesBadOptions) {
 
 // A map of 1 cm cells over [-1, 2] x [-1, 1] with the height h(x, y) at each cell's centre.
 template <class H>
-terrain::Steppability mapOf(H h) {
+terrain::Steppability mapOf(H h, const terrain::SteppabilityOptions& options = {}) {
   terrain::ElevationMap m;
   m.resolution = 0.01;
   m.origin_x = -1.0;
@@ -999,7 +999,7 @@ terrain::Steppability mapOf(H h) {
     for (int c = 0; c < m.cols; ++c)
       m.at(r, c) =
           static_cast<float>(h(m.origin_x + c * m.resolution, m.origin_y + r * m.resolution));
-  terrain::Steppability st({}, m.rows * m.cols);
+  terrain::Steppability st(options, m.rows * m.cols);
   EXPECT_TRUE(st.update(m));
   return st;
 }
@@ -1104,6 +1104,41 @@ TEST(GaitGenerator, OnAMapASwingsFootholdIsHeldFromItsMiddle) {
   EXPECT_EQ(late.fl, 0.0);     // after it: held, bit for bit
   EXPECT_GT(blind.fl, 0.005);  // blind: as before (flat ground plans as it did)
   EXPECT_GT(late.fr, 0.005);
+}
+
+TEST(GaitGenerator, OnAMapAFootholdAcrossAnUnsafeBandIsKeptWhenTheBodyLags) {
+  // A 5 cm riser 5 mm past FL's nominal touch-down (0.3 s), edges unsafe within 10 cm: the foot
+  // steps across the band (10.5 cm on) rather than short of it (9.5 cm back, counted twice). When
+  // the body then lags 2 cm, the place across is 12.5 cm on, beyond max_foothold_shift (12 cm):
+  // planned afresh, the foot would step short of the band; planned again, its choice is kept
+  // (within 1.5 x max_foothold_shift), not flipped 20 cm back in mid-swing.
+  GaitGeneratorOptions o = hand();
+  o.max_foothold_lead = 0.0;  // footholds from the measured body
+  o.max_foothold_shift = 0.12;
+  auto fl = [&](const terrain::Steppability* map, bool plan_first, double lag) {
+    Generator g(o);
+    g->setCommand(velocity(0.3));
+    if (plan_first) {
+      if (map) g->setMap(map);
+      EXPECT_TRUE(g->plan(0.15, placed(0.045, 0.0, 0.0), 0.15, 1.15));
+    }
+    if (map) g->setMap(map);
+    EXPECT_TRUE(g->plan(0.16, placed(0.048 - lag, 0.0, 0.0), 0.16, 1.16));
+    EXPECT_NEAR(g->stance(FL, 1).touch_down, 0.3, 1e-9);
+    return g->stance(FL, 1).p.x();
+  };
+  const double nominal = fl(nullptr, true, 0.0), edge = nominal + 0.005;
+  EXPECT_NEAR(fl(nullptr, true, 0.02), nominal - 0.02, 1e-9);  // the nominal follows the body
+  terrain::SteppabilityOptions wide;
+  wide.min_edge_distance = 0.1;
+  wide.edge_search_radius = 0.12;
+  const terrain::Steppability box =
+      mapOf([&](double x, double) { return x >= edge ? 0.05 : 0.0; }, wide);
+  const double across = fl(&box, true, 0.0);
+  EXPECT_GE(across, edge + 0.1 - 1e-9);
+  EXPECT_LT(across, edge + 0.12);
+  EXPECT_LE(fl(&box, false, 0.02), edge - 0.1 + 1e-9);  // afresh: short of the band
+  EXPECT_EQ(fl(&box, true, 0.02), across);              // again: kept
 }
 
 }  // namespace

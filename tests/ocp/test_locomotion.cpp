@@ -17,6 +17,7 @@
 #include "solver/contact/contact_dynamics.hpp"
 #include "solver/ddp/solver.hpp"
 #include "solver/ocp/residual_frame.hpp"
+#include "terrain/steppability.hpp"
 
 namespace stride {
 namespace {
@@ -209,6 +210,58 @@ TEST(LocomotionProblem, UpdateConfiguresKnots) {
                                      [](LocomotionOptions& o) { o.impulses = false; });
   for (int k = 0; k < no_impulse.loco->problem().horizon(); ++k)
     EXPECT_EQ(knotAt(*no_impulse.loco, k).mode(), KnotMode::Contact);
+}
+
+TEST(LocomotionProblem, ASwingToAFootholdNearAnEdgeWeighsEveryAxis) {
+  // With swing_horizontal lighter than swing the solver may move a foothold by a few cm; not one a
+  // map placed near an edge (FL lands at 0.3 s 5 cm before a 5 cm riser: within the edge search
+  // radius, 8 cm), whose swing weighs `swing` on every axis. FL's swing is 0.1-0.3 s.
+  Case c = loco_cases::make(Problem::SoloTrot, kShared, [](LocomotionOptions& o) {
+    o.weights.swing = 1e4;
+    o.weights.swing_horizontal = 1e3;
+  });
+  LocomotionProblem& loco = *c.loco;
+  const int FL = loco.contacts().find("FL_FOOT");
+  auto flSwingWeights = [&]() {
+    Eigen::Vector3d w = Eigen::Vector3d::Zero();
+    for (int k = 0; k < loco.problem().horizon(); ++k) {
+      const double t = loco.knotTime(k);
+      if (t <= 0.11 || t >= 0.29) continue;
+      const KnotModel& knot = knotAt(loco, k);
+      const CostTerm& swing = knot.costs()[knot.costs().find("swing_FL_FOOT")];
+      EXPECT_TRUE(swing.active) << t;
+      if (w.isZero()) w = swing.activation.weights;
+      EXPECT_EQ(swing.activation.weights, w) << t;  // the same along the swing
+    }
+    return w;
+  };
+  ASSERT_TRUE(c.update(0.0));
+  const double landing = c.ref->stance(FL, 1).p.x();
+  EXPECT_EQ(flSwingWeights(), Eigen::Vector3d(1e3, 1e3, 1e4));  // blind
+  auto mapWithRiserAt = [&](double edge) {
+    terrain::ElevationMap m;
+    m.resolution = 0.01;
+    m.origin_x = -1.0;
+    m.origin_y = -1.0;
+    m.resize(201, 201);
+    for (int r = 0; r < m.rows; ++r)
+      for (int col = 0; col < m.cols; ++col)
+        m.at(r, col) = m.origin_x + col * m.resolution >= edge ? 0.05f : 0.0f;
+    terrain::Steppability st({}, m.rows * m.cols);
+    EXPECT_TRUE(st.update(m));
+    return st;
+  };
+  const terrain::Steppability near = mapWithRiserAt(landing + 0.05);
+  c.ref->setMap(&near);
+  ASSERT_TRUE(c.update(0.0));
+  EXPECT_NEAR(c.ref->stance(FL, 1).p.x(), landing, 0.01);  // 5 cm before it is safe
+  EXPECT_TRUE(c.ref->stance(FL, 1).near_edge);
+  EXPECT_EQ(flSwingWeights(), Eigen::Vector3d(1e4, 1e4, 1e4));
+  const terrain::Steppability far = mapWithRiserAt(landing + 0.2);
+  c.ref->setMap(&far);
+  ASSERT_TRUE(c.update(0.0));
+  EXPECT_FALSE(c.ref->stance(FL, 1).near_edge);
+  EXPECT_EQ(flSwingWeights(), Eigen::Vector3d(1e3, 1e3, 1e4));
 }
 
 // A non-uniform grid (LocomotionOptions::grid): the first segment's knots from t0, then each

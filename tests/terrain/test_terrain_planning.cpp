@@ -277,6 +277,38 @@ TEST(Foothold, AMoveAgainstTheTravelCountsTwice) {
   EXPECT_NEAR(selectFoothold(map, {0.475, 0.3}, reach).position.x(), 0.46, 1e-12);
 }
 
+TEST(Foothold, TheLastChoiceStaysInReachLonger) {
+  // The box's side at x = 0.49: safe cells at 0.46 before it and 0.52 on it. From 0.488 walking
+  // +x, the cell on the box is 3.2 cm on, beyond a reach of 3 cm: back to 0.46 (2.8 cm).
+  const Steppability map = computed(boxMap());
+  FootholdReach reach;
+  reach.max_shift = 0.03;
+  reach.forward = Eigen::Vector2d::UnitX();
+  EXPECT_NEAR(selectFoothold(map, {0.488, 0.3}, reach).position.x(), 0.46, 1e-12);
+  // Chosen on the box at the last plan (the body has since lagged 1 cm): kept, within 4.5 cm.
+  reach.kept = {0.52, 0.3};
+  reach.kept_max_shift = 0.045;
+  Foothold f = selectFoothold(map, {0.488, 0.3}, reach);
+  EXPECT_EQ(f.status, FootholdStatus::Moved);
+  EXPECT_NEAR(f.position.x(), 0.52, 1e-12);
+  EXPECT_NEAR(f.position.z(), 0.05, 1e-7);
+  EXPECT_NEAR(f.shift, 0.032, 1e-12);
+  // Any point of the kept cell names it.
+  reach.kept = {0.527, 0.305};
+  EXPECT_NEAR(selectFoothold(map, {0.488, 0.3}, reach).position.x(), 0.52, 1e-12);
+  // Beyond the longer reach too: the nearest safe cell again.
+  reach.kept_max_shift = 0.031;
+  EXPECT_NEAR(selectFoothold(map, {0.488, 0.3}, reach).position.x(), 0.46, 1e-12);
+  reach.kept_max_shift = 0.045;
+  // A kept place that is not safe (on the edge) is not kept.
+  reach.kept = {0.49, 0.3};
+  EXPECT_NEAR(selectFoothold(map, {0.488, 0.3}, reach).position.x(), 0.46, 1e-12);
+  // Only a longer reach, not a discount: a cheaper cell within the reach still wins (from 0.505 on
+  // the box, 0.52 at 1.5 cm beats the kept 0.46 at 4.5 cm).
+  reach.kept = {0.46, 0.3};
+  EXPECT_NEAR(selectFoothold(map, {0.505, 0.3}, reach).position.x(), 0.52, 1e-12);
+}
+
 TEST(Foothold, SafeCellsBeyondReachAreReportedNotTaken) {
   const Steppability s = computed(boxMap());
   const Eigen::Vector2d nominal(0.492, 0.30);
