@@ -355,6 +355,9 @@ void SimNode::writeSummary(const std::string& path) const {
   j["min_edge_distance_m"] = std::isfinite(counters.min_edge_distance)
                                  ? nlohmann::ordered_json(counters.min_edge_distance)
                                  : nlohmann::ordered_json(nullptr);
+  const double flat = sim::soleFlatFraction(counters);
+  j["sole_flat_fraction"] =
+      std::isfinite(flat) ? nlohmann::ordered_json(flat) : nlohmann::ordered_json(nullptr);
   j["terrain_maps"] = mapper_.published();
   std::ofstream f(path);
   f << j.dump(2) << "\n";

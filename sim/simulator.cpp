@@ -27,6 +27,12 @@ const char* toString(StepStatus status) {
   return "?";
 }
 
+double soleFlatFraction(const SimCounters& c) {
+  return c.sole_steps > 0
+             ? static_cast<double>(c.sole_flat_steps) / static_cast<double>(c.sole_steps)
+             : std::numeric_limits<double>::quiet_NaN();
+}
+
 std::string footholdText(const SimCounters& c, const SimOptions& o) {
   char text[256];
   int n =
@@ -37,10 +43,15 @@ std::string footholdText(const SimCounters& c, const SimOptions& o) {
                     100.0 * o.edge_distance, 100.0 * o.edge_jump);
   n = std::max(0, std::min(n, static_cast<int>(sizeof text) - 1));
   if (std::isfinite(c.min_edge_distance))
-    std::snprintf(text + n, sizeof text - n, "nearest %.3f m", c.min_edge_distance);
+    n += std::snprintf(text + n, sizeof text - n, "nearest %.3f m", c.min_edge_distance);
   else
-    std::snprintf(text + n, sizeof text - n, "no edge within %g cm of any",
-                  100.0 * o.edge_search_radius);
+    n += std::snprintf(text + n, sizeof text - n, "no edge within %g cm of any",
+                       100.0 * o.edge_search_radius);
+  n = std::max(0, std::min(n, static_cast<int>(sizeof text) - 1));
+  if (c.sole_steps > 0)
+    std::snprintf(text + n, sizeof text - n,
+                  "; soles down flat (every corner within %g mm) %.1f %% of the time",
+                  1000.0 * o.sole_flat_tolerance, 100.0 * soleFlatFraction(c));
   return text;
 }
 
@@ -110,6 +121,13 @@ Simulator::Simulator(const Model& model, std::vector<ContactPoint> points,
   touching_wall_.assign(np, 0);
   airborne_.assign(np, 1);
   touching_support_.assign(np, 0);
+  // A contact's points are consecutive (contactPointsFromRobot).
+  for (int i = 0; i < np;) {
+    int n = 1;
+    while (i + n < np && points_[i + n].contact == points_[i].contact) ++n;
+    if (n > 1) soles_.emplace_back(i, n);
+    i += n;
+  }
 }
 
 Simulator::Simulator(const Robot& robot, const SimOptions& options)
@@ -289,6 +307,19 @@ StepStatus Simulator::substep(double h) {
       counters_.min_edge_distance = std::min(counters_.min_edge_distance, d);
       if (d < options_.edge_distance) ++counters_.edge_footholds;
     }
+  }
+  // A sole down (a corner loading its support) is flat when every corner is within
+  // sole_flat_tolerance of the terrain under it: not "every corner loaded", since a sole flat on
+  // the ground often carries its load on three corners, the fourth touching with none.
+  for (const auto& [first, n] : soles_) {
+    bool down = false, flat = true;
+    for (int i = first; i < first + n; ++i) {
+      down = down || touching_support_[i];
+      flat = flat && std::abs(contacts_[i].height) <= options_.sole_flat_tolerance;
+    }
+    if (!down) continue;
+    ++counters_.sole_steps;
+    if (flat) ++counters_.sole_flat_steps;
   }
 
   // q⁺ = q ⊕ h v⁺ (rhs_ is free again: it holds h v⁺).

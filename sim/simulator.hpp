@@ -20,6 +20,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "config/robot_config.hpp"
@@ -62,6 +63,9 @@ struct SimOptions {
   double edge_jump = 0.02;
   double edge_distance = 0.02;
   double edge_search_radius = 0.05;
+  // A sole down is flat when every corner is this close to the terrain under it
+  // (SimCounters::sole_flat_steps).
+  double sole_flat_tolerance = 0.005;
 };
 
 enum class StepStatus : std::uint8_t {
@@ -94,12 +98,20 @@ struct SimCounters {
   // The smallest distance of a touch-down to an edge [m]; +infinity while no touch-down had one
   // within SimOptions::edge_search_radius (always on flat ground).
   double min_edge_distance = std::numeric_limits<double>::infinity();
+  // Soles (contacts of several points: a dim-6 sole's corners) on the ground, per physics step:
+  // loading their support with at least one corner, and of those flat on it (every corner within
+  // SimOptions::sole_flat_tolerance of the terrain under it). A 20 cm sole set down level on a
+  // 10° ramp has one end 3.5 cm above it.
+  std::int64_t sole_steps = 0;
+  std::int64_t sole_flat_steps = 0;
 };
 
 // The footholds in words, for the summaries of stride-sim and stride-drive: "412 footholds
 // (touch-downs), 3 closer than 2 cm to an edge of more than 2 cm, nearest 0.012 m" (or "no edge
 // within 5 cm of any").
 std::string footholdText(const SimCounters& counters, const SimOptions& options);
+// sole_flat_steps / sole_steps; NaN without a sole on the ground (point feet).
+double soleFlatFraction(const SimCounters& counters);
 
 // What one candidate point did in the last step.
 struct PointContact {
@@ -194,6 +206,7 @@ class Simulator {
   std::vector<PointContact> contacts_;
   std::vector<char> on_wall_, touching_wall_;      // per point: pushing on a face (trips)
   std::vector<char> airborne_, touching_support_;  // per point: swung, loading its support
+  std::vector<std::pair<int, int>> soles_;         // first point and count of each sole
 
   SimCounters counters_;
   StepStatus last_status_ = StepStatus::Ok;

@@ -613,6 +613,41 @@ TEST(TerrainContact, TheQuadStandingOnFlatGroundHasNoEdgeFootholds) {
   }
 }
 
+TEST(TerrainContact, SolesFlatOnTheGroundNotSetLevelOnARamp) {
+  // stride_humanoid dropped 1 cm and held: on flat ground its soles stand flat (every corner within
+  // 5 mm of the ground); set down level on a 10° ramp, one end of each sole is 3.5 cm above it,
+  // and they are not. The quadruped has no soles: no such steps.
+  const Robot& h = robot("stride_humanoid");
+  const double slope = std::tan(10.0 * kPi / 180.0);
+  TerrainSpec ramp;
+  ramp.ramps.push_back({{-2.0, 0.0}, {2.0, 0.0}, 4.0, 4.0 * slope});
+  auto fraction = [&](const std::shared_ptr<const Terrain>& world, double lift) {
+    SimOptions opt;
+    opt.terrain = world;
+    Simulator sim(h, opt);
+    Eigen::VectorXd q = h.default_q;
+    q[2] += 0.01 + lift;
+    sim.reset(q, Eigen::VectorXd::Zero(h.model.nv));
+    const sim::HoldPolicy hold = sim_test::holdDefault(h);
+    Eigen::VectorXd tau(sim.nu());
+    for (int i = 0; i < 300; ++i) {
+      hold.torque(h.model, sim.q(), sim.v(), tau);
+      sim.step(tau);
+    }
+    EXPECT_GT(sim.counters().sole_steps, 200);  // two soles, down after ~0.05 s
+    return sim::soleFlatFraction(sim.counters());
+  };
+  EXPECT_GT(fraction(nullptr, 0.0), 0.95);
+  // Its soles' highest point over the ramp's middle: 2 x 0.1 x tan(10°) / 2 above the centre.
+  EXPECT_LT(fraction(std::make_shared<const Terrain>(ramp), 2.0 * slope + 0.1 * slope), 0.05);
+  const Robot& quad = robot("stride_quad");
+  Simulator sim(quad, SimOptions{});
+  sim.reset(quad.default_q, Eigen::VectorXd::Zero(quad.model.nv));
+  for (int i = 0; i < 100; ++i) sim.step(Eigen::VectorXd::Zero(sim.nu()));
+  EXPECT_EQ(sim.counters().sole_steps, 0);
+  EXPECT_TRUE(std::isnan(sim::soleFlatFraction(sim.counters())));
+}
+
 // ---------------------------------------------------------------------------------------------
 // step() allocates nothing with walls in play: the puck's sweep into the riser, and the quadruped
 // dropped from 5 cm onto a rough patch (5 cm cells, ±2 cm) in front of a flight (1 and 3

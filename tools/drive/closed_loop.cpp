@@ -217,6 +217,7 @@ Run run(const ControllerConfig& config, const Options& options) {
   r.footholds = counters.footholds;
   r.edge_footholds = counters.edge_footholds;
   r.min_edge_distance = counters.min_edge_distance;
+  r.sole_flat_fraction = sim::soleFlatFraction(counters);
   r.footholds_text = sim::footholdText(counters, sim->simulator().options());
   r.base_above_terrain = sim->stats().above;
   return r;

@@ -87,6 +87,8 @@ struct Run {
   // sim::footholdText). After a restart of the mock robot (Options::sim_lost_at), the new one's.
   std::int64_t footholds = 0, edge_footholds = 0;
   double min_edge_distance = std::numeric_limits<double>::infinity();
+  // Soles down with every corner, of the time they are down (sim::soleFlatFraction; NaN: no soles).
+  double sole_flat_fraction = std::numeric_limits<double>::quiet_NaN();
   std::string footholds_text;
   double base_above_terrain = 0.0;
   // A diverged simulation (sim::SimNodeStats::diverged) counts as a fall: the run is over.

@@ -42,6 +42,9 @@ void writeJson(const std::string& path, const stride::drive::Run& run,
   j["min_edge_distance_m"] = std::isfinite(run.min_edge_distance)
                                  ? nlohmann::ordered_json(run.min_edge_distance)
                                  : nlohmann::ordered_json(nullptr);
+  j["sole_flat_fraction"] = std::isfinite(run.sole_flat_fraction)
+                                ? nlohmann::ordered_json(run.sole_flat_fraction)
+                                : nlohmann::ordered_json(nullptr);
   j["segments"] = nlohmann::ordered_json::array();
   for (const stride::logs::Segment& s : segments) {
     nlohmann::ordered_json segment;

@@ -543,7 +543,8 @@ int main(int argc, char** argv) {
     j["base_height_above_terrain_m"] = robot(z1 - ground_last);
     j["trips"] = sim_summary.contains("trips") ? sim_summary["trips"] : json(nullptr);
     // The feet's touch-downs near edges of the true terrain: only the mock robot knows them.
-    for (const char* key : {"footholds", "edge_footholds", "min_edge_distance_m"})
+    for (const char* key :
+         {"footholds", "edge_footholds", "min_edge_distance_m", "sole_flat_fraction"})
       j[key] = sim_summary.contains(key) ? sim_summary[key] : json(nullptr);
     j["terrain_maps"] = maps;
     j["terrain_map_top_m"] = std::isfinite(map_top) ? json(map_top) : json(nullptr);
