@@ -98,7 +98,7 @@ struct SimCounters {
   // The smallest distance of a touch-down to an edge [m]; +infinity while no touch-down had one
   // within SimOptions::edge_search_radius (always on flat ground).
   double min_edge_distance = std::numeric_limits<double>::infinity();
-  // Soles (contacts of several points: a dim-6 sole's corners) on the ground, per physics step:
+  // Soles (contacts of several points: a dim-6 sole's corners) on the ground, per substep:
   // loading their support with at least one corner, and of those flat on it (every corner within
   // SimOptions::sole_flat_tolerance of the terrain under it). A 20 cm sole set down level on a
   // 10° ramp has one end 3.5 cm above it.
