@@ -144,6 +144,44 @@ void SimNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channe
   have_policy_ = true;
   last_answer_ = std::max(last_answer_, incoming_.utime);
   ++stats_.policies;
+  // At or past its end on arrival (to the stamps' microsecond): the robot cannot follow it, and
+  // stands down past the grace. Said for the first two; the summaries say how many (whyText).
+  const double now = sim_.time(), end = policy_.t0 + (policy_.knots - 1) * policy_.dt;
+  stats_.policy_span = end - policy_.t0;
+  if (now > end - 1e-6) {
+    stats_.expired_by_max = std::max(stats_.expired_by_max, now - end);
+    if (++stats_.policies_expired <= 2)
+      std::fprintf(stderr,
+                   "stride-sim: a policy arrived %.3f s after its end: it covers %.3f s from a "
+                   "state %.3f s old; the estimates' latency and the controller's answer together "
+                   "take as long as a policy lasts or longer, and the robot cannot follow it\n",
+                   std::max(0.0, now - end), stats_.policy_span, now - policy_.t0);
+  }
+}
+
+std::string whyText(const SimNodeStats& s) {
+  std::string why;
+  char text[320];
+  if (s.policies_expired > 0) {
+    std::snprintf(text, sizeof text,
+                  "%lld of %lld policies arrived at or after their end (up to %.3f s after; a "
+                  "policy covers %.3f s): the estimates' latency and the controller's answer "
+                  "together took as long as a policy lasts or longer",
+                  static_cast<long long>(s.policies_expired), static_cast<long long>(s.policies),
+                  s.expired_by_max, s.policy_span);
+    why += text;
+    if (s.stand_downs > 0) {
+      std::snprintf(text, sizeof text, "; past a policy's end the robot stood down (%lld times)",
+                    static_cast<long long>(s.stand_downs));
+      why += text;
+    }
+  }
+  if (s.steps > 0 && s.policy_steps == 0) {
+    if (!why.empty()) why += "; ";
+    why += s.policies == 0 ? "no policy came: the robot stood on its hold PD for the whole run"
+                           : "no policy was ever in force: the robot stood for the whole run";
+  }
+  return why;
 }
 
 bool SimNode::followSource(std::int64_t source, const std::string& channel) {
@@ -248,6 +286,7 @@ bool SimNode::advance(int steps) {
       }
     } else if (status != PolicyStatus::Invalid) {
       standing_down_ = false;  // a policy in force again: the controller is back
+      ++stats_.policy_steps;
     }
     if (status == PolicyStatus::Invalid) {
       hold_.torque(robot_.model, sim_.q(), sim_.v(), tau_);
@@ -320,6 +359,8 @@ void SimNode::writeSummary(const std::string& path) const {
       terrain.name().c_str(), q[0], q[1], q[2], s.above, s.above_min, s.above0,
       static_cast<long long>(counters.trips), static_cast<long long>(mapper_.published()));
   std::printf("stride-sim: %s\n", footholdText(counters, sim_.options()).c_str());
+  const std::string why = whyText(s);
+  if (!why.empty()) std::printf("stride-sim: why: %s\n", why.c_str());
   if (path.empty()) return;
   nlohmann::ordered_json j;
   j["sim_time_s"] = sim_.time();
@@ -342,6 +383,9 @@ void SimNode::writeSummary(const std::string& path) const {
   j["stand_downs"] = s.stand_downs;
   j["stand_down_steps"] = s.stand_down_steps;
   j["lockstep_timeouts"] = s.lockstep_timeouts;
+  j["policies_expired"] = s.policies_expired;
+  j["policy_steps"] = s.policy_steps;
+  j["why"] = why.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(why);
   j["terrain"] = terrain.name();
   // A fixed-base robot has no base: its q starts with joints.
   j["final_base"] = robot_.model.hasFreeFlyer() ? nlohmann::ordered_json({q[0], q[1], q[2]})

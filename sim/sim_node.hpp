@@ -70,6 +70,13 @@ struct SimNodeStats {
   // Past a policy's end by more than the grace: the controller is lost, the robot stands down.
   std::int64_t stand_downs = 0, stand_down_steps = 0;
   std::int64_t lockstep_timeouts = 0;
+  // Policies that arrived at or after their end (the state they answered was as old on arrival
+  // as the span they cover, or older: the estimates' latency and the controller's answer together
+  // took as long as a policy lasts), by how much at most [s], and the last policy's span [s];
+  // steps driven by a policy in force.
+  std::int64_t policies_expired = 0;
+  double expired_by_max = 0.0, policy_span = 0.0;
+  std::int64_t policy_steps = 0;
   double x0 = 0, y0 = 0, z0 = 0, z_min = 1e300, z_max = -1e300, max_tilt_deg = 0.0;
   // The base's height above the terrain under it: at the start, lowest, at the end.
   double above0 = 0.0, above_min = 1e300, above = 0.0;
@@ -77,6 +84,11 @@ struct SimNodeStats {
   bool fell = false;
   bool diverged = false;  // the physics could not go on (singular M, non-finite state)
 };
+
+// Why the robot did not follow its controller, in words, when the counters show it: policies that
+// arrived already expired, a robot that never had a policy in force. Empty when there is nothing
+// to say. For the summaries of stride-sim, stride-drive and stride-log-summary.
+std::string whyText(const SimNodeStats& stats);
 
 class SimNode {
  public:

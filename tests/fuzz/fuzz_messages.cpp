@@ -51,10 +51,18 @@ viz::RobotSource vizSource() {
   return source;
 }
 
+// What the nodes publish (a policy, a horizon and a status for each state the controller takes,
+// the mock robot's maps) is encoded and dropped. Published on the memq:// bus, which nothing here
+// handles, each message stayed queued in LCM: 1.6 GB in 39 000 messages after 480 000 inputs,
+// past libFuzzer's 2 GB limit (an out-of-memory "finding" of the harness, not of the nodes).
+struct Discard : Publisher {
+  void publish(const std::string&, const void*, int) override {}
+};
+
 // Everything an input goes to, built on first use.
 struct Harness {
   lcm::LCM bus{"memq://"};
-  LcmPublisher out{bus};
+  Discard out;
   ControllerConfig config = loadControllerConfig(configDir() + "/controller/stride_quad.yaml");
   MpcNode mpc{config, out, TimeSource::Stamps};
   const Robot& robot = mpc.mpc().robot();

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
@@ -105,6 +107,58 @@ TEST(SimNode, APolicyOfAnyStampIsTakenWithoutOverflow) {
       EXPECT_EQ(node.stats().stand_downs, 1) << knot0;  // long past its end
     }
   }
+}
+
+// Why the robot did not follow its controller, in words (issue 32): a robot that never had a
+// policy, a policy that arrived already past its end (a latency longer than the policy: the robot
+// stood down with nothing but "standing down" lines before), said once each on stderr and in the
+// summaries' `why`.
+TEST(SimNode, APolicyPastItsEndOnArrivalIsSaidSo) {
+  const Robot& robot = sim_test::robot("stride_quad");
+  Sink out;
+  sim::SimNode node(robot, sim::SimOptions{}, sim::SimNodeOptions{}, out);
+  node.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
+  EXPECT_EQ(sim::whyText(node.stats()), "");
+  ASSERT_TRUE(node.advance(50));  // 50 ms on the hold PD
+  EXPECT_EQ(sim::whyText(node.stats()),
+            "no policy came: the robot stood on its hold PD for the whole run");
+
+  auto feed = [&](double knot0) {
+    policy_t p = holdPolicy(robot, 19, 18, modelHash(robot));
+    p.utime = p.knot0_utime = 1000000 + static_cast<std::int64_t>(std::llround(knot0 * 1e6));
+    std::vector<unsigned char> b = encode(p);
+    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
+    node.onPolicy(&rbuf, "STRIDE_POLICY");
+  };
+  // Knot 0 at the state of 0 s, 10 ms long, arriving at 50 ms: 40 ms past its end.
+  testing::internal::CaptureStderr();
+  feed(0.0);
+  feed(0.001);
+  feed(0.002);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(node.stats().policies, 3);
+  EXPECT_EQ(node.stats().policies_expired, 3);
+  EXPECT_NE(err.find("stride-sim: a policy arrived 0.040 s after its end: it covers 0.010 s from a "
+                     "state 0.050 s old"),
+            std::string::npos)
+      << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 2) << err;  // the first two
+  ASSERT_TRUE(node.advance(10));
+  EXPECT_EQ(node.stats().stand_downs, 1);
+  EXPECT_EQ(node.stats().policy_steps, 0);
+  EXPECT_EQ(sim::whyText(node.stats()),
+            "3 of 3 policies arrived at or after their end (up to 0.040 s after; a policy covers "
+            "0.010 s): the estimates' latency and the controller's answer together took as long "
+            "as a policy lasts or longer; past a policy's end the robot stood down (1 times); no "
+            "policy was ever in force: the robot stood for the whole run");
+  // One in time (the state of 60 ms, now): followed; the expired ones are still said.
+  feed(0.06);
+  ASSERT_TRUE(node.advance(5));
+  EXPECT_EQ(node.stats().policies_expired, 3);
+  EXPECT_EQ(node.stats().policy_steps, 5);
+  const std::string why = sim::whyText(node.stats());
+  EXPECT_NE(why.find("3 of 4 policies arrived at or after their end"), std::string::npos) << why;
+  EXPECT_EQ(why.find("whole run"), std::string::npos) << why;
 }
 
 }  // namespace

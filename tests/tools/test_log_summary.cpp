@@ -223,3 +223,22 @@ TEST(LogSummary, LostMessagesAreCountedAndCanFailTheRun) {
   EXPECT_NE(strict.output.find("MORE THAN --max-lost"), std::string::npos) << strict.output;
   EXPECT_EQ(summarize(log, "--max-lost 15").status, 0);
 }
+
+// The mock robot's own summary (stride-sim --summary) says why it did not follow its controller
+// (sim::whyText): said on a line of its own and kept in the JSON; null when it had nothing to say.
+TEST(LogSummary, TheMockRobotsWhyIsSaid) {
+  const std::string log = writeSession("why", Robot::Tracks);
+  const std::string sim = testing::TempDir() + "/why_sim.json";
+  const std::string why =
+      "997 of 997 policies arrived at or after their end (up to 0.000 s after; a policy covers "
+      "0.060 s)";
+  std::ofstream(sim) << nlohmann::json{{"fell", false}, {"why", why}}.dump();
+  Summary r = summarize(log, "--sim-summary " + sim);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("robot: " + why + "\n"), std::string::npos) << r.output;
+  EXPECT_EQ(r.json["why"], why);
+  std::ofstream(sim) << nlohmann::json{{"fell", false}, {"why", nullptr}}.dump();
+  r = summarize(log, "--sim-summary " + sim);
+  EXPECT_EQ(r.output.find("robot: "), std::string::npos) << r.output;
+  EXPECT_TRUE(r.json["why"].is_null());
+}

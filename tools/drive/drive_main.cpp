@@ -31,6 +31,8 @@ void writeJson(const std::string& path, const stride::drive::Run& run,
   j["duration_s"] = run.samples.empty() ? 0.0 : run.samples.back().t;
   j["tracked"] = tracked;
   j["fallbacks"] = run.mpc.fallbacks;
+  const std::string why = stride::sim::whyText(run.sim);
+  j["why"] = why.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(why);
   j["failed_solves"] = run.mpc.failed_solves;
   j["terrain"] = run.terrain;
   if (run.q_end.size() >= 3) j["final_base"] = {run.q_end[0], run.q_end[1], run.q_end[2]};
@@ -95,9 +97,11 @@ int main(int argc, char** argv) {
   app.add_option("--controller-back-after", options.controller_back_after,
                  "start a new controller this long after the kill [s] (1)");
   app.add_option("--noise-q", options.sim.noise_q,
-                 "state estimates: joint and base position noise, standard deviation [rad, m]");
+                 "state estimates: joint position noise, standard deviation [rad] (the base's "
+                 "pose is exact)");
   app.add_option("--noise-v", options.sim.noise_v,
-                 "state estimates: velocity noise, standard deviation [rad/s, m/s]");
+                 "state estimates: velocity noise, every component of v (base and joints), "
+                 "standard deviation [rad/s, m/s]");
   app.add_option("--delay", options.sim.delay,
                  "state estimates: published this many publications late (a latency in lock-step)");
   app.add_option("--drop", options.sim.drop, "state estimates: the probability of dropping one");
@@ -198,6 +202,8 @@ int main(int argc, char** argv) {
           static_cast<long long>(run.sim.exhausted_steps),
           static_cast<long long>(run.sim.hold_steps),
           static_cast<long long>(run.sim.source_switches));
+    const std::string why = stride::sim::whyText(run.sim);
+    if (!why.empty()) std::printf("  why: %s\n", why.c_str());
     std::printf("  %6s %6s  %-5s %23s  %23s\n", "t0", "t1", "gait", "command [vx vy yaw]",
                 "achieved");
     for (const stride::logs::Segment& s : segments) {

@@ -490,6 +490,9 @@ int main(int argc, char** argv) {
                   sim_summary_path.c_str());
       fell = true;
     }
+    // Why it did not follow its controller, when it did not (sim::whyText).
+    if (sim_summary.contains("why") && sim_summary["why"].is_string())
+      std::printf("robot: %s\n", sim_summary["why"].get<std::string>().c_str());
   }
   const std::string terrain_name =
       sim_summary.contains("terrain") && sim_summary["terrain"].is_string()
@@ -544,7 +547,7 @@ int main(int argc, char** argv) {
     j["trips"] = sim_summary.contains("trips") ? sim_summary["trips"] : json(nullptr);
     // The feet's touch-downs near edges of the true terrain: only the mock robot knows them.
     for (const char* key :
-         {"footholds", "edge_footholds", "min_edge_distance_m", "sole_flat_fraction"})
+         {"footholds", "edge_footholds", "min_edge_distance_m", "sole_flat_fraction", "why"})
       j[key] = sim_summary.contains(key) ? sim_summary[key] : json(nullptr);
     j["terrain_maps"] = maps;
     j["terrain_map_top_m"] = std::isfinite(map_top) ? json(map_top) : json(nullptr);
