@@ -50,6 +50,8 @@ install(TARGETS ${_stride_targets} EXPORT StrideTargets
 foreach(_dir solver/multibody solver/contact solver/ocp solver/ddp terrain config messages controller sim
              tools/log tools/drive)
   file(GLOB _headers CONFIGURE_DEPENDS ${STRIDE_ROOT}/${_dir}/*.hpp)
+  # The programs' shared options (stride_sim_cli) are not a library a user links.
+  list(FILTER _headers EXCLUDE REGEX "sim/command_line.hpp$")
   install(FILES ${_headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/stride/${_dir})
 endforeach()
 

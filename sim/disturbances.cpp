@@ -7,25 +7,6 @@
 
 namespace stride::sim {
 
-StateNoise::StateNoise(double q_joint_std, double v_std, std::uint64_t seed)
-    : q_std_(q_joint_std), v_std_(v_std), rng_(seed) {
-  if (!(q_std_ >= 0.0) || !(v_std_ >= 0.0))
-    throw std::invalid_argument("StateNoise: standard deviations must be >= 0");
-}
-
-void StateNoise::apply(const Model& model, Eigen::Ref<Eigen::VectorXd> q,
-                       Eigen::Ref<Eigen::VectorXd> v) {
-  if (q_std_ > 0.0) {
-    for (int j = 1; j < model.njoints(); ++j) {
-      const Joint& jt = model.joints[j];
-      if (jt.type == JointType::FreeFlyer) continue;
-      for (int k = 0; k < jt.nq; ++k) q[jt.idx_q + k] += q_std_ * normal_(rng_);
-    }
-  }
-  if (v_std_ > 0.0)
-    for (Eigen::Index k = 0; k < v.size(); ++k) v[k] += v_std_ * normal_(rng_);
-}
-
 StateDelay::StateDelay(int nq, int nv, int delay) : delay_(delay) {
   if (delay < 0) throw std::invalid_argument("StateDelay: delay must be >= 0");
   q_.setZero(nq, delay + 1);

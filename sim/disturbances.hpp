@@ -1,7 +1,7 @@
 #pragma once
 // Disturbances the mock robot can add between its physics and the controller (ARCHITECTURE.md §6):
-// state-estimate noise, publication delay, dropped messages and pushes. Each is small,
-// deterministic for a given seed, and allocates nothing after construction.
+// publication delay, dropped messages and pushes (what the robot senses: sim/sensing.hpp). Each is
+// small, deterministic for a given seed, and allocates nothing after construction.
 
 #include <cstdint>
 #include <random>
@@ -11,19 +11,6 @@
 #include "solver/multibody/model.hpp"
 
 namespace stride::sim {
-
-// Gaussian noise on the estimate: joint positions (the base pose is left exact) and every velocity.
-class StateNoise {
- public:
-  StateNoise(double q_joint_std, double v_std, std::uint64_t seed);
-  void apply(const Model& model, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> v);
-  bool enabled() const { return q_std_ > 0.0 || v_std_ > 0.0; }
-
- private:
-  double q_std_, v_std_;
-  std::mt19937_64 rng_;
-  std::normal_distribution<double> normal_{0.0, 1.0};
-};
 
 // The state as it was `delay` pushes ago: a ring buffer of delay + 1 stamped states.
 class StateDelay {

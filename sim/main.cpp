@@ -13,6 +13,7 @@
 
 #include "config/command_line.hpp"
 #include "config/describe_model.hpp"
+#include "sim/command_line.hpp"
 #include "sim/sim_node.hpp"
 #include "terrain/terrain_file.hpp"
 
@@ -49,7 +50,6 @@ int main(int argc, char** argv) {
   app.add_option("--url", url, "LCM URL (default: LCM_DEFAULT_URL)");
   app.add_option("--dt", sim.dt, "physics step [s]");
   app.add_option("--substeps", sim.substeps, "substeps per physics step");
-  app.add_option("--mu", sim.friction, "ground friction coefficient");
   auto* terrain_option = app.add_option(
       "--terrain", terrain_name,
       "the world: a terrain file, or a name in config/terrain/ (stairs_anymal_c, ...); default: "
@@ -69,11 +69,8 @@ int main(int argc, char** argv) {
   app.add_option("--map-latency", node_options.map.latency,
                  "a map shows the terrain around where the robot was this long ago [s]");
   app.add_option("--map-channel", node_options.map.channel, "the maps' LCM channel");
-  app.add_option("--noise-q", node_options.noise_q, "joint position noise std [rad]");
-  app.add_option("--noise-v", node_options.noise_v, "velocity noise std");
-  app.add_option("--delay", node_options.delay, "publish estimates this many periods late");
-  app.add_option("--drop", node_options.drop, "probability of dropping an estimate");
-  app.add_option("--seed", node_options.seed, "noise and drop seed");
+  stride::sim::MockRobotArgs mock_args;
+  stride::sim::addMockRobotOptions(app, node_options, sim, mock_args);
   app.add_option("--push", pushes, "a push on the base: start:duration:fx,fy,fz (repeatable)");
   app.add_option("--lockstep-timeout", timeout, "lock-step: wall seconds to wait for an answer");
   app.add_option("--hold-kp", node_options.hold_kp,
@@ -96,6 +93,7 @@ int main(int argc, char** argv) {
       "simulation diverged; 4 the robot fell (sim/README.md).");
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
+  if (!stride::sim::finishMockRobotOptions(mock_args, node_options, "stride-sim")) return 2;
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
   try {
@@ -142,6 +140,9 @@ int main(int argc, char** argv) {
         robot.name.c_str(), lockstep ? "lock-step" : "real time", 1.0 / sim.dt,
         node_options.state_rate_hz, duration, node.simulator().terrain().name().c_str(),
         url.c_str());
+    if (const std::string differs = stride::sim::describeMockRobot(node_options, sim);
+        !differs.empty())
+      std::printf("stride-sim: the robot differs from a perfect one: %s\n", differs.c_str());
     std::fflush(stdout);
 
     const int per_state = node.stepsPerState();

@@ -53,14 +53,16 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
                  Publisher& out)
     : robot_(robot),
       options_(options),
-      sim_(robot, sim),
+      plant_(options.plant.enabled() ? plantOf(robot, options.plant) : robot),
+      sim_(plant_, sim),
       out_(out),
       evaluator_(robot.model, actuatedDimension(robot.model)),
       hold_(robot.model, robot.default_q, holdGain(options.hold_kp, robot.joint_kp, 5.0),
             holdGain(options.hold_kd, robot.joint_kd, 0.1), sim.dt),
       stand_down_(robot.model, hold_, standDownContacts(robot), options.stand_down),
       mapper_(sim_.terrain(), options.map, sim.dt),
-      noise_(options.noise_q, options.noise_v, options.seed),
+      sensing_(robot.model, options.sensing, sim.dt, options.seed + 3),
+      actuators_(plant_.model, robot.default_q, options.actuators, sim.dt),
       delay_(robot.model.nq, robot.model.nv, options.delay),
       dropper_(options.drop, options.seed + 1) {
   const Model& model = robot.model;
@@ -72,6 +74,7 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
   buffer_.resize(state_msg_.getEncodedSize());
   q_pub_ = Eigen::VectorXd::Zero(model.nq);
   v_pub_ = Eigen::VectorXd::Zero(model.nv);
+  tau_cmd_ = Eigen::VectorXd::Zero(sim_.nu());
   tau_ = Eigen::VectorXd::Zero(sim_.nu());
 }
 
@@ -91,6 +94,9 @@ std::int64_t SimNode::utime() const {
 
 void SimNode::reset(const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
   sim_.reset(q, v, 0.0);
+  sensing_.reset(q, v);
+  sensed_at_ = -1;
+  actuators_.reset();
   delay_.clear();
   have_policy_ = false;
   standing_down_ = false;
@@ -225,11 +231,20 @@ void SimNode::noteWrongModel(const void* buf, int size, const std::string& chann
                msg::describeMismatch(wire_, claim, text, sizeof text));
 }
 
+void SimNode::sense() {
+  if (sensed_at_ == stats_.steps) return;
+  sensing_.sample(sim_.q(), sim_.v());
+  sensed_at_ = stats_.steps;
+  stats_.sensor_drops = sensing_.dropped();
+}
+
 std::int64_t SimNode::publishState() {
   const Model& model = robot_.model;
-  double t = sim_.time();
-  q_pub_ = sim_.q();
-  v_pub_ = sim_.v();
+  sense();
+  // The estimate is of the state `latency` steps ago, and says so in its stamp.
+  double t = std::max(0.0, sim_.time() - sensing_.latency() * sim_.options().dt);
+  q_pub_ = qSensed();
+  v_pub_ = vSensed();
   if (delay_.delay() > 0) {
     delay_.push(t, q_pub_, v_pub_);
     if (!delay_.delayed(t, q_pub_, v_pub_)) return -1;  // not enough history yet
@@ -238,7 +253,6 @@ std::int64_t SimNode::publishState() {
     ++stats_.states_dropped;
     return -1;
   }
-  noise_.apply(model, q_pub_, v_pub_);
   state_msg_.utime = options_.utime_base + static_cast<std::int64_t>(std::llround(t * 1e6));
   std::copy(q_pub_.data(), q_pub_.data() + model.nq, state_msg_.q.begin());
   std::copy(v_pub_.data(), v_pub_.data() + model.nv, state_msg_.v.begin());
@@ -259,14 +273,18 @@ bool SimNode::advance(int steps) {
     const double t = sim_.time();
     const Vector6d push = options_.pushes.wrenchAt(t);
     if (!push.isZero()) sim_.applyExternalWrench(push, options_.pushes.activeUntil(t));
+    // The low-level loop has only what the robot senses (sim/sensing.hpp).
+    sense();
+    const Eigen::VectorXd& q_hat = qSensed();
+    const Eigen::VectorXd& v_hat = vSensed();
     PolicyStatus status = PolicyStatus::Invalid;
-    if (have_policy_) status = evaluator_.evaluate(policy_, t, sim_.q(), sim_.v(), tau_);
+    if (have_policy_) status = evaluator_.evaluate(policy_, t, q_hat, v_hat, tau_cmd_);
     if (status == PolicyStatus::Exhausted) {
       // Past the policy's end (by the grace, 0 by default: sim/README.md) the controller is lost.
       const double end = policy_.t0 + (policy_.knots - 1) * policy_.dt;
       if (!standing_down_ && t - end > options_.stand_down.grace) {
         const int last = policy_.knots - 1;
-        stand_down_.begin(t, sim_.q(),
+        stand_down_.begin(t, q_hat,
                           Eigen::Map<const Eigen::VectorXd>(policy_.uFf(last), sim_.nu()));
         standing_down_ = true;
         if (++stats_.stand_downs <= 4)
@@ -279,7 +297,7 @@ bool SimNode::advance(int steps) {
         unsigned on_ground = 0;  // the robot's contact sensing
         for (int c = 0; c < static_cast<int>(robot_.contacts.size()) && c < 32; ++c)
           if (sim_.normalForce(c) > 0.0) on_ground |= 1u << c;
-        stand_down_.torque(t, sim_.q(), sim_.v(), on_ground, tau_);
+        stand_down_.torque(t, q_hat, v_hat, on_ground, tau_cmd_);
         ++stats_.stand_down_steps;
       } else {
         ++stats_.exhausted_steps;
@@ -289,9 +307,10 @@ bool SimNode::advance(int steps) {
       ++stats_.policy_steps;
     }
     if (status == PolicyStatus::Invalid) {
-      hold_.torque(robot_.model, sim_.q(), sim_.v(), tau_);
+      hold_.torque(robot_.model, q_hat, v_hat, tau_cmd_);
       ++(have_policy_ ? stats_.hold_steps : stats_.waiting_steps);
     }
+    actuators_.apply(tau_cmd_, sim_.v(), tau_);
     const StepStatus step = sim_.step(tau_);
     ++stats_.steps;
     if (step == StepStatus::NonFiniteState || step == StepStatus::SingularMassMatrix) {
@@ -385,6 +404,8 @@ void SimNode::writeSummary(const std::string& path) const {
   j["lockstep_timeouts"] = s.lockstep_timeouts;
   j["policies_expired"] = s.policies_expired;
   j["policy_steps"] = s.policy_steps;
+  j["sensor_drops"] = s.sensor_drops;
+  j["envelope_steps"] = s.envelope_steps;
   j["why"] = why.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(why);
   j["terrain"] = terrain.name();
   // A fixed-base robot has no base: its q starts with joints.

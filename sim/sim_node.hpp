@@ -19,18 +19,24 @@
 #include "config/robot_config.hpp"
 #include "messages/publisher.hpp"
 #include "messages/validate.hpp"
+#include "sim/actuators.hpp"
 #include "sim/disturbances.hpp"
+#include "sim/plant.hpp"
 #include "sim/policy.hpp"
+#include "sim/sensing.hpp"
 #include "sim/simulator.hpp"
 #include "sim/terrain_map.hpp"
 
 namespace stride::sim {
 
 struct SimNodeOptions {
-  double state_rate_hz = 1000.0;        // estimates published per second of sim time
-  double noise_q = 0.0, noise_v = 0.0;  // joint position / velocity noise std [rad, rad/s, m/s]
-  int delay = 0;                        // estimates published this many publications late
-  double drop = 0.0;                    // probability of dropping an estimate
+  double state_rate_hz = 1000.0;  // estimates published per second of sim time
+  // What the robot senses: the estimate its low-level loop uses and publishes (sim/sensing.hpp).
+  SensingOptions sensing;
+  ActuatorOptions actuators;  // between the commanded and the applied torque (sim/actuators.hpp)
+  PlantOptions plant;         // the robot as it really is (sim/plant.hpp)
+  int delay = 0;              // estimates published this many publications late
+  double drop = 0.0;          // probability of dropping an estimate on its way to the controller
   std::uint64_t seed = 1;
   PushSchedule pushes;
   // The joint PD before the first policy and when standing down; negative: the robot YAML's
@@ -77,6 +83,9 @@ struct SimNodeStats {
   std::int64_t policies_expired = 0;
   double expired_by_max = 0.0, policy_span = 0.0;
   std::int64_t policy_steps = 0;
+  // Sensor samples lost (the low-level loop kept the previous estimate), steps where the
+  // actuators' torque-speed envelope cut a command.
+  std::int64_t sensor_drops = 0, envelope_steps = 0;
   double x0 = 0, y0 = 0, z0 = 0, z_min = 1e300, z_max = -1e300, max_tilt_deg = 0.0;
   // The base's height above the terrain under it: at the start, lowest, at the end.
   double above0 = 0.0, above_min = 1e300, above = 0.0;
@@ -137,8 +146,15 @@ class SimNode {
   // False (and counted) for a rival controller's policy; follows a new source after a silence.
   bool followSource(std::int64_t source, const std::string& channel);
 
+  // The estimate of the current physics step (sampled once per step), and the state the
+  // robot's low-level loop sees: the estimate, or the truth when sensing is off.
+  void sense();
+  const Eigen::VectorXd& qSensed() const { return sensing_.enabled() ? sensing_.q() : sim_.q(); }
+  const Eigen::VectorXd& vSensed() const { return sensing_.enabled() ? sensing_.v() : sim_.v(); }
+
   const Robot& robot_;
   SimNodeOptions options_;
+  Robot plant_;  // what the physics integrates (options_.plant); robot_ is what the loop knows
   Simulator sim_;
   Publisher& out_;
   PolicyEvaluator evaluator_;
@@ -146,7 +162,9 @@ class SimNode {
   StandDown stand_down_;
   bool standing_down_ = false;
   TerrainMapper mapper_;
-  StateNoise noise_;
+  Sensing sensing_;
+  std::int64_t sensed_at_ = -1;  // the step the estimate was sampled at
+  Actuators actuators_;
   StateDelay delay_;
   MessageDropper dropper_;
   int steps_per_state_;
@@ -167,7 +185,7 @@ class SimNode {
   lcm::LCM* bus_ = nullptr;
   lcm::Subscription* subscription_ = nullptr;
   std::vector<unsigned char> buffer_;
-  Eigen::VectorXd q_pub_, v_pub_, tau_;
+  Eigen::VectorXd q_pub_, v_pub_, tau_cmd_, tau_;
   SimNodeStats stats_;
 };
 

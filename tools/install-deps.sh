@@ -23,6 +23,7 @@ packages=(
   socat                    # demo.sh --viz: the viewer's port from the demo's namespace to the host
   curl                     # tests: the viewer through demo.sh --viz's forward
   python3-matplotlib       # tools/paper: the experiments' plots
+  parallel                 # tools/robustness.sh --jobs: GNU parallel runs the card's cases
   nodejs npm               # viz/web: npm ci (the lock file's packages) and esbuild build stride-viz's page
   chromium                 # viz/web/test: the page's browser test, headless
 )

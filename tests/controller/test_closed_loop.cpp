@@ -86,9 +86,9 @@ TEST(ClosedLoop, QuadrupedTrotsWithNoiseDelayAndDrops) {
   script[1].gait = "trot";
   script[1].vx = 0.2;
   sim::SimNodeOptions o;
-  o.noise_q = 0.002;  // rad
-  o.noise_v = 0.02;   // rad/s, m/s
-  o.delay = 1;        // one controller period late
+  o.sensing.encoder_noise = 0.002;  // rad
+  o.sensing.joint_velocity_noise = o.sensing.base_velocity_noise = o.sensing.gyro_noise = 0.02;
+  o.delay = 1;  // one controller period late
   o.drop = 0.1;
   o.seed = 7;
   const drive::Run r = run(config, o, 4.0, script);

@@ -253,31 +253,6 @@ TEST(Policy, StandDownHoldsPlantedFeetAtTheDefaultDepthAndBringsTheOthersUnderTh
 }
 
 // ---------------------------------------------------------------------------------------------
-TEST(Disturbances, StateNoiseIsSeededAndLeavesTheBasePose) {
-  const Model& model = robot("stride_quad").model;
-  const Eigen::VectorXd q0 = robot("stride_quad").default_q, v0 = Eigen::VectorXd::Zero(18);
-  sim::StateNoise a(0.01, 0.1, 42), b(0.01, 0.1, 42), c(0.01, 0.1, 43);
-  Eigen::VectorXd qa = q0, va = v0, qb = q0, vb = v0, qc = q0, vc = v0;
-  a.apply(model, qa, va);
-  b.apply(model, qb, vb);
-  c.apply(model, qc, vc);
-  EXPECT_EQ(qa, qb);
-  EXPECT_EQ(va, vb);
-  EXPECT_NE(qa, qc);
-  EXPECT_EQ(qa.head(7), q0.head(7));
-  // Sample statistics over many draws.
-  double sum = 0, sum2 = 0;
-  const int n = 2000;
-  for (int i = 0; i < n; ++i) {
-    Eigen::VectorXd q = q0, v = v0;
-    a.apply(model, q, v);
-    sum += v.sum();
-    sum2 += v.squaredNorm();
-  }
-  EXPECT_NEAR(sum / (n * 18), 0.0, 0.005);
-  EXPECT_NEAR(std::sqrt(sum2 / (n * 18)), 0.1, 0.005);
-}
-
 TEST(Disturbances, DelayReturnsTheStateOfNPushesAgo) {
   sim::StateDelay delay(2, 1, 3);
   double t;

@@ -10,7 +10,9 @@
 #include <cmath>
 #include <random>
 
+#include "sim/actuators.hpp"
 #include "sim/disturbances.hpp"
+#include "sim/sensing.hpp"
 #include "sim_cases.hpp"
 #include "solver/multibody/lie_group.hpp"
 
@@ -76,7 +78,24 @@ TEST(SimNoAllocation, PolicyAndDisturbances) {
   std::vector<sim::StandDownContact> contacts;
   for (const ContactSpec& c : r.contacts) contacts.push_back({model.getFrameId(c.frame), c.dim});
   sim::StandDown down(model, hold, contacts, sim::StandDownOptions{});
-  sim::StateNoise noise(0.01, 0.1, 3);
+  sim::SensingOptions so;
+  so.encoder_resolution = 1e-4;
+  so.encoder_noise = so.joint_velocity_noise = so.orientation_noise = so.gyro_noise = 0.01;
+  so.gyro_bias_walk = so.base_position_noise = so.base_velocity_noise = so.base_drift = 0.01;
+  so.joint_velocity_filter = 100.0;
+  so.latency = 3;
+  so.sample_drop = 0.2;
+  sim::Sensing sensing(model, so, 1e-3, 3);
+  sensing.reset(r.default_q, Eigen::VectorXd::Zero(model.nv));
+  sim::ActuatorOptions ao;
+  ao.latency = 2;
+  ao.bandwidth = 100.0;
+  ao.torque_scale = 0.9;
+  ao.velocity_limits = true;
+  ao.friction = 0.1;
+  ao.damping = 0.01;
+  sim::Actuators actuators(model, r.default_q, ao, 1e-3);
+  Eigen::VectorXd tau_out(12);
   sim::StateDelay delay(model.nq, model.nv, 4);
   sim::MessageDropper dropper(0.3, 4);
   sim::PushSchedule pushes;
@@ -90,7 +109,10 @@ TEST(SimNoAllocation, PolicyAndDisturbances) {
       eval.evaluate(p, t, q, v, tau);
       if (i == 40) down.begin(t, q, tau);
       if (i >= 40) down.torque(t, q, v, i < 60 ? 0b0110u : 0b1111u, tau);
-      noise.apply(model, q, v);
+      sensing.sample(q, v);
+      sink += sensing.q().sum() + sensing.v().sum();
+      actuators.apply(tau, v, tau_out);
+      sink += tau_out.sum();
       delay.push(t, q, v);
       if (delay.delayed(td, qd, vd)) sink += td;
       sink += dropper.drop();

@@ -161,5 +161,104 @@ TEST(SimNode, APolicyPastItsEndOnArrivalIsSaidSo) {
   EXPECT_EQ(why.find("whole run"), std::string::npos) << why;
 }
 
+// A 0.4 s policy holding the default posture with a joint PD in its gains (K's joint columns), no
+// feed-forward: the robot sags on it, differently for each state it feeds back.
+policy_t gainPolicy(const Robot& robot) {
+  const int nq = robot.model.nq, nv = robot.model.nv, nu = nv - 6;
+  policy_t p;
+  msg::shape(p, 40, nq, nv, nu);
+  p.model_hash = modelHash(robot);
+  p.source_id = 1;
+  p.utime = p.knot0_utime = 1000000;
+  p.dt = 0.01;
+  p.status = 0;
+  for (int k = 0; k < 40; ++k) {
+    for (int i = 0; i < nq; ++i) p.x_ref[k][i] = robot.default_q[i];
+    for (int i = 0; i < nu; ++i) {
+      p.K[k][i * 2 * nv + 6 + i] = 3.0;        // position
+      p.K[k][i * 2 * nv + nv + 6 + i] = 0.05;  // velocity
+    }
+  }
+  return p;
+}
+
+// The policy above as the evaluator reads it.
+sim::Policy asPolicy(const policy_t& m, const Robot& robot) {
+  sim::Policy p;
+  p.resize(m.knots, robot.model.nq, robot.model.nv, robot.model.nv - 6);
+  p.t0 = 0.0;
+  p.dt = m.dt;
+  for (int k = 0; k < m.knots; ++k) {
+    std::copy(m.x_ref[k].begin(), m.x_ref[k].end(), p.xRef(k));
+    std::copy(m.u_ff[k].begin(), m.u_ff[k].end(), p.uFf(k));
+    std::copy(m.K[k].begin(), m.K[k].end(), p.gain(k));
+  }
+  return p;
+}
+
+// The robot's loop applies the feedback to what it senses. Noise-free (the default), that is the
+// truth, bit for bit as a loop that reads the simulator's state; with 5 steps of sensing latency,
+// bit for bit a loop that reads the state of 5 steps ago.
+TEST(SimNode, NoiseFreeSensingIsTheTruthAndLatencyFeedsBackTheOldState) {
+  const Robot& robot = sim_test::robot("stride_quad");
+  const policy_t message = gainPolicy(robot);
+  const sim::Policy policy = asPolicy(message, robot);
+  for (int latency : {0, 5}) {
+    Sink out;
+    sim::SimNodeOptions o;
+    o.sensing.latency = latency;
+    sim::SimNode node(robot, sim::SimOptions{}, o, out);
+    node.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
+    std::vector<unsigned char> b = encode(message);
+    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
+    node.onPolicy(&rbuf, "STRIDE_POLICY");
+    ASSERT_TRUE(node.advance(200));
+    EXPECT_EQ(node.stats().policy_steps, 200);
+
+    sim::Simulator sim(robot, sim::SimOptions{});
+    sim.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
+    sim::PolicyEvaluator evaluator(robot.model, 12);
+    std::vector<Eigen::VectorXd> qs{sim.q()}, vs{sim.v()};
+    Eigen::VectorXd tau(12);
+    for (int k = 0; k < 200; ++k) {
+      const int seen = std::max(0, k - latency);
+      evaluator.evaluate(policy, sim.time(), qs[seen], vs[seen], tau);
+      sim.step(tau);
+      qs.push_back(sim.q());
+      vs.push_back(sim.v());
+    }
+    EXPECT_EQ(node.simulator().q(), sim.q()) << "latency " << latency;
+    EXPECT_EQ(node.simulator().v(), sim.v()) << "latency " << latency;
+    // The estimate published now is the state of `latency` steps ago, stamped with its time.
+    const std::int64_t stamp = node.publishState();
+    EXPECT_EQ(stamp, 1000000 + 1000 * (200 - latency));
+    for (int i = 0; i < robot.model.nq; ++i) EXPECT_EQ(out.state.q[i], qs[200 - latency][i]);
+  }
+}
+
+// The model mismatch moves the robot, not the wire: the states still carry the nominal model's
+// hash (the controller plans with the robot it knows), and a heavier robot sags more.
+TEST(SimNode, AHeavierRobotIsTheSameRobotOnTheWire) {
+  const Robot& robot = sim_test::robot("stride_quad");
+  const policy_t message = gainPolicy(robot);
+  double z[2];
+  for (int heavy : {0, 1}) {
+    Sink out;
+    sim::SimNodeOptions o;
+    if (heavy) o.plant.payload = 1.0;
+    sim::SimNode node(robot, sim::SimOptions{}, o, out);
+    EXPECT_NEAR(node.simulator().model().totalMass(), robot.model.totalMass() + heavy, 1e-12);
+    node.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
+    std::vector<unsigned char> b = encode(message);
+    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
+    node.onPolicy(&rbuf, "STRIDE_POLICY");
+    ASSERT_TRUE(node.advance(100));
+    node.publishState();
+    EXPECT_EQ(out.state.model_hash, modelHash(robot));
+    z[heavy] = node.simulator().q()[2];
+  }
+  EXPECT_LT(z[1], z[0] - 1e-3);
+}
+
 }  // namespace
 }  // namespace stride

@@ -59,7 +59,7 @@ Run run(const ControllerConfig& config, const Options& options) {
   std::unique_ptr<sim::SimNode> sim;
   auto startSim = [&](std::int64_t utime_base) {
     o.utime_base = utime_base;
-    sim::SimOptions physics;
+    sim::SimOptions physics = options.physics;
     physics.terrain = options.terrain;
     sim = std::make_unique<sim::SimNode>(robot, physics, o, publisher);
     sim->subscribe(lcm);

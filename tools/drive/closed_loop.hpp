@@ -37,7 +37,8 @@ struct Sample {
 };
 
 struct Options {
-  sim::SimNodeOptions sim;  // pushes, noise, delay, drops (the state rate is the config's)
+  sim::SimNodeOptions sim;  // pushes, sensing, actuators, mismatch (the state rate: the config's)
+  sim::SimOptions physics;  // the mock robot's physics (--mu); its terrain is `terrain` below
   double duration = 10.0;   // [s] of robot time
   std::vector<ScriptedCommand> script;  // empty: no command (the robot stands)
   // Commands stop at this time [s] (a teleop that went silent: the deadman's case).

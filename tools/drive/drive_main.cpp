@@ -4,8 +4,8 @@
 //   stride-drive --config config/controller/solo12.yaml --commands config/commands/solo12.yaml
 //                [--robots-dir DIR] [--duration S] [--push START:DURATION:FX,FY,FZ]...
 //                [--log FILE] [--summary FILE.json] [--trace FILE.csv] [--settle S]
-//                [--check-tracking] [--noise-q S] [--noise-v S] [--delay N] [--drop P]
-//                [--seed N]
+//                [--check-tracking] [the mock robot's sensing, actuators and model mismatch:
+//                sim/command_line.hpp, the same options as stride-sim's]
 //                [--lose-controller AT [--controller-back-after S]] [--stand-down-grace S]
 //                [--stand-down-ramp S]
 // Exit status: 0; 1 with --check-tracking when a segment missed its command or the robot fell;
@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "config/command_line.hpp"
+#include "sim/command_line.hpp"
 #include "terrain/terrain_file.hpp"
 #include "tools/drive/closed_loop.hpp"
 
@@ -96,16 +97,12 @@ int main(int argc, char** argv) {
                  "kill the controller at this time [s] (the robot's fallback takes over)");
   app.add_option("--controller-back-after", options.controller_back_after,
                  "start a new controller this long after the kill [s] (1)");
-  app.add_option("--noise-q", options.sim.noise_q,
-                 "state estimates: joint position noise, standard deviation [rad] (the base's "
-                 "pose is exact)");
-  app.add_option("--noise-v", options.sim.noise_v,
-                 "state estimates: velocity noise, every component of v (base and joints), "
-                 "standard deviation [rad/s, m/s]");
-  app.add_option("--delay", options.sim.delay,
-                 "state estimates: published this many publications late (a latency in lock-step)");
-  app.add_option("--drop", options.sim.drop, "state estimates: the probability of dropping one");
-  app.add_option("--seed", options.sim.seed, "the noise's and the drops' random seed (1)");
+  stride::sim::MockRobotArgs mock_args;
+  stride::sim::addMockRobotOptions(app, options.sim, options.physics, mock_args);
+  double controller_mu = 0.0;
+  app.add_option("--controller-mu", controller_mu,
+                 "the friction coefficient the controller plans with (default: its YAML's "
+                 "contacts.mu); with --mu, a controller told the ground's friction");
   app.add_option("--stand-down-grace", options.sim.stand_down.grace,
                  "past a policy's end this long [s], the robot stands down (sim/README.md, "
                  "\"Controller loss\")");
@@ -130,8 +127,10 @@ int main(int argc, char** argv) {
                "0.05 m/s, 0.1 rad/s), or the robot fell");
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
+  if (!stride::sim::finishMockRobotOptions(mock_args, options.sim, "stride-drive")) return 2;
   try {
     stride::ControllerConfig config = stride::loadControllerConfig(config_path);
+    if (controller_mu > 0.0) config.locomotion.mu = controller_mu;
     config.robots_dirs = robots_dirs;
     options.script = stride::loadCommandScript(script_path);
     if (!terrain_name.empty())
@@ -185,6 +184,9 @@ int main(int argc, char** argv) {
         config_path.c_str(), run.samples.empty() ? 0.0 : run.samples.back().t, options.duration,
         run.sim.diverged ? "DIVERGED (the simulation)" : (run.fell() ? "FELL" : "no fall"),
         static_cast<long long>(run.mpc.fallbacks), static_cast<long long>(run.mpc.failed_solves));
+    if (const std::string differs = stride::sim::describeMockRobot(options.sim, options.physics);
+        !differs.empty())
+      std::printf("  the robot differs from a perfect one: %s\n", differs.c_str());
     if (run.q_end.size() >= 7) {
       std::printf(
           "  terrain '%s': final base (%.3f, %.3f, %.3f) m, %.3f m above the terrain under it, "
