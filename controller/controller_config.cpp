@@ -149,8 +149,17 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   if (lo.knots < 2 || lo.knots > 1000) r.fail("horizon.knots", "must be in [2, 1000]");
   r.positive(lo.dt, "horizon.dt");
   if (c.policy_knots > lo.knots) r.fail("policy_knots", "exceeds horizon.knots");
-  if ((c.policy_knots - 1) * lo.dt < 1.0 / c.rate_hz)
-    r.fail("policy_knots", "the policy must cover at least one tick period");
+  // A policy lasts until the next one arrives; when states or answers are lost, until a later one
+  // does. Past its end the robot stands down, and a walking robot stood down falls: the policy must
+  // bridge kMinPolicyPeriods - 1 lost answers in a row (with 20 % of the states lost, 5 in a row
+  // happen once in 3000 ticks; a 60 ms policy at 50 Hz fell to 3 in a row: controller/README.md,
+  // "Robustness").
+  if ((c.policy_knots - 1) * lo.dt < kMinPolicyPeriods / c.rate_hz - 1e-9)
+    r.fail("policy_knots",
+           "the policy must cover at least " + std::to_string(kMinPolicyPeriods) +
+               " tick periods (" + std::to_string(kMinPolicyPeriods / c.rate_hz) +
+               " s), so that the robot rides out lost states and answers; it covers " +
+               std::to_string((c.policy_knots - 1) * lo.dt) + " s");
 
   const YAML::Node solver = root["solver"];
   r.onlyKeys(solver, "solver",
@@ -186,15 +195,19 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
 
   const YAML::Node contacts = root["contacts"];
   r.onlyKeys(contacts, "contacts",
-             {"mu", "min_normal_force", "swing_height", "impulses", "torque_limits"});
+             {"mu", "min_normal_force", "swing_height", "impulses", "torque_limits",
+              "torque_limit_fraction"});
   if (contacts) {
     r.get(contacts, "mu", "contacts", lo.mu);
     r.get(contacts, "min_normal_force", "contacts", lo.min_normal_force);
     r.get(contacts, "swing_height", "contacts", c.generator.swing_height);
     r.get(contacts, "impulses", "contacts", lo.impulses);
     r.get(contacts, "torque_limits", "contacts", lo.torque_limits);
+    r.get(contacts, "torque_limit_fraction", "contacts", lo.torque_limit_fraction);
   }
   r.positive(lo.mu, "contacts.mu");
+  if (!(lo.torque_limit_fraction > 0.0 && lo.torque_limit_fraction <= 1.0))
+    r.fail("contacts.torque_limit_fraction", "must be in (0, 1]");
   r.nonNegative(lo.min_normal_force, "contacts.min_normal_force");
   r.nonNegative(c.generator.swing_height, "contacts.swing_height");
   if (c.solver == SolverKind::BoxFddp) lo.torque_limits = true;

@@ -38,6 +38,10 @@ struct TerrainConfig {
   int max_cells = 256 * 256;
 };
 
+// The shortest policy, in tick periods: it must bridge kMinPolicyPeriods - 1 lost answers in a row
+// (controller_config.cpp, controller/README.md "Robustness").
+inline constexpr int kMinPolicyPeriods = 6;
+
 struct ControllerConfig {
   std::string path;        // the YAML it came from
   std::string robot_yaml;  // resolved against the YAML's folder
@@ -45,7 +49,7 @@ struct ControllerConfig {
   // ROS_PACKAGE_PATH (config/package_path.hpp).
   std::vector<std::string> robots_dirs;
   double rate_hz = 100.0;
-  int policy_knots = 8;  // knots sent in each policy message
+  int policy_knots = 8;  // knots sent in each policy message (covering kMinPolicyPeriods)
   LocomotionOptions locomotion;
   GaitGeneratorOptions generator;  // horizon, accelerations and height rate follow the rest
   GaitConfig gait;

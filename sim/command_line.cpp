@@ -39,6 +39,14 @@ void addMockRobotOptions(CLI::App& app, SimNodeOptions& node, SimOptions& physic
   app.add_option("--base-velocity-noise", s.base_velocity_noise,
                  "base linear velocity estimate's noise, std [m/s]")
       ->group(sensing);
+  app.add_option("--velocity-estimator", s.velocity_estimator,
+                 "base linear velocity from a complementary filter of the legs' odometry (its "
+                 "noise: --base-velocity-noise) and the accelerometer, crossover [Hz] (0: the "
+                 "legs' velocity as is)")
+      ->group(sensing);
+  app.add_option("--accel-noise", s.accel_noise,
+                 "the velocity estimator's accelerometer noise, std [m/s^2]")
+      ->group(sensing);
   app.add_option("--base-drift", s.base_drift,
                  "base position estimate's drift on x and y, random walk [m/sqrt(s)]")
       ->group(sensing);

@@ -42,6 +42,11 @@ Robot plantOf(const Robot& robot, const PlantOptions& options) {
         model.inertias[j] = scaled(model.inertias[j], factor);
       continue;
     }
+    // "base": the free-flyer's body, whatever its link is called.
+    if (body == "base" && !model.existFrame(body) && model.hasFreeFlyer()) {
+      model.inertias[1] = scaled(model.inertias[1], factor);
+      continue;
+    }
     if (!model.existFrame(body))
       throw std::invalid_argument("--mass-scale: the robot '" + robot.name + "' has no body '" +
                                   body + "'");

@@ -14,7 +14,8 @@ namespace stride::sim {
 
 struct PlantOptions {
   // (body, factor): the mass and inertia of the joint that carries the body (a link name; the
-  // links fixed to it scale with it) times the factor; an empty body: every moving body.
+  // links fixed to it scale with it) times the factor; "base": the free-flyer's body; an empty
+  // body: every moving body.
   std::vector<std::pair<std::string, double>> mass_scale;
   // A point mass rigidly on the base (fixed-base robots: on the last joint), at this offset from
   // its frame's origin, in its axes [kg, m].

@@ -11,7 +11,8 @@ bool SensingOptions::enabled() const {
   return encoder_resolution > 0.0 || encoder_noise > 0.0 || joint_velocity_noise > 0.0 ||
          joint_velocity_filter > 0.0 || orientation_noise > 0.0 || gyro_noise > 0.0 ||
          gyro_bias_walk > 0.0 || base_position_noise > 0.0 || base_velocity_noise > 0.0 ||
-         base_drift > 0.0 || latency > 0 || sample_drop > 0.0;
+         base_drift > 0.0 || velocity_estimator > 0.0 || accel_noise > 0.0 || latency > 0 ||
+         sample_drop > 0.0;
 }
 
 void SensingOptions::check() const {
@@ -42,6 +43,9 @@ Sensing::Sensing(const Model& model, const SensingOptions& options, double dt, s
   alpha_ = options.joint_velocity_filter > 0.0
                ? 1.0 - std::exp(-2.0 * M_PI * options.joint_velocity_filter * dt)
                : 1.0;
+  kappa_ = options.velocity_estimator > 0.0
+               ? 1.0 - std::exp(-2.0 * M_PI * options.velocity_estimator * dt)
+               : 1.0;
   q_hist_.setZero(model.nq, options.latency + 1);
   v_hist_.setZero(model.nv, options.latency + 1);
   q_hat_.setZero(model.nq);
@@ -59,6 +63,7 @@ void Sensing::reset(const Eigen::Ref<const Eigen::VectorXd>& q,
   drift_.setZero();
   yaw_ = 0.0;
   have_prev_ = false;
+  have_base_ = false;
   gap_ = 1;
   q_hat_ = q;
   v_hat_ = v;
@@ -89,6 +94,7 @@ void Sensing::sample(const Eigen::Ref<const Eigen::VectorXd>& q,
 void Sensing::sense(const Eigen::Ref<const Eigen::VectorXd>& q,
                     const Eigen::Ref<const Eigen::VectorXd>& v) {
   const SensingOptions& o = options_;
+  const int gap = gap_;  // steps since the last sample that arrived
   // Encoders, then the joint velocities.
   const int nj = model_.nq - first_q_;
   for (int j = 0; j < nj; ++j) {
@@ -131,11 +137,33 @@ void Sensing::sense(const Eigen::Ref<const Eigen::VectorXd>& q,
   q_hat_[4] = R.y();
   q_hat_[5] = R.z();
   q_hat_[6] = R.w();
+  Eigen::Vector3d lin = v.head<3>();
+  if (o.velocity_estimator > 0.0) {
+    // The complementary filter, in world axes (sensing.hpp).
+    const Eigen::Quaterniond R_true(q[6], q[3], q[4], q[5]);
+    const Eigen::Vector3d v_world = R_true * lin;
+    if (!have_base_) {
+      v_world_ = v_world;
+    } else {
+      Eigen::Vector3d accel = (v_world - v_world_prev_) / (gap * dt_);
+      if (o.accel_noise > 0.0)
+        for (int i = 0; i < 3; ++i) accel[i] += o.accel_noise * normal();
+      v_world_ += gap * dt_ * accel;
+      Eigen::Vector3d legs = v_world;
+      if (o.base_velocity_noise > 0.0)
+        for (int i = 0; i < 3; ++i) legs[i] += o.base_velocity_noise * normal();
+      v_world_ += kappa_ * (legs - v_world_);
+    }
+    v_world_prev_ = v_world;
+    lin = R.conjugate() * v_world_;
+  } else if (o.base_velocity_noise > 0.0) {
+    for (int i = 0; i < 3; ++i) lin[i] += o.base_velocity_noise * normal();
+  }
+  have_base_ = true;
   for (int i = 0; i < 3; ++i) {
-    double lin = v[i], ang = v[3 + i] + bias_[i];
-    if (o.base_velocity_noise > 0.0) lin += o.base_velocity_noise * normal();
+    double ang = v[3 + i] + bias_[i];
     if (o.gyro_noise > 0.0) ang += o.gyro_noise * normal();
-    v_hat_[i] = lin;
+    v_hat_[i] = lin[i];
     v_hat_[3 + i] = ang;
   }
 }

@@ -17,7 +17,12 @@
 //   integral of the bias's z, a yaw drift;
 // - base position: p + d + N(0, base_position_noise²), d a random walk on x and y of
 //   base_drift [m/√s] (leg odometry: x, y and yaw are unobservable); base linear velocity:
-//   v + N(0, base_velocity_noise²) (base frame, like v).
+//   v + N(0, base_velocity_noise²) (base frame, like v). With velocity_estimator f > 0 that noisy
+//   velocity is the legs' odometry, and the estimate is what a complementary filter makes of it
+//   and of the IMU's accelerometer (the true acceleration plus N(0, accel_noise²)): in world axes
+//   v̂ ← v̂ + dt a; v̂ ← v̂ + κ (v_legs − v̂), κ = 1 − exp(−2π f dt), turned into the base frame by
+//   the estimated orientation. The legs' noise is filtered above f, the accelerometer's integrated
+//   below it (what a leg-odometry + IMU estimator does).
 // A dropped sample (sample_drop) leaves the previous estimate in place.
 // All seeded; allocates nothing after construction. Disabled (every option 0): the estimate IS
 // the true state, and no random number is drawn (bit-identical to a robot without this model).
@@ -40,6 +45,8 @@ struct SensingOptions {
   double base_position_noise = 0.0;    // std [m]
   double base_velocity_noise = 0.0;    // std [m/s]
   double base_drift = 0.0;             // [m/√s] on x and y
+  double velocity_estimator = 0.0;     // [Hz] the filter's crossover; 0: the legs' velocity as is
+  double accel_noise = 0.0;            // std [m/s²] (the estimator's accelerometer)
   int latency = 0;                     // [physics steps]
   double sample_drop = 0.0;            // probability that a sample is lost
 
@@ -83,10 +90,14 @@ class Sensing {
   Eigen::MatrixXd q_hist_, v_hist_;  // a ring of latency + 1 true states
   int head_ = 0;
   Eigen::VectorXd q_hat_, v_hat_, enc_prev_, filtered_;  // filtered_: the low-pass's state
-  bool have_prev_ = false;
+  bool have_prev_ = false, have_base_ = false;
   int gap_ = 1;  // steps since the last sample that arrived
   Eigen::Vector3d bias_ = Eigen::Vector3d::Zero();
   Eigen::Vector2d drift_ = Eigen::Vector2d::Zero();
+  // The velocity estimator: its world-frame estimate, the true world velocity it last saw, and
+  // its gain per step.
+  Eigen::Vector3d v_world_ = Eigen::Vector3d::Zero(), v_world_prev_ = Eigen::Vector3d::Zero();
+  double kappa_ = 1.0;
   double yaw_ = 0.0;
   std::int64_t dropped_ = 0;
   std::mt19937_64 rng_;

@@ -175,7 +175,7 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   u_lower_ = Eigen::VectorXd::Constant(nu, -inf);
   u_upper_ = Eigen::VectorXd::Constant(nu, inf);
   if (options.torque_limits) {
-    u_upper_ = model.effortLimit.tail(nu);
+    u_upper_ = options.torque_limit_fraction * model.effortLimit.tail(nu);
     u_lower_ = -u_upper_;
   }
   x_ref_ = x_nominal_;

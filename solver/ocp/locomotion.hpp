@@ -89,6 +89,9 @@ struct LocomotionOptions {
   // frame (half extents along its x and y; zero: no such term). Use the sole's, shrunk by a margin.
   Eigen::Vector2d sole_half_extents = Eigen::Vector2d::Zero();
   bool torque_limits = false;  // controlLower/Upper from the model's effort limits (else ±inf)
+  // The plan's share of those limits: the rest is left to the feedback and to what the model does
+  // not know (a heavier robot, weaker motors; controller/README.md, "Robustness").
+  double torque_limit_fraction = 1.0;
 };
 
 class LocomotionProblem {

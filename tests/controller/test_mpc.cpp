@@ -262,9 +262,14 @@ TEST(Mpc, HorizonCarriesTheChosenFootholds) {
   ASSERT_GT(h.nfootholds, 0);
   EXPECT_GT(h.foothold[0][0], mpc.reference()->stance(0, 0).p.x());
 
-  // A message shaped for fewer footholds gets the first ones, and says how many.
+  // A message shaped for fewer footholds gets the first ones, and says how many (after a tick
+  // whose last step was accepted: a rejected one writes nothing, as above).
   horizon_t small;
   msg::shape(small, mpc.horizonKnots(), nq, nc, 3);
+  for (int i = 0; i < 20 && !mpc.writeHorizon(h); ++i) {
+    s.utime += 5000;
+    ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+  }
   ASSERT_TRUE(mpc.writeHorizon(small));
   ASSERT_EQ(small.nfootholds, 3);
   for (int k = 0; k < 3; ++k) {

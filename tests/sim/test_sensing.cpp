@@ -215,6 +215,33 @@ TEST(Sensing, BasePositionVelocityNoiseAndDriftOnXYOnly) {
   EXPECT_NEAR(stddev(ex), 0.01, 0.001);
 }
 
+TEST(Sensing, TheVelocityEstimatorFiltersTheLegsNoiseAndFollowsTheAccelerometer) {
+  const Robot& r = quad();
+  const double dt = 1e-3, kappa = 1.0 - std::exp(-2.0 * M_PI * 5.0 * dt);
+  auto run = [&](double legs, double accel, double a_true) {
+    sim::SensingOptions o;
+    o.base_velocity_noise = legs;
+    o.accel_noise = accel;
+    o.velocity_estimator = 5.0;
+    sim::Sensing s(r.model, o, dt, 4);
+    Eigen::VectorXd q = r.default_q, v = Eigen::VectorXd::Zero(18);
+    s.reset(q, v);
+    std::vector<double> error;
+    for (int k = 0; k < 20000; ++k) {
+      v[0] = a_true * k * dt;  // a level base: base and world axes agree
+      s.sample(q, v);
+      error.push_back(s.v()[0] - v[0]);
+    }
+    return error;
+  };
+  // The legs' white noise, low-passed: σ √(κ / (2 − κ)), an eighth of it at 5 Hz.
+  EXPECT_NEAR(stddev(run(0.05, 0.0, 0.0)), 0.05 * std::sqrt(kappa / (2.0 - kappa)), 0.0006);
+  // The accelerometer's, integrated and leaked: about dt σ / √(2κ).
+  EXPECT_NEAR(stddev(run(0.0, 0.05, 0.0)), dt * 0.05 / std::sqrt(2.0 * kappa), 3e-5);
+  // Noise-free, an accelerating base is followed exactly (the accelerometer sees the ramp).
+  for (double e : run(0.0, 0.0, 1.0)) EXPECT_NEAR(e, 0.0, 1e-9);
+}
+
 TEST(Sensing, ADroppedSampleKeepsThePreviousEstimate) {
   sim::SensingOptions o;
   o.sample_drop = 0.3;

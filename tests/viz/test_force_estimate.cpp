@@ -310,7 +310,9 @@ TEST(ForceEstimate, MatchesTheMockRobotWhereTheFootIsHeld) {
   std::printf("  steps clamped by the robot: %ld; max |tau estimated - tau applied| %.3g N m\n",
               tr.clamped_steps, r.torque_error);
   // The torque is the robot's, clamping included (the policy evaluated alike: same time, state).
-  EXPECT_GT(tr.clamped_steps, 20) << "the drive saturates some joints: clamping is exercised";
+  // (15 steps since the plan keeps 20 % of the limits for the feedback: controller/README.md,
+  // "Robustness".)
+  EXPECT_GT(tr.clamped_steps, 10) << "the drive saturates some joints: clamping is exercised";
   EXPECT_LT(r.torque_error, 1e-9);
   // Standing still, the rigid estimate is the robot's force: no frame, sign or time error.
   EXPECT_GT(r.error[Standing].n, 3900);
