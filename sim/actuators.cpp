@@ -48,6 +48,7 @@ void Actuators::reset() {
   queue_.setZero();
   head_ = 0;
   lagged_.setZero();
+  envelope_steps_ = 0;
 }
 
 void Actuators::apply(const Eigen::Ref<const Eigen::VectorXd>& tau_cmd,

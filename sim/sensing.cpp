@@ -64,6 +64,7 @@ void Sensing::reset(const Eigen::Ref<const Eigen::VectorXd>& q,
   yaw_ = 0.0;
   have_prev_ = false;
   have_base_ = false;
+  dropped_ = 0;
   gap_ = 1;
   q_hat_ = q;
   v_hat_ = v;

@@ -311,6 +311,7 @@ bool SimNode::advance(int steps) {
       ++(have_policy_ ? stats_.hold_steps : stats_.waiting_steps);
     }
     actuators_.apply(tau_cmd_, sim_.v(), tau_);
+    stats_.envelope_steps = actuators_.envelopeSteps();
     const StepStatus step = sim_.step(tau_);
     ++stats_.steps;
     if (step == StepStatus::NonFiniteState || step == StepStatus::SingularMassMatrix) {

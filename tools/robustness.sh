@@ -19,6 +19,8 @@
 # Prints the table; exits 0 when every hardware row was tracked, 1 otherwise, 2 on bad arguments.
 # The cases are independent runs: tools/robustness.sh --list ROBOT prints the job list, one case
 # per line (row, level, stride-drive's options), and --case runs one line of it.
+# tools/robustness.sh --markdown CARD.json... prints cards written by --json side by side, each
+# cell the first level not tracked (controller/README.md's table).
 set -euo pipefail
 case "${1:-}" in -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;; esac
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -39,10 +41,10 @@ robot_yaml() {  # the controller YAML's robot:, relative to it
 # The job list: row<TAB>level<TAB>options. The hardware rows: what a robot's sensors and motors
 # give (issue 32): joint velocity noise 0.1 rad/s, joint position 0.005 rad, base orientation
 # 5 mrad, position 5 mm, velocity 0.05 m/s (the legs' odometry, through a 5 Hz complementary
-# filter with an accelerometer of 0.05 m/s²: sim/README.md, "Sensing"), gyro 0.02 rad/s, 3 ms sensing latency, 20 % of the
-# estimates dropped, ±20 % base mass (the trunk: batteries, computers, cabling; the legs' masses
-# come from CAD), a payload of 10 % of the mass 3 cm off the base's centre
-# (scaled by the robot's size), torque limits × 0.8, μ 0.4 known to the controller.
+# filter with an accelerometer of 0.05 m/s²: sim/README.md, "Sensing"), gyro 0.02 rad/s, 3 ms
+# sensing latency, 20 % of the estimates dropped, ±20 % base mass (the trunk: batteries,
+# computers, cabling; the legs' masses come from CAD), a payload of 10 % of the mass 3 cm off the
+# base's centre (scaled by the robot's size), torque limits × 0.8, μ 0.4 known to the controller.
 jobs_for() {
   local config=$1 mass size payload
   mass=$(robot_mass "$config")
@@ -52,7 +54,8 @@ jobs_for() {
   payload() { awk -v m="$mass" -v f="$1" -v s="$size" 'BEGIN { printf "%.3f %.4f 0 0", f * m, 0.03 * s }'; }
   local hw="--joint-velocity-noise 0.1 --noise-q 0.005 --orientation-noise 0.005 \
 --base-position-noise 0.005 --base-velocity-noise 0.05 --velocity-estimator 5 --accel-noise 0.05 \
---gyro-noise 0.02 --sensor-latency 3 --drop 0.2 --payload $(payload 0.1) --torque-limit-scale 0.8 --mu 0.4 --controller-mu 0.4"
+--gyro-noise 0.02 --sensor-latency 3 --drop 0.2 --payload $(payload 0.1) \
+--torque-limit-scale 0.8 --mu 0.4 --controller-mu 0.4"
   # A row: its name, its options with {} for the level, the levels.
   row() { local name=$1 fmt=$2; shift 2; for l in "$@"; do printf '%s\t%s\t%s\n' "$name" "$l" "${fmt//\{\}/$l}"; done; }
   row joint_velocity_noise "--joint-velocity-noise {}" 0.05 0.1 0.2 0.4
@@ -106,6 +109,36 @@ EOF
 
 if [ "${1:-}" = --case ]; then  # --case CONFIG COMMANDS OUT ROW LEVEL OPTIONS (one job)
   run_case "$2" "$3" "$5" "$6" "$7" "$4"
+  exit 0
+fi
+if [ "${1:-}" = --markdown ]; then  # --markdown CARD.json... : the cards side by side (README)
+  shift
+  python3 - "$@" <<'EOF'
+import json, sys
+cards = [json.load(open(p)) for p in sys.argv[1:]]
+robots = [c["robot"] for c in cards]
+rows = []
+for c in cards:
+    for r in c["card"]:
+        if r["row"] not in rows:
+            rows.append(r["row"])
+print("| disturbance | levels | " + " | ".join(robots) + " |")
+print("| --- | --- | " + " | ".join("---" for _ in robots) + " |")
+for name in rows:
+    levels, cells = None, []
+    for c in cards:
+        r = next((x for x in c["card"] if x["row"] == name), None)
+        if r is None:
+            cells.append("")
+            continue
+        levels = levels or ", ".join(x["level"] for x in r["levels"])
+        bad = [x for x in r["levels"] if x["result"] != "tracked"]
+        if name == "hardware":
+            cells.append("tracked" if not bad else ", ".join(f"{x['level']} {x['result']}" for x in bad))
+        else:
+            cells.append("all tracked" if not bad else f"{bad[0]['level']} ({bad[0]['result']})")
+    print(f"| {name} | {levels} | " + " | ".join(cells) + " |")
+EOF
   exit 0
 fi
 if [ "${1:-}" = --list ]; then
