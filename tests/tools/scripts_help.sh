@@ -8,7 +8,8 @@ root=$1
 fail=0
 for script in tools/demo.sh tools/test.sh tools/bench/run.sh tools/drive/sweep.sh \
               tools/paper/astronaut.sh tools/paper/large-stride.sh tools/viz.sh \
-              tools/viz-screenshot.sh tools/soak.sh tools/faults.sh tools/drive/terrains.sh; do
+              tools/viz-screenshot.sh tools/soak.sh tools/faults.sh tools/drive/terrains.sh \
+              tools/robustness.sh; do
   out=$(timeout 20 "$root/$script" --help 2>&1)
   status=$?
   if [ "$status" != 0 ] || [ "$(printf '%s\n' "$out" | head -n 1 | cut -c1)" != "#" ]; then
