@@ -19,7 +19,7 @@ void SensingOptions::check() const {
   const double values[] = {
       encoder_resolution,  encoder_noise, joint_velocity_noise, joint_velocity_filter,
       orientation_noise,   gyro_noise,    gyro_bias_walk,       base_position_noise,
-      base_velocity_noise, base_drift};
+      base_velocity_noise, base_drift,    velocity_estimator,   accel_noise};
   for (double x : values)
     if (!(x >= 0.0) || !std::isfinite(x))
       throw std::invalid_argument(

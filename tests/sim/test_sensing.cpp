@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <limits>
 
 #include "sim/actuators.hpp"
 #include "sim/plant.hpp"
@@ -275,6 +276,12 @@ TEST(Sensing, BadOptionsAreRefused) {
   EXPECT_THROW(o.check(), std::invalid_argument);
   o = {};
   o.gyro_noise = std::nan("");
+  EXPECT_THROW(o.check(), std::invalid_argument);
+  o = {};
+  o.accel_noise = -0.1;
+  EXPECT_THROW(o.check(), std::invalid_argument);
+  o = {};
+  o.velocity_estimator = std::numeric_limits<double>::infinity();
   EXPECT_THROW(o.check(), std::invalid_argument);
 }
 
