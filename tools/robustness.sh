@@ -180,9 +180,18 @@ if [ ${#only[@]} -gt 0 ]; then
 fi
 echo "robustness.sh: $robot, $(wc -l <"$list") cases, $jobs at a time${sshlogin:+ over ${sshlogin[1]}}" >&2
 results="$out/results.jsonl"
+# GNU parallel runs remote jobs through $SHELL: without it (a CI's bare environment) a
+# --sshloginfile run does nothing and exits 0.
+export SHELL="${SHELL:-/bin/bash}"
 # Each job: this script's --case on one line of the list (on a remote host: the same path).
 parallel --jobs "$jobs" "${sshlogin[@]}" --colsep '\t' --keep-order \
   "$root/tools/robustness.sh" --case "$config" "$commands" "$out" {1} {2} {3} <"$list" >"$results"
+# Never a card with cases silently missing.
+if [ "$(grep -c . "$results")" != "$(grep -c . "$list")" ]; then
+  echo "robustness.sh: $(grep -c . "$list") cases, $(grep -c . "$results") results: a host did not" \
+    "run its jobs (GNU parallel's --sshloginfile, ssh, this repository at the same path?)" >&2
+  exit 1
+fi
 python3 - "$robot" "$results" "$json" <<'EOF'
 import json, sys
 robot, path, out = sys.argv[1:]
