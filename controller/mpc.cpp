@@ -92,6 +92,13 @@ void Mpc::setPlan(const ContactPlan& plan, std::int64_t start_utime) {
   rebuild_ = true;
 }
 
+void Mpc::shiftClock(std::int64_t offset_us) {
+  plan_start_utime_ += offset_us;
+  if (steppability_.valid()) map_utime_ += offset_us;
+  previous_.utime += offset_us;
+  previous_.knot0_utime += offset_us;
+}
+
 bool Mpc::setTerrain(const terrain_t& m) {
   const long cells = static_cast<long>(m.rows) * m.cols;
   if (m.rows < 1 || m.cols < 1 || cells > config_.terrain.max_cells ||

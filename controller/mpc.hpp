@@ -100,6 +100,9 @@ class Mpc {
   // (the command still sets the velocity). Call between ticks; the next tick rebuilds the problem
   // and solves it to convergence, as at start-up (allocating then). Throws std::invalid_argument.
   void setPlan(const ContactPlan& plan, std::int64_t start_utime);
+  // The robot's clock moved by offset_us and stays there (MpcNode: a clock offset or a new
+  // robot): every time kept on that clock moves with it, so the plan time goes on where it was.
+  void shiftClock(std::int64_t offset_us);
   // The body command in force (the node's CommandFilter smooths it toward the one received), and
   // the gait asked for (an index into gaits()). Takes effect at the next tick's re-planning.
   void setCommand(const BodyCommand& command, int gait);

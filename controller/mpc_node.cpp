@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 
 #include "config/model_hash.hpp"
@@ -16,6 +17,11 @@ constexpr int kMaxPlanPhases = 100000;
 constexpr int kQueueCapacity = 1000;  // > 1 s of a 1 kHz estimator between two drains
 constexpr long kLatencyCapacity = 1L << 20;
 constexpr std::int64_t kMaxStampLeadUs = 1000000;  // stamps may run 1 s ahead of the arrivals
+// A stream refused on its stamps for this many states (and, in real time, this long) is the
+// robot's clock (MpcNode::onState).
+constexpr int kRebaseStates = 20;
+constexpr std::int64_t kRebaseUs = 200000;
+constexpr std::int64_t kMaxRebaseWarnings = 5;
 }  // namespace
 
 MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time)
@@ -162,23 +168,78 @@ void MpcNode::onState(const lcm::ReceiveBuffer* rbuf, const std::string& channel
       !msg::decode(rbuf->data, static_cast<int>(rbuf->data_size), incoming_))
     why = msg::Reject::Undecodable;
   if (why == msg::Reject::None) why = msg::checkState(incoming_, floating_);
-  if (why == msg::Reject::None && have_state_ && incoming_.utime <= newest_.utime)
-    why = msg::Reject::OutOfOrder;
-  // A stamp far ahead of the time that really passed (a corrupt stamp, a clock jump) would make
-  // every later estimate "out of order": refuse it instead of locking the controller out.
-  const std::int64_t now_us = time_ == TimeSource::RealTime ? monotonicMicros() : 0;
-  if (why == msg::Reject::None && have_state_ && time_ == TimeSource::RealTime &&
-      incoming_.utime - newest_.utime > (now_us - newest_arrival_us_) + kMaxStampLeadUs)
-    why = msg::Reject::BadField;
-  if (why != msg::Reject::None) {
+  if (why != msg::Reject::None) {  // not a state at all: says nothing about the robot's clock
     reject(why);
     return;
   }
+  const bool real_time = time_ == TimeSource::RealTime;
+  const std::int64_t arrival_us = real_time ? arrivalMicros(rbuf->recv_utime) : incoming_.utime;
+  // The stamp checks: newer than the newest state, and (real time) not far ahead of the time that
+  // really passed since it arrived, which a corrupt stamp or a clock jump would be.
+  std::int64_t lead_us = 0;
+  if (have_state_) {
+    lead_us = incoming_.utime - newest_.utime - (real_time ? arrival_us - newest_arrival_us_ : 0);
+    if (incoming_.utime <= newest_.utime)
+      why = msg::Reject::OutOfOrder;
+    else if (real_time && lead_us > kMaxStampLeadUs)
+      why = msg::Reject::BadField;
+  }
+  if (why != msg::Reject::None) {
+    // Refused on its stamp alone. A stream of them that goes on (stamps increasing among
+    // themselves, for kRebaseStates states and kRebaseUs) is the robot's clock, not a corrupt
+    // stamp: a clock offset or a new robot. Refusing it for good would lock the controller out
+    // (issue 33): its clock is taken instead, and every time kept on the old one moves with it.
+    if (streak_ > 0 && incoming_.utime > streak_utime_) {
+      ++streak_;
+    } else {
+      streak_ = 1;
+      streak_since_us_ = arrival_us;
+    }
+    streak_utime_ = incoming_.utime;
+    const bool persists =
+        streak_ >= kRebaseStates && (!real_time || arrival_us - streak_since_us_ >= kRebaseUs);
+    if (!persists) {
+      reject(why);
+      return;
+    }
+    rebaseClock(lead_us);
+  }
+  streak_ = 0;
   newest_ = incoming_;  // same shapes: element copies only
-  newest_arrival_us_ = time_ == TimeSource::RealTime ? now_us : newest_.utime;
+  newest_arrival_us_ = arrival_us;
   have_state_ = true;
   new_state_ = true;
   ++accepted_;
+}
+
+void MpcNode::rebaseClock(std::int64_t offset_us) {
+  const bool ahead = offset_us > 0;
+  std::int64_t& count = ahead ? rebases_ahead_ : rebases_back_;
+  ++count;
+  mpc_.shiftClock(offset_us);
+  next_tick_utime_ += offset_us;
+  if (count <= kMaxRebaseWarnings)
+    std::fprintf(stderr,
+                 "stride-mpc: warning: the robot's stamps %s %.3f s %s the time that passed and "
+                 "stayed there for %d states: %s; its clock taken from here on%s\n",
+                 ahead ? "jumped" : "went back", std::abs(offset_us) * 1e-6,
+                 ahead ? "ahead of" : "behind", streak_,
+                 ahead ? "a clock offset (its clock stepped, or its estimator restarted on "
+                         "another clock)"
+                       : "a new robot (a restarted robot or estimator, its clock started again)",
+                 count == kMaxRebaseWarnings ? " (the later ones are only counted)" : "");
+}
+
+std::int64_t MpcNode::arrivalMicros(std::int64_t recv_utime) {
+  // When LCM's receive thread got the message (recv_utime, wall clock), on CLOCK_MONOTONIC: not
+  // when this tick drained the queue. A backlog (a controller started while the robot ran, or
+  // stopped by the host) must not pass for fresh states, nor make the next fresh one look early.
+  const std::int64_t now = monotonicMicros();
+  if (recv_utime <= 0) return now;
+  timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  const std::int64_t wall = static_cast<std::int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
+  return now - std::clamp<std::int64_t>(wall - recv_utime, 0, 3600LL * 1000000);
 }
 
 void MpcNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {

@@ -89,6 +89,10 @@ class MpcNode {
   // Replaces the random source id (a replay: its output is then the same bits on every run).
   void setSourceId(std::int64_t id);
   std::int64_t rivalPolicies() const { return rival_policies_; }
+  // Times the robot's clock was taken after its stamps stayed ahead of the time that passed (a
+  // clock offset) or behind the newest state (a new robot): onState.
+  std::int64_t clockRebasesAhead() const { return rebases_ahead_; }
+  std::int64_t clockRebasesBack() const { return rebases_back_; }
   // States refused for another model, and the distinct causes (at most kMaxMismatches kept).
   struct ModelMismatch {
     msg::WireClaim claim;
@@ -105,7 +109,9 @@ class MpcNode {
   void noteWrongModel(const void* buf, int size, const std::string& channel);
   void publishModelIfDue();
   void publishHorizonIfDue();
+  void rebaseClock(std::int64_t offset_us);
   static std::int64_t monotonicMicros();
+  static std::int64_t arrivalMicros(std::int64_t recv_utime);
   double now() const;  // the controller's clock [s]: monotonic, or the newest state's stamp
 
   ControllerConfig config_;
@@ -116,6 +122,11 @@ class MpcNode {
   robot_state_t incoming_, newest_;
   bool have_state_ = false, new_state_ = false;
   std::int64_t newest_arrival_us_ = 0;  // real time: CLOCK_MONOTONIC at arrival
+  // The states refused on their stamps in a row (increasing among themselves): how many, since
+  // when (arrival), the newest stamp; and the rebases they led to.
+  int streak_ = 0;
+  std::int64_t streak_since_us_ = 0, streak_utime_ = 0;
+  std::int64_t rebases_ahead_ = 0, rebases_back_ = 0;
   std::int64_t next_tick_utime_ = 0;
   bool tick_grid_set_ = false;
   std::int64_t accepted_ = 0, rejected_total_ = 0, plan_updates_ = 0, policies_published_ = 0;

@@ -220,6 +220,13 @@ void writeSummary(const MpcNode& node, const std::string& path) {
   for (int i = 0; i < node.mismatchCount(); ++i)
     std::printf("stride-mpc: %lld states of another model: %s\n",
                 static_cast<long long>(node.mismatch(i).count), node.mismatch(i).text.data());
+  if (node.clockRebasesAhead() + node.clockRebasesBack() > 0)
+    std::printf(
+        "stride-mpc: the robot's clock taken anew %lld times (%lld a clock offset, %lld a new "
+        "robot)\n",
+        static_cast<long long>(node.clockRebasesAhead() + node.clockRebasesBack()),
+        static_cast<long long>(node.clockRebasesAhead()),
+        static_cast<long long>(node.clockRebasesBack()));
   if (node.rivalPolicies() > 0)
     std::printf("stride-mpc: %lld policies of another controller on '%s' (a robot follows one)\n",
                 static_cast<long long>(node.rivalPolicies()), node.config().policy_channel.c_str());
@@ -231,6 +238,10 @@ void writeSummary(const MpcNode& node, const std::string& path) {
   j["rejected_messages"] = node.rejected();
   j["wrong_model"] = node.wrongModel();        // of rejected_messages: another model's states
   j["rival_policies"] = node.rivalPolicies();  // another controller's, on this one's channel
+  // The robot's clock taken anew after its stamps stayed ahead (a clock offset) or went back (a
+  // new robot): MpcNode::onState.
+  j["clock_rebases"] = {{"offset", node.clockRebasesAhead()},
+                        {"new_robot", node.clockRebasesBack()}};
   j["tick_latency"] = timingJson(lat);
   j["deadline_misses"] = c.deadline_misses;
   j["late_ticks"] = c.late_ticks;

@@ -1,6 +1,10 @@
 // LCM messages: a memq round trip of every type, and the node's rejection of malformed input.
 #include <gtest/gtest.h>
 
+#include <time.h>
+#include <chrono>
+#include <thread>
+
 #include <algorithm>
 #include <cmath>
 #include <lcm/lcm-cpp.hpp>
@@ -263,6 +267,98 @@ TEST(NodeRealTime, StampJumpingAheadIsRejected) {
   EXPECT_EQ(node.rejected(msg::Reject::BadField), 1);
   feed(1002000);
   EXPECT_EQ(node.acceptedStates(), 3);
+}
+
+// Issue 33's lock-out, deterministic: a controller started (or woken) while the robot runs finds
+// a backlog in its queue. Taken at the time the tick drained it, the newest of the backlog looked
+// fresh, and the next fresh state then "led" the clock by the backlog's age: refused, and every
+// later one with it, for good. Arrival is when LCM received the message (recv_utime).
+TEST(NodeRealTime, ABacklogDoesNotLockTheControllerOut) {
+  const ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  Recorder out;
+  MpcNode node(config, out, TimeSource::RealTime);
+  timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  const std::int64_t wall = static_cast<std::int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
+  auto feed = [&](std::int64_t utime, std::int64_t recv_utime) {
+    robot_state_t m = standingState(node.mpc().robot(), utime);
+    std::vector<unsigned char> b(m.getEncodedSize());
+    m.encode(b.data(), 0, static_cast<int>(b.size()));
+    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), recv_utime};
+    node.onState(&rbuf, "STRIDE_STATE");
+  };
+  // 1000 states of a 1 kHz robot received 2.5 .. 1.5 s ago (the queue's capacity), the next
+  // 1.5 s dropped by the full queue, then the robot's fresh states.
+  const std::int64_t t0 = 5000000;
+  for (int i = 0; i < 1000; ++i) feed(t0 + 1000 * i, wall - 2500000 + 1000 * i);
+  for (int i = 0; i < 100; ++i) feed(t0 + 2500000 + 1000 * i, wall + 1000 * i);
+  EXPECT_EQ(node.rejected(), 0);
+  EXPECT_EQ(node.acceptedStates(), 1100);
+  EXPECT_EQ(node.clockRebasesAhead(), 0);
+}
+
+// A lead that persists is the robot's clock (a clock step; or no arrival time to tell a backlog
+// by): refused for 0.2 s and 20 states, then taken, said and counted, never refused for good.
+TEST(NodeRealTime, AStampLeadThatPersistsIsAClockOffset) {
+  const ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  Recorder out;
+  MpcNode node(config, out, TimeSource::RealTime);
+  auto feed = [&](std::int64_t utime) {
+    robot_state_t m = standingState(node.mpc().robot(), utime);
+    std::vector<unsigned char> b(m.getEncodedSize());
+    m.encode(b.data(), 0, static_cast<int>(b.size()));
+    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
+    node.onState(&rbuf, "STRIDE_STATE");
+  };
+  feed(1000000);
+  node.tick(Mpc::Clock::now() + std::chrono::seconds(10));
+  const double plan_time = node.mpc().status().plan_time;
+  // The robot's clock steps 30 s ahead; its states keep coming every 10 ms.
+  const auto start = std::chrono::steady_clock::now();
+  std::int64_t stamp = 31000000;
+  while (node.clockRebasesAhead() == 0 &&
+         std::chrono::steady_clock::now() - start < std::chrono::seconds(2)) {
+    feed(stamp += 10000);
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  const double waited =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(node.clockRebasesAhead(), 1);
+  EXPECT_GE(node.rejected(msg::Reject::BadField), 19);
+  EXPECT_GE(waited, 0.2);
+  EXPECT_LT(waited, 1.0);
+  EXPECT_EQ(node.acceptedStates(), 2);
+  for (int i = 0; i < 10; ++i) feed(stamp += 10000);
+  EXPECT_EQ(node.acceptedStates(), 12) << "the new clock's states are taken";
+  // The plan's time goes on from where it was, not 30 s later.
+  node.tick(Mpc::Clock::now() + std::chrono::seconds(10));
+  EXPECT_NEAR(node.mpc().status().plan_time, plan_time + waited + 0.1, 0.1);
+}
+
+// Lock-step: a new robot whose clock started again (stamps back to 0). Out of order for 20 states,
+// then taken as the new robot's clock; the ticks go on on its stamps.
+TEST(NodeStamps, StampsThatStartAgainAreANewRobot) {
+  const ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  Recorder out;
+  MpcNode node(config, out, TimeSource::Stamps);
+  auto feed = [&](std::int64_t utime) {
+    robot_state_t m = standingState(node.mpc().robot(), utime);
+    std::vector<unsigned char> b(m.getEncodedSize());
+    m.encode(b.data(), 0, static_cast<int>(b.size()));
+    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
+    node.onState(&rbuf, "STRIDE_STATE");
+    if (node.tickDue()) node.tick(Mpc::Clock::time_point::max());
+  };
+  for (std::int64_t t = 5000000; t <= 6000000; t += 5000) feed(t);
+  const int policies = out.policies;
+  for (std::int64_t t = 0; t < 19 * 5000; t += 5000) feed(t);
+  EXPECT_EQ(out.policies, policies) << "19 states are not yet a new robot";
+  EXPECT_EQ(node.clockRebasesBack(), 0);
+  for (std::int64_t t = 19 * 5000; t <= 200000; t += 5000) feed(t);
+  EXPECT_EQ(node.clockRebasesBack(), 1);
+  EXPECT_EQ(node.rejected(msg::Reject::OutOfOrder), 19);
+  EXPECT_GE(out.policies, policies + 20) << "a tick per state of the new robot";
+  EXPECT_NEAR(node.mpc().status().plan_time, 1.0 + 0.2 - 19 * 0.005, 0.02);
 }
 
 // The wire contract goes out at the first tick and then once a second of the controller's clock.
