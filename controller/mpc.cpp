@@ -552,12 +552,15 @@ void Mpc::prepare(Clock::time_point deadline) {
   const bool resume =
       !restart && solver_->preparing() && std::abs(t_next - t_warm_) < config_.locomotion.dt;
   if (!resume) solver_->discardPreparation();
-  if (restart) {
+  // The next state past the warm start's horizon (the controller was stopped for longer than
+  // the horizon: a host stall, SIGSTOP, a debugger): the warm start is made again from the
+  // references, as after a failure. Returning unprepared instead left every later tick to shed
+  // and fall back, for good (issue 33: 2461 fallbacks after a 1.5 s pause, the robot standing).
+  const bool behind = !restart && !resume && !shiftTo(t_next);
+  if (restart || behind) {
     restartWarmStart(t_last_, t_next, false);
     if (need_restart_) return;  // the references could not be planned: the next tick tries
   } else if (!resume) {
-    // For when the next state is expected; past the horizon the next tick restarts anyway.
-    if (!shiftTo(t_next)) return;
     if (!replan(t_last_)) return;  // on the trajectory's grid, as in solveTick
   }
   SolveStatus why = SolveStatus::MaxIterations;

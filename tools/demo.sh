@@ -9,7 +9,8 @@
 #   tools/demo.sh [--robot NAME | --humanoid] [--commands FILE | --teleop] [--duration S]
 #                 [--realtime | --lockstep] [--robots-dir DIR]... [--check-tracking]
 #                 [--host-network] [--out DIR] [--summary FILE] [--spy] [--viz [--viz-port P]]
-#                 [--slow-host F] [--kill-controller T] [--kill-sim T] [--flood RATE] [--rival]
+#                 [--slow-host F] [--kill-controller T] [--pause-controller T D]
+#                 [--kill-sim T] [--flood RATE] [--rival]
 #                 [--terrain NAME|FILE [--map-rate HZ]]
 #
 #   --robot NAME      stride_quad (default), solo12, anymal_c, stride_humanoid, talos_reduced:
@@ -59,6 +60,10 @@
 #                     1 s later (issue 19: the robot stands down on its own meanwhile, sim/README.md
 #                     "Controller loss"; the new controller takes over); its output in
 #                     DIR/mpc-restarted.txt. tools/faults.sh runs it at 10 instants
+#   --pause-controller T D  stop stride-mpc (SIGSTOP) T seconds after the robot starts, for D
+#                     seconds, then let it go on (SIGCONT): a host stall, swapping, a debugger
+#                     (issue 33: it must drive again within 2 s of waking); when it was stopped and
+#                     woken in DIR/pause.txt. tools/faults.sh --pause runs it
 #   --flood RATE      also publish RATE policies per second of another robot (44 kB each, another
 #                     model hash) on the policy channel (stride-flood, on the side core at nice
 #                     10): every receiver must refuse them cheaply and the robot walk on (issue
@@ -80,7 +85,7 @@ build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
 spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood="" kill_sim="" rival=0
-terrain="" map_rate=""
+pause_at="" pause_for="" terrain="" map_rate=""
 robots_dirs=()
 args=("$@")
 need_value() { [ $# -ge 2 ] || { echo "demo.sh: $1 needs a value (--help)" >&2; exit 2; }; }
@@ -106,6 +111,9 @@ while [ $# -gt 0 ]; do
     --rss) rss=1; shift ;;
     --slow-host) need_value "$@"; slow_host="$2"; shift 2 ;;
     --kill-controller) need_value "$@"; kill_controller="$2"; shift 2 ;;
+    --pause-controller)
+      [ $# -ge 3 ] || { echo "demo.sh: --pause-controller needs T and D (--help)" >&2; exit 2; }
+      pause_at="$2" pause_for="$3"; shift 3 ;;
     --flood) need_value "$@"; flood="$2"; shift 2 ;;
     --kill-sim) need_value "$@"; kill_sim="$2"; shift 2 ;;
     --rival) rival=1; shift ;;
@@ -399,6 +407,21 @@ if [ -n "$kill_controller" ]; then
   ) &
   restart_pid=$!
   pids+=($restart_pid)
+fi
+if [ -n "$pause_at" ]; then
+  # The controller stopped by the host (it cannot tell, nor clean up) and let go on: timed from
+  # here, as the kill.
+  (
+    sleep "$pause_at"
+    pid=$(pgrep -P "$mpc_pid" -x stride-mpc || true)
+    [ -n "$pid" ] || exit 0
+    kill -STOP "$pid"
+    echo "demo: stopped stride-mpc at $(date +%s.%N)" > "$out/pause.txt"
+    sleep "$pause_for"
+    kill -CONT "$pid"
+    echo "demo: woke stride-mpc at $(date +%s.%N)" >> "$out/pause.txt"
+  ) &
+  pids+=($!)
 fi
 if [ "$commands" = none ]; then
   # No command source: whoever joins the bus drives (the controller stands until then).
