@@ -23,6 +23,8 @@ constexpr double kSoleMargin = 0.8;
 constexpr double kStalledRegularization = 1e4;
 // A tick's rollout may take this much longer than the average before its answer is late.
 constexpr double kTrialMargin = 1.5;
+// Each tick shed for the rollout's time scales the estimate by this (Mpc::solveTick).
+constexpr double kTrialForget = 0.9;
 
 double millisSince(Solver::Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Solver::Clock::now() - t0).count();
@@ -279,6 +281,9 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, bool late, SolveStatus
   const bool real_time = deadline != Clock::time_point::max();
   if (shed != nullptr && !first && real_time &&
       (!use_prepared || millisFromNow(trial_ms_) > deadline)) {
+    // A tick shed for the rollout's time measures no rollout: an estimate too high to allow one
+    // would never be measured again, and every tick would shed for good. It forgets itself.
+    if (use_prepared) trial_ms_ *= kTrialForget;
     *shed = true;
     return false;
   }
@@ -310,7 +315,10 @@ bool Mpc::solveTick(double t, Clock::time_point deadline, bool late, SolveStatus
   // margin): the least time a tick needs before its deadline. Slowly averaged, so that one
   // interrupted solve does not shed the next ticks.
   if (use_prepared && !first && solver_->forwardPasses() > 0) {
-    const double need = kTrialMargin * millisSince(solve_start) / solver_->forwardPasses();
+    // At most a period: a host stall inside the solve (SIGSTOP, swapping: issue 33's pause made
+    // one rollout "take" 1.5 s) is not what a rollout costs.
+    const double need = std::min(kTrialMargin * millisSince(solve_start) / solver_->forwardPasses(),
+                                 1e3 / config_.rate_hz);
     trial_ms_ = trial_ms_ == 0.0 ? need : 0.9 * trial_ms_ + 0.1 * need;
   }
   if (result == SolveStatus::NonFinite || result == SolveStatus::NoDescent) {

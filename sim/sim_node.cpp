@@ -265,6 +265,7 @@ std::int64_t SimNode::publishState() {
   const int n = state_msg_.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
   if (n > 0) out_.publish(options_.state_channel, buffer_.data(), n);
   ++stats_.states_published;
+  stats_.last_state_utime = state_msg_.utime;
   return state_msg_.utime;
 }
 
@@ -392,6 +393,8 @@ void SimNode::writeSummary(const std::string& path) const {
   j["diverged"] = s.diverged;
   j["peak_normal_force_N"] = s.peak_normal_force;
   j["states_published"] = s.states_published;
+  // A log's reader tells from it whether the logger had every state (stride-log-summary).
+  j["last_state_utime"] = s.last_state_utime;
   j["policies"] = s.policies;
   j["policies_rejected"] = s.policies_rejected;
   j["policies_wrong_model"] = s.policies_wrong_model;

@@ -66,6 +66,7 @@ Eigen::VectorXd startingPose(const Robot& robot, const terrain::Terrain& terrain
 
 struct SimNodeStats {
   std::int64_t states_published = 0, states_dropped = 0;
+  std::int64_t last_state_utime = -1;  // the stamp of the last state published
   std::int64_t policies = 0, policies_rejected = 0;
   std::int64_t policies_wrong_model = 0;  // of policies_rejected: another model's
   std::int64_t policies_rival = 0;        // of policies_rejected: a rival controller's

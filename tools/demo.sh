@@ -41,6 +41,9 @@
 #                     build/robot_packages and ROS_PACKAGE_PATH
 #   --check-tracking  exit 1 when a command segment missed its command (a fall always exits 4,
 #                     a diverged simulation 3: stride-sim's and stride-log-summary's statuses)
+#                     With a fault (--kill-controller, --pause-controller, --kill-sim, --flood,
+#                     --rival) the summary also says whether control came back (every segment
+#                     starting 2 s after the fault's end tracked; issue 33), and exits 6 if not
 #   --host-network    use the host's loopback instead of a private namespace (multicast with ttl=0
 #                     on lo; for watching with lcm-spy from the host: tools/lcm-spy.sh)
 #   --out DIR         where the log and summaries go (default build/demo)
@@ -397,6 +400,7 @@ if [ -n "$kill_controller" ]; then
     pkill -KILL -P "$mpc_pid" -x stride-mpc || true
     echo "demo: killed stride-mpc at $(date +%s.%N)" > "$out/kill.txt"
     sleep 1
+    echo "demo: started a new stride-mpc at $(date +%s.%N)" >> "$out/kill.txt"
     restarted=()
     for a in "${mpc_args[@]}"; do
       [ "$a" = "$out/mpc.json" ] && a="$out/mpc-restarted.json"
@@ -423,6 +427,7 @@ if [ -n "$pause_at" ]; then
   ) &
   pids+=($!)
 fi
+robot_started=$(date +%s.%N)  # the faults that last the whole run start here
 if [ "$commands" = none ]; then
   # No command source: whoever joins the bus drives (the controller stands until then).
   join=""
@@ -458,6 +463,7 @@ elif [ "$teleop" = 0 ]; then
     pkill -KILL -P "$sim_pid" -x stride-sim || true
     wait "$sim_pid" 2>/dev/null || true
     sleep 1
+    date +%s.%N > "$out/sim-restart.txt"
     rest=$(awk -v d="$duration" -v k="$kill_sim" 'BEGIN { r = d - k - 1; printf "%.3f", (r > 1 ? r : 1) }')
     restarted=() prev=""
     for a in "${sim_args[@]}"; do
@@ -511,7 +517,16 @@ if [ "$rival" = 1 ]; then
   kill -TERM "$rival_pid" 2>/dev/null || true
   wait "$rival_pid" 2>/dev/null || true
 fi
-sleep 0.2
+# lcm-logger stopped before it has read the robot's last states would make a summary of a robot
+# that fell say it did not (issue 33): wait until the log stops growing (up to 5 s). A loss that
+# remains is measured and said by stride-log-summary (the robot's own last stamp, in sim.json).
+size=-1
+for ((i = 0; i < 50; i++)); do
+  sleep 0.1
+  now_size=$(stat -c %s "$log" 2>/dev/null || echo 0)
+  [ "$now_size" = "$size" ] && break
+  size=$now_size
+done
 cleanup
 trap - EXIT
 wall=$(awk -v a="$started" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
@@ -540,6 +555,20 @@ sim_json="$out/sim.json"
 [ -n "$kill_sim" ] && sim_json="$out/sim-restarted.json"
 [ -f "$sim_json" ] && summary_args+=(--sim-summary "$sim_json")
 [ "$check" = 1 ] && summary_args+=(--check-tracking)
+# Whether control came back after a fault (issue 33): its end on the wall clock; a rival or a
+# flood lasts the whole run, from the robot's start.
+fault_end=""
+[ -n "$kill_controller" ] && fault_end=$(sed -n 's/^demo: started a new stride-mpc at //p' "$out/kill.txt" 2>/dev/null)
+[ -n "$pause_at" ] && fault_end=$(sed -n 's/^demo: woke stride-mpc at //p' "$out/pause.txt" 2>/dev/null)
+[ -n "$kill_sim" ] && fault_end=$(cat "$out/sim-restart.txt" 2>/dev/null)
+{ [ "$rival" = 1 ] || [ -n "$flood" ]; } && fault_end=$robot_started
+if [ -n "$kill_controller$pause_at$kill_sim$flood" ] || [ "$rival" = 1 ]; then
+  if [ -n "$fault_end" ]; then
+    summary_args+=(--fault-end-wall "$fault_end")
+  else
+    echo "demo: the fault never ended (the run stopped first): recovery not judged"
+  fi
+fi
 status=0
 "$build/tools/stride-log-summary" "${summary_args[@]}" || status=$?
 # The sim's own verdict counts too (its fall criterion is the summary's, on every physics step).

@@ -10,6 +10,7 @@
 
 #include "controller_cases.hpp"
 #include "tools/drive/closed_loop.hpp"
+#include "tools/log/segments.hpp"
 
 namespace stride {
 namespace {
@@ -20,22 +21,29 @@ struct Outcome {
   bool fell = false;
   double max_tilt = 0.0, z_min = 1e9, progress_after = 0.0;
   drive::Run run;
+  logs::Recovery recovery;
 };
 
 // Walks `gait` at vx from `walk_at`, kills the controller at `kill`, restarts it 1 s later and
 // runs `after` more seconds. progress_after: forward distance over the last `after` / 2 seconds.
-Outcome killAndRestart(const ControllerConfig& config, const char* gait, double vx, double walk_at,
-                       double kill, double after) {
+// From 2 s after the restart on, the robot also turns at yaw_rate: a command segment after the
+// fault that it must track (issue 33: recovery, logs::recovery).
+Outcome killAndRestart(const ControllerConfig& config, const char* gait, double vx, double yaw_rate,
+                       double walk_at, double kill, double after) {
   drive::Options o;
   o.duration = kill + 1.0 + after;
   o.controller_lost_at = kill;
   o.controller_back_after = 1.0;
-  o.script.resize(2);  // stand from 0 s, then the gait
+  o.script.resize(3);  // stand from 0 s, then the gait, then turning too
   o.script[1].at = walk_at;
   o.script[1].gait = gait;
   o.script[1].vx = vx;
+  o.script[2] = o.script[1];
+  o.script[2].at = kill + 1.0 + 2.0;
+  o.script[2].yaw_rate = yaw_rate;
   Outcome out;
   out.run = drive::run(config, o);
+  out.recovery = logs::recovery(out.run.segments(), out.run.baseSamples(), kill + 1.0);
   out.fell = out.run.fell();
   const double t_half = o.duration - 0.5 * after;
   double x_half = 0.0;
@@ -53,20 +61,22 @@ Outcome killAndRestart(const ControllerConfig& config, const char* gait, double 
 // and walks it forward again at three quarters of the command or better (min_progress over the last
 // after / 2 seconds: it went on at the commanded speed in 40 kills of the quadruped's trot and 10
 // of the humanoid's walk, sim/README.md "Controller loss").
-void kills(int n, const char* robot, const char* gait, double vx, double walk_at, double cycle,
-           double after, double min_progress, double max_tilt_deg) {
+void kills(int n, const char* robot, const char* gait, double vx, double yaw_rate, double walk_at,
+           double cycle, double after, double min_progress, double max_tilt_deg) {
   const ControllerConfig config = loadControllerConfig(controller_cases::configPath(robot));
   const double first_kill = walk_at + 1.5;  // walking at vx by then
   int falls = 0;
   for (int i = 0; i < n; ++i) {
     const double kill = first_kill + cycle * i / n + 0.0013 * i;  // off the period's grid too
-    const Outcome o = killAndRestart(config, gait, vx, walk_at, kill, after);
+    const Outcome o = killAndRestart(config, gait, vx, yaw_rate, walk_at, kill, after);
     const sim::SimNodeStats& s = o.run.sim;
     std::printf(
         "%s killed at %.4f s: %s, tilt max %.1f deg, base min %.3f m, %.3f m forward in the last "
-        "%.1f s; %lld steps standing down, %lld past a policy's end\n",
+        "%.1f s; %lld steps standing down, %lld past a policy's end; %s, command tracked %.2f s "
+        "after the restart\n",
         robot, kill, o.fell ? "FELL" : "up", o.max_tilt, o.z_min, o.progress_after, 0.5 * after,
-        static_cast<long long>(s.stand_down_steps), static_cast<long long>(s.exhausted_steps));
+        static_cast<long long>(s.stand_down_steps), static_cast<long long>(s.exhausted_steps),
+        o.recovery.recovered ? "recovered" : "NOT recovered", o.recovery.time_to_tracking);
     falls += o.fell;
     EXPECT_FALSE(o.fell) << "killed at " << kill;
     EXPECT_LT(o.max_tilt, max_tilt_deg) << "killed at " << kill;
@@ -76,6 +86,12 @@ void kills(int n, const char* robot, const char* gait, double vx, double walk_at
     EXPECT_EQ(s.source_switches, 1) << "the new controller is followed";
     EXPECT_EQ(s.policies_rival, 0);
     EXPECT_GT(o.progress_after, min_progress) << "walks on after the restart, killed at " << kill;
+    // Control came back: the turn that starts 2 s after the restart tracked, and the command in
+    // force within 2 s of the restart.
+    EXPECT_EQ(o.recovery.segments_after, 1) << "killed at " << kill;
+    EXPECT_TRUE(o.recovery.recovered) << "killed at " << kill;
+    EXPECT_GE(o.recovery.time_to_tracking, 0.0) << "killed at " << kill;
+    EXPECT_LE(o.recovery.time_to_tracking, 2.0) << "killed at " << kill;
   }
   EXPECT_EQ(falls, 0);
 }
@@ -128,17 +144,17 @@ TEST(ControllerLoss, HumanoidStandsDownForGoodAtTenKills) {
 // they take 10 and 15 minutes, so tools/test.sh --sanitize runs this one kill instead (label
 // sanitize_slow, tests/CMakeLists.txt; tests/README.md, "Sanitizers").
 TEST(ControllerLoss, QuadrupedTrottingSurvivesAKillAndRestart) {
-  kills(1, "stride_quad", "trot", 0.5, 1.0, 0.4, 4.0, 0.8, 10.0);
+  kills(1, "stride_quad", "trot", 0.5, 0.3, 1.0, 0.4, 4.5, 0.8, 10.0);
 }
 
 TEST(ControllerLoss, QuadrupedTrottingSurvivesTenKillsAndRestarts) {
   // stride_quad's trot: a 0.4 s cycle; 0.5 m/s forward.
-  kills(10, "stride_quad", "trot", 0.5, 1.0, 0.4, 4.0, 0.8, 10.0);
+  kills(10, "stride_quad", "trot", 0.5, 0.3, 1.0, 0.4, 4.5, 0.8, 10.0);
 }
 
 TEST(ControllerLoss, HumanoidWalkingSurvivesTenKillsAndRestarts) {
   // stride_humanoid's walk: see its controller YAML for the cycle; 0.2 m/s forward.
-  kills(10, "stride_humanoid", "walk", 0.2, 1.0, 1.0, 4.0, 0.3, 10.0);
+  kills(10, "stride_humanoid", "walk", 0.2, 0.2, 1.0, 1.0, 4.5, 0.3, 10.0);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 
 #include "controller_cases.hpp"
 #include "tools/drive/closed_loop.hpp"
+#include "tools/log/segments.hpp"
 
 namespace stride {
 namespace {
@@ -30,6 +31,30 @@ drive::Options trotForward(double duration) {
   o.script[2].at = 2.0;
   o.script[2].vx = 0.5;
   return o;
+}
+
+// Issue 33: surviving is not recovering. trotForward, then from 2 s after the fault's end a turn
+// while trotting on (0.3 rad/s) for 2.5 s: a command segment that starts after the fault, which
+// the robot must track (logs::recovery).
+drive::Options recoveryDrive(double fault_end) {
+  drive::Options o = trotForward(fault_end + 4.5);
+  o.script.push_back(o.script.back());
+  o.script.back().at = fault_end + 2.0;
+  o.script.back().yaw_rate = 0.3;
+  return o;
+}
+
+// Control came back: every segment starting 2 s after the fault's end tracked (there is one at
+// least), and the command in force tracked within 2 s of the fault's end.
+void expectRecovered(const drive::Run& r, double fault_end) {
+  const logs::Recovery rec = logs::recovery(r.segments(), r.baseSamples(), fault_end);
+  std::printf("recovery after %.2f s: %d of %d segments tracked, command tracked %.2f s after\n",
+              fault_end, rec.segments_after - rec.missed_after, rec.segments_after,
+              rec.time_to_tracking);
+  EXPECT_GE(rec.segments_after, 1);
+  EXPECT_TRUE(rec.recovered);
+  EXPECT_GE(rec.time_to_tracking, 0.0);
+  EXPECT_LE(rec.time_to_tracking, 2.0);
 }
 
 ControllerConfig quad() {
@@ -55,7 +80,7 @@ double maxTilt(const drive::Run& r) {
 // Every third state from 3 s to 5 s carries a NaN: refused (counted), the robot trots on, on the
 // policies of the good states in between.
 TEST(Faults, NaNStatesAreRefusedAndTheRobotTrotsOn) {
-  drive::Options o = trotForward(7.0);
+  drive::Options o = recoveryDrive(5.0);
   int spoiled = 0;
   o.state_fault = [&spoiled, n = 0](robot_state_t& m, double t) mutable {
     if (t >= 3.0 && t < 5.0 && n++ % 3 == 0) {
@@ -71,12 +96,13 @@ TEST(Faults, NaNStatesAreRefusedAndTheRobotTrotsOn) {
   EXPECT_LT(maxTilt(r), 15.0);
   EXPECT_GT(progress(r, 3.0, 5.0), 0.8) << "walks on at ~0.5 m/s through it";
   EXPECT_EQ(r.sim.stand_downs, 0) << "the good states' policies cover the bad ones";
+  expectRecovered(r, 5.0);
 }
 
 // Every fourth state from 3 s to 5 s is stamped 50 ms in the past (an estimator's clock jumping
 // back): refused as out of order, the robot trots on.
 TEST(Faults, StampsGoingBackAreRefusedAndTheRobotTrotsOn) {
-  drive::Options o = trotForward(7.0);
+  drive::Options o = recoveryDrive(5.0);
   int old = 0;
   o.state_fault = [&old, n = 0](robot_state_t& m, double t) mutable {
     if (t >= 3.0 && t < 5.0 && n++ % 4 == 0) {
@@ -92,13 +118,14 @@ TEST(Faults, StampsGoingBackAreRefusedAndTheRobotTrotsOn) {
   EXPECT_LT(maxTilt(r), 15.0);
   EXPECT_GT(progress(r, 3.0, 5.0), 0.8);
   EXPECT_EQ(r.sim.stand_downs, 0);
+  expectRecovered(r, 5.0);
 }
 
 // No state at all from 3 s to 4 s (the estimator or the network stalled): the controller has
 // nothing to answer, the policy runs out, the robot stands down; when states come back the
 // controller, alive all along, plans from the robot as it is and trots on.
 TEST(Faults, AOneSecondGapInTheStatesIsSurvived) {
-  drive::Options o = trotForward(8.0);
+  drive::Options o = recoveryDrive(4.0);
   o.state_fault = [](robot_state_t&, double t) { return !(t >= 3.0 && t < 4.0); };
   const drive::Run r = drive::run(quad(), o);
   EXPECT_FALSE(r.fell());
@@ -109,6 +136,7 @@ TEST(Faults, AOneSecondGapInTheStatesIsSurvived) {
   std::printf("after the gap: tilt max %.1f deg, %.3f m in the last 2 s\n", maxTilt(r),
               progress(r, 6.0, 8.0));
   EXPECT_GT(progress(r, 6.0, 8.0), 0.8) << "trots on after the gap";
+  expectRecovered(r, 4.0);
 }
 
 // 1000 policies a second of another robot's sizes (5 each 5 ms period, 23 kB each) arrive on the
@@ -127,13 +155,14 @@ TEST(Faults, AFloodOfForeignPoliciesChangesNothingOnTheRobot) {
   EXPECT_EQ(flooded.sim.policies_wrong_model, 5 * periods);
   EXPECT_EQ(flooded.sim.policies_rejected, 5 * periods);
   EXPECT_EQ(flooded.sim.policies, calm.sim.policies) << "no answer lost in the flood";
+  expectRecovered(flooded, 0.0);  // the flood lasts the whole run
 }
 
 // The mock robot restarted (stride-sim killed at 3 s, back 1 s later with the robot standing at
 // the origin, its clock going on): the controller, alive all along, takes the new robot as it
 // comes and trots it forward.
 TEST(Faults, TheMockRobotRestartedIsTakenOverByTheController) {
-  drive::Options o = trotForward(8.0);
+  drive::Options o = recoveryDrive(4.0);
   o.sim_lost_at = 3.0;
   const drive::Run r = drive::run(quad(), o);
   EXPECT_EQ(r.sim_starts, 2);
@@ -141,6 +170,7 @@ TEST(Faults, TheMockRobotRestartedIsTakenOverByTheController) {
   EXPECT_FALSE(r.fell());
   EXPECT_LT(maxTilt(r), 15.0);
   EXPECT_GT(progress(r, 6.0, 8.0), 0.8) << "the new robot trots forward";
+  expectRecovered(r, 4.0);
 }
 
 }  // namespace

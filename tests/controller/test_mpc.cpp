@@ -354,6 +354,48 @@ TEST(Mpc, PreparedTicksAndTheirFallback) {
   EXPECT_EQ(mpc.counters().unprepared_solves, 3);
 }
 
+// Issue 33: a controller stopped for longer than its horizon (SIGSTOP, a host stall, a debugger)
+// found a warm start its next state had left behind. The preparation gave up on it, every tick
+// then shed for want of a preparation, and the controller answered with fallbacks for good. In
+// real time (answers due soon after each tick, preparations until half a period after the next) the
+// ticks must drive again (solved policies) within 2 s of the robot's time after the pause.
+TEST(Mpc, AControllerStoppedLongerThanItsHorizonDrivesAgain) {
+  ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  Mpc mpc(config);
+  BodyCommand forward;
+  forward.vx = 0.3;
+  const auto& gaits = mpc.gaits();
+  mpc.setCommand(forward,
+                 static_cast<int>(std::find(gaits.begin(), gaits.end(), "trot") - gaits.begin()));
+  robot_state_t s = standingState(mpc.robot(), 1000000);
+  const auto period = std::chrono::microseconds(5000);
+  const auto tickRealTime = [&](std::int64_t dt_us) {
+    s.utime += dt_us;
+    const auto start = Mpc::Clock::now();
+    // An answer due 1.5 ms after the tick's start: a prepared tick's rollout fits, a whole
+    // iteration does not (as on a loaded host, where the pause was seen).
+    const bool sent = mpc.tick(&s, 0.0, start + std::chrono::microseconds(1500));
+    mpc.prepare(start + period + period / 2);
+    return sent;
+  };
+  for (int i = 0; i < 200; ++i) tickRealTime(5000);
+  ASSERT_EQ(mpc.policy().status, kPolicySolved);
+  const std::int64_t fallbacks = mpc.counters().fallbacks;
+  // 1.5 s without a tick, then the ticks go on.
+  int solved_after = -1;
+  for (int i = 0; i < 400 && solved_after < 0; ++i) {
+    tickRealTime(i == 0 ? 1500000 : 5000);
+    if (mpc.policy().status == kPolicySolved) solved_after = i;
+  }
+  ASSERT_GE(solved_after, 0) << "never solved again: " << mpc.counters().fallbacks - fallbacks
+                             << " fallbacks";
+  EXPECT_LE(solved_after, 5) << "ticks after the pause";
+  int solved = 0;
+  for (int i = 0; i < 100; ++i)
+    solved += tickRealTime(5000) && mpc.policy().status == kPolicySolved;
+  EXPECT_GE(solved, 90) << "and it keeps solving";
+}
+
 // A deadline is on the answer: a tick whose policy goes out after it is one miss, whether its
 // solve stopped there or finished late; a tick on time is none.
 TEST(Mpc, DeadlineMissesCountAnswersAfterTheDeadline) {

@@ -261,5 +261,58 @@ TEST(Segments, ARobotThatFallsShortOfItsCommandMissesIt) {
   EXPECT_NEAR(misses[2].achieved, 0.64, 1e-12);
 }
 
+// Issue 33's recovery: forward 0.5 m/s for 4 s, turn for 4 s, sidestep for 4 s; a fault from 0.5
+// to 1.5 s stops the robot until `back` (or for good). The robot otherwise follows exactly.
+Session faultSession(double back) {
+  Session s;
+  repeat(s.commands, command(0.0, 0.5, 0, 0, "trot"), 4.0);
+  repeat(s.commands, command(4.0, 0, 0, 1.0, "trot"), 8.0);
+  repeat(s.commands, command(8.0, 0, 0.25, 0, "trot"), 12.0);
+  KinematicBase base;
+  const double dt = 0.005;
+  for (int i = 0; i <= 2400; ++i) {
+    const double t = i / 200.0;
+    const bool stopped = t >= 0.5 && t < back;
+    const double vx = stopped || t >= 4.0 ? 0.0 : 0.5,
+                 w = !stopped && t >= 4.0 && t < 8.0 ? 1.0 : 0.0,
+                 vy = !stopped && t >= 8.0 ? 0.25 : 0.0;
+    s.states.push_back(sample(t, pose(base.x, base.y, base.z, base.yaw), {vx, vy, 0, 0, 0, w}));
+    base.step(dt, vx, vy, w);
+  }
+  return s;
+}
+
+TEST(Recovery, ControlBackSoonAfterTheFault) {
+  const Session session = faultSession(2.1);
+  const auto segments = segmentCommands(session.commands, session.states);
+  const Recovery r = recovery(segments, session.states, 1.5);
+  EXPECT_EQ(r.segments_after, 2);  // the turn and the sidestep start 2 s or more after 1.5 s
+  EXPECT_EQ(r.missed_after, 0);
+  EXPECT_TRUE(r.recovered);
+  // The first 1 s window that averages within 0.075 m/s of 0.5: 0.5 (t + 1 - 2.1) >= 0.425.
+  EXPECT_NEAR(r.time_to_tracking, 1.95 - 1.5, 0.006);
+  // The forward segment itself, which holds the fault, misses: surviving is not the criterion.
+  EXPECT_FALSE(checkTracking(segments).empty());
+}
+
+TEST(Recovery, ARobotThatNeverMovesAgainDidNotRecover) {
+  const Session session = faultSession(1e9);
+  const Recovery r =
+      recovery(segmentCommands(session.commands, session.states), session.states, 1.5);
+  EXPECT_EQ(r.segments_after, 2);
+  EXPECT_EQ(r.missed_after, 2);
+  EXPECT_FALSE(r.recovered);
+  EXPECT_LT(r.time_to_tracking, 0.0);
+}
+
+TEST(Recovery, NoSegmentAfterTheFaultJudgesNothing) {
+  const Session session = faultSession(2.1);
+  const Recovery r =
+      recovery(segmentCommands(session.commands, session.states), session.states, 9.0);
+  EXPECT_EQ(r.segments_after, 0);
+  EXPECT_FALSE(r.recovered) << "no segment to show it";
+  EXPECT_NEAR(r.time_to_tracking, 0.0, 1e-9) << "the sidestep tracks from the fault's end on";
+}
+
 }  // namespace
 }  // namespace stride::logs

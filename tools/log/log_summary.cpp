@@ -189,7 +189,8 @@ int main(int argc, char** argv) {
   std::string log_path, summary_path,
       state_channel = "STRIDE_STATE", status_channel = "STRIDE_STATUS",
       command_channel = "STRIDE_COMMAND", terrain_channel = "STRIDE_TERRAIN", sim_summary_path;
-  double fall_height = 0.5, fall_tilt_deg = 60.0, window = 0.0;
+  double fall_height = 0.5, fall_tilt_deg = 60.0, window = 0.0, fault_end = -1.0,
+         fault_end_wall = -1.0;
   stride::logs::TrackingTolerance tolerance;
   stride::logs::SegmentOptions segment_options;
   bool check_tracking = false;
@@ -206,6 +207,13 @@ int main(int argc, char** argv) {
                  "footholds and verdict go into this one; a fall it saw is a fall here, whatever "
                  "the log holds")
       ->check(CLI::ExistingFile);
+  app.add_option("--fault-end", fault_end,
+                 "a fault (a controller killed, paused, ...) ended at this time [s from the first "
+                 "state]: reports whether control came back (every segment starting 2 s after it "
+                 "tracked) and when its command was first tracked; exit status 6 if it did not");
+  app.add_option("--fault-end-wall", fault_end_wall,
+                 "the same, as wall-clock seconds (date +%s.%N), placed on the log's clock by the "
+                 "time the logger received the states");
   app.add_option("--fall-height", fall_height,
                  "fallen: base below this fraction of its first height");
   app.add_option("--fall-tilt", fall_tilt_deg, "fallen: base tilted more than this [deg]");
@@ -222,7 +230,8 @@ int main(int argc, char** argv) {
   app.footer(
       "Exit status: 0 read, upright (and tracked, with --check-tracking); 1 a segment missed its "
       "command (--check-tracking) or the log or summary could not be read or written; 2 a usage "
-      "error; 4 the robot fell (as stride-sim's); 5 more messages lost than --max-lost.");
+      "error; 4 the robot fell (as stride-sim's); 5 more messages lost than --max-lost; 6 control "
+      "did not come back after the fault (--fault-end).");
   app.add_option("--tolerance", tolerance.relative,
                  "tracking: allowed error as a fraction of the commanded value")
       ->check(CLI::Range(0.0, 10.0))
@@ -260,7 +269,7 @@ int main(int argc, char** argv) {
   stride::mpc_status_t last_status{};
   std::vector<Window> windows;
   std::int64_t status_t0 = -1;
-  std::int64_t state_utime0 = 0;
+  std::int64_t state_utime0 = 0, state_event0 = 0;     // the first state's stamp and log time
   std::vector<stride::logs::BaseSample> base_samples;  // t from the first state's stamp
   // The newest elevation map, and the terrain's height under the base from it (0 where unknown).
   stride::terrain::ElevationMap map;
@@ -301,6 +310,7 @@ int main(int argc, char** argv) {
         z_first = z;
         t_first = s.utime * 1e-6;
         state_utime0 = s.utime;
+        state_event0 = e->timestamp;
       }
       stride::logs::BaseSample b;
       b.t = static_cast<double>(s.utime - state_utime0) / 1e6;
@@ -442,6 +452,39 @@ int main(int argc, char** argv) {
   const stride::Percentiles latency = stride::percentiles(latency_ms),
                             solve = stride::percentiles(solve_ms),
                             prepare = stride::percentiles(prepare_ms);
+  double log_tail_lost = 0.0;  // [s] of the robot's states the logger did not record
+  // The mock robot's verdict: it checks the fall on every physics step, the log only holds what the
+  // logger read before it was stopped.
+  json sim_summary;
+  if (!sim_summary_path.empty()) {
+    std::ifstream in(sim_summary_path);
+    try {
+      sim_summary = json::parse(in);
+    } catch (const json::exception& e) {
+      std::fprintf(stderr, "stride-log-summary: cannot read '%s': %s\n", sim_summary_path.c_str(),
+                   e.what());
+      return 1;
+    }
+    // The logger stopped before the robot's last state (a loaded machine): said, and measured.
+    if (states > 0 && sim_summary.contains("last_state_utime") &&
+        sim_summary["last_state_utime"].is_number_integer()) {
+      const std::int64_t robot_last = sim_summary["last_state_utime"].get<std::int64_t>();
+      if (robot_last > last_state_utime) log_tail_lost = (robot_last - last_state_utime) * 1e-6;
+    }
+    if (log_tail_lost > 0.0)
+      std::printf(
+          "log: the logger stopped %.3f s before the robot's last state: the robot's own "
+          "summary (%s) gives the fall\n",
+          log_tail_lost, sim_summary_path.c_str());
+    if (sim_summary.value("fell", false) && !fell) {
+      std::printf("robot: the mock robot fell (%s), after the log's last state\n",
+                  sim_summary_path.c_str());
+      fell = true;
+    }
+    // Why it did not follow its controller, when it did not (sim::whyText).
+    if (sim_summary.contains("why") && sim_summary["why"].is_string())
+      std::printf("robot: %s\n", sim_summary["why"].get<std::string>().c_str());
+  }
   if (states > 0)
     std::printf(
         "session %.1f s: walked %.3f m (x %+.3f, y %+.3f), base height %.3f .. %.3f m, "
@@ -473,27 +516,6 @@ int main(int argc, char** argv) {
   if (!windows.empty())
     printWindows(windows, window, last_status.deadline_misses, last_status.late_ticks);
   if (bad > 0) std::printf("log: %ld undecodable events skipped\n", bad);
-  // The mock robot's verdict: it checks the fall on every physics step, the log only holds what the
-  // logger read before it was stopped.
-  json sim_summary;
-  if (!sim_summary_path.empty()) {
-    std::ifstream in(sim_summary_path);
-    try {
-      sim_summary = json::parse(in);
-    } catch (const json::exception& e) {
-      std::fprintf(stderr, "stride-log-summary: cannot read '%s': %s\n", sim_summary_path.c_str(),
-                   e.what());
-      return 1;
-    }
-    if (sim_summary.value("fell", false) && !fell) {
-      std::printf("robot: the mock robot fell (%s), after the log's last state\n",
-                  sim_summary_path.c_str());
-      fell = true;
-    }
-    // Why it did not follow its controller, when it did not (sim::whyText).
-    if (sim_summary.contains("why") && sim_summary["why"].is_string())
-      std::printf("robot: %s\n", sim_summary["why"].get<std::string>().c_str());
-  }
   const std::string terrain_name =
       sim_summary.contains("terrain") && sim_summary["terrain"].is_string()
           ? sim_summary["terrain"].get<std::string>()
@@ -518,6 +540,30 @@ int main(int argc, char** argv) {
       std::printf("tracking: the robot fell outside the command segments\n");
       tracked = false;
     }
+  }
+  // Recovery after a fault (issue 33): did control come back, and when.
+  if (fault_end_wall >= 0.0 && states > 0)
+    fault_end = (fault_end_wall * 1e6 - static_cast<double>(state_event0)) * 1e-6;
+  stride::logs::Recovery recovery;
+  const bool judge_recovery = fault_end >= 0.0 || fault_end_wall >= 0.0;
+  if (judge_recovery) {
+    recovery = stride::logs::recovery(segments, base_samples, fault_end, tolerance, {},
+                                      segment_options.fall);
+    char when[96] = "its command never tracked after it";
+    if (recovery.time_to_tracking >= 0.0)
+      std::snprintf(when, sizeof(when), "its command tracked %.2f s after the fault's end",
+                    recovery.time_to_tracking);
+    if (recovery.segments_after == 0)
+      std::printf(
+          "recovery: the fault ended at %.2f s; no checked segment starts 2 s after it: "
+          "not judged (%s)\n",
+          fault_end, when);
+    else
+      std::printf(
+          "recovery: the fault ended at %.2f s; %d of %d segments starting 2 s after it "
+          "tracked: %s; %s\n",
+          fault_end, recovery.segments_after - recovery.missed_after, recovery.segments_after,
+          recovery.recovered ? "control came back" : "control did NOT come back", when);
   }
   if (off_clock > 0)
     std::printf(
@@ -566,6 +612,15 @@ int main(int argc, char** argv) {
     j["segments"] = segmentsJson(segments);
     j["tracked"] = tracked;
     j["lost"] = {{"statuses", lost_statuses}, {"states", missing_states}};
+    j["log_tail_lost_s"] = log_tail_lost;
+    if (judge_recovery)
+      j["recovery"] = {
+          {"fault_end_s", fault_end},
+          {"segments_after", recovery.segments_after},
+          {"missed_after", recovery.missed_after},
+          {"recovered", recovery.recovered},
+          {"time_to_tracking_s",
+           recovery.time_to_tracking >= 0.0 ? json(recovery.time_to_tracking) : json(nullptr)}};
     std::ofstream f(summary_path);
     f << j.dump(2, ' ', false, json::error_handler_t::replace) << "\n";
     if (!f) {
@@ -575,5 +630,6 @@ int main(int argc, char** argv) {
   }
   if (fell) return 4;
   if (max_lost >= 0 && lost > max_lost) return 5;
+  if (judge_recovery && !recovery.recovered) return 6;
   return check_tracking && !tracked ? 1 : 0;
 }

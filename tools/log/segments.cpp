@@ -144,4 +144,59 @@ const char* componentName(int component) {
   }
 }
 
+Recovery recovery(const std::vector<Segment>& segments, const std::vector<BaseSample>& states,
+                  double fault_end, const TrackingTolerance& tolerance,
+                  const RecoveryOptions& options, const FallLimits& fall) {
+  Recovery r;
+  r.fault_end = fault_end;
+  const std::vector<TrackingMiss> misses = checkTracking(segments, tolerance);
+  for (std::size_t k = 0; k < segments.size(); ++k) {
+    const Segment& s = segments[k];
+    // (Times on a grid of periods: 6.0 may be 5.9999999.)
+    if (s.t0 < fault_end + options.after - 1e-6 || s.t1 - s.t0 < tolerance.min_duration) continue;
+    ++r.segments_after;
+    r.missed_after += std::any_of(misses.begin(), misses.end(), [&](const TrackingMiss& m) {
+      return m.segment == static_cast<int>(k);
+    });
+  }
+  r.recovered = r.segments_after > 0 && r.missed_after == 0;
+  if (states.empty()) return r;
+  // Prefix sums of the heading-frame velocities and of the fallen states: each window is O(1).
+  const std::size_t n = states.size();
+  std::vector<std::array<double, 3>> sum(n + 1, std::array<double, 3>{});
+  std::vector<int> fallen_count(n + 1, 0);
+  const double first_height = states.front().q[2] - states.front().ground;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::array<double, 3> v = headingVelocity(states[i]);
+    for (int j = 0; j < 3; ++j) sum[i + 1][j] = sum[i][j] + v[j];
+    fallen_count[i + 1] = fallen_count[i] + (fallen(states[i], first_height, fall) ? 1 : 0);
+  }
+  std::size_t end = 0, seg = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t0 = states[i].t;
+    if (t0 < fault_end) continue;
+    const double t1 = t0 + options.window;
+    while (seg < segments.size() && segments[seg].t1 < t0) ++seg;
+    if (seg == segments.size()) break;
+    const Segment& s = segments[seg];
+    if (s.t0 > t0 || t1 > s.t1) continue;  // the window within one command's segment
+    end = std::max(end, i);
+    while (end < n && states[end].t < t1) ++end;
+    if (end == n) break;  // the states end before the window does
+    const double count = static_cast<double>(end - i);
+    if (count < 1.0 || fallen_count[end] > fallen_count[i]) continue;
+    bool tracked = true;
+    for (int j = 0; j < 3 && tracked; ++j) {
+      const double floor = j < 2 ? tolerance.linear : tolerance.yaw_rate;
+      const double tol = std::max(tolerance.relative * std::abs(s.command[j]), floor);
+      tracked = std::abs((sum[end][j] - sum[i][j]) / count - s.command[j]) <= tol;
+    }
+    if (tracked) {
+      r.time_to_tracking = t0 - fault_end;
+      break;
+    }
+  }
+  return r;
+}
+
 }  // namespace stride::logs

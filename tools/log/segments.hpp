@@ -100,4 +100,24 @@ std::vector<TrackingMiss> checkTracking(const std::vector<Segment>& segments,
 // "vx", "vy", "yaw_rate".
 const char* componentName(int component);
 
+// Recovery after a fault that ended at fault_end [s] (issue 33): surviving is not recovering. Did
+// control come back? Every checked segment (at least tolerance.min_duration long) that starts
+// `after` s or more after the fault's end must be tracked; and the time from the fault's end to
+// the first `window` of states whose mean heading-frame velocity tracks the command in force (one
+// segment's, within the segments' tolerance, no fall in it).
+struct RecoveryOptions {
+  double after = 2.0;   // [s]
+  double window = 1.0;  // [s]: a trot's cycle or two, so a step's sway averages out
+};
+struct Recovery {
+  double fault_end = 0.0;
+  int segments_after = 0;  // checked segments starting `after` or more after the fault's end
+  int missed_after = 0;    // of them, missed (a component, a fall, no states)
+  bool recovered = false;  // segments_after > 0 and none missed
+  double time_to_tracking = -1.0;  // [s]; < 0: never tracked after the fault
+};
+Recovery recovery(const std::vector<Segment>& segments, const std::vector<BaseSample>& states,
+                  double fault_end, const TrackingTolerance& tolerance = {},
+                  const RecoveryOptions& options = {}, const FallLimits& fall = {});
+
 }  // namespace stride::logs
