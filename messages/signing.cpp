@@ -4,10 +4,11 @@
 // - The payload's SHA-256 (the bulk of the work: a policy is 31 kB for stride_quad, 160 kB for
 //   talos_reduced) comes from OpenSSL's libcrypto, through its low-level SHA256_Init/Update/Final:
 //   the context is a plain struct on the stack, and the code uses the CPU's SHA extensions when it
-//   has them (~1.6 GB/s on our machines, against ~350 MB/s for libsodium's portable C). They are
-//   deprecated in OpenSSL 3.0 in favour of EVP, but present; EVP_Digest* allocates a context (and
-//   fetches the algorithm) per message in 3.0, which a real-time path must not do. The deprecation
-//   warnings are silenced here only (OPENSSL_SUPPRESS_DEPRECATED, before the header).
+//   has them (~1.45 GB/s measured here, against ~350 MB/s for libsodium's portable C). They are
+//   deprecated in OpenSSL 3.0 in favour of EVP, but present; EVP allocates per message in 3.0
+//   (measured with OpenSSL 3.0.19: 2 blocks with a reused EVP_MD_CTX, 3 for EVP_Digest), which a
+//   real-time path must not do. The deprecation warnings are silenced here only
+//   (OPENSSL_SUPPRESS_DEPRECATED, before the header).
 // - The HMAC over the short header (the domain string, channel, key id, sender, timestamp and the
 //   payload's digest: ~80 bytes) comes from libsodium's crypto_auth_hmacsha256_init/update/final,
 //   whose state also sits on the stack. Hash-then-MAC keeps the keyed part short and the fast hash
@@ -32,8 +33,10 @@
 namespace stride::msg {
 namespace {
 
-constexpr std::uint8_t kKeyIdDomain[] = {'s', 't', 'r', 'i', 'd', 'e', ' ', 'k', 'e', 'y', ' ', 'i', 'd'};
-constexpr std::uint8_t kMacDomain[] = {'s', 't', 'r', 'i', 'd', 'e', '-', 's', 'i', 'g', '-', 'v', '1'};
+constexpr std::uint8_t kKeyIdDomain[] = {'s', 't', 'r', 'i', 'd', 'e', ' ',
+                                         'k', 'e', 'y', ' ', 'i', 'd'};
+constexpr std::uint8_t kMacDomain[] = {'s', 't', 'r', 'i', 'd', 'e', '-',
+                                       's', 'i', 'g', '-', 'v', '1'};
 static_assert(sizeof(kKeyIdDomain) == 13 && sizeof(kMacDomain) == 13);
 
 // Offsets in the trailer.
@@ -168,14 +171,12 @@ Key loadKeyFile(const std::string& path) {
   startSodium();
   FileDescriptor file{::open(path.c_str(), O_RDONLY | O_CLOEXEC)};
   if (file.fd < 0) {
-    throw std::runtime_error("cannot read key file " + quoted(path) + ": " +
-                             std::strerror(errno));
+    throw std::runtime_error("cannot read key file " + quoted(path) + ": " + std::strerror(errno));
   }
   // The permissions of the file opened (not of whatever the path names a moment later).
   struct stat st {};
   if (::fstat(file.fd, &st) != 0) {
-    throw std::runtime_error("cannot read key file " + quoted(path) + ": " +
-                             std::strerror(errno));
+    throw std::runtime_error("cannot read key file " + quoted(path) + ": " + std::strerror(errno));
   }
   if (!S_ISREG(st.st_mode))
     throw std::runtime_error("key file " + quoted(path) + " is not a regular file");
@@ -191,8 +192,10 @@ Key loadKeyFile(const std::string& path) {
     const ssize_t n = ::read(file.fd, text + length, sizeof(text) - length);
     if (n < 0 && errno == EINTR) continue;
     if (n < 0) {
+      const int error = errno;
+      sodium_memzero(text, sizeof(text));
       throw std::runtime_error("cannot read key file " + quoted(path) + ": " +
-                               std::strerror(errno));
+                               std::strerror(error));
     }
     if (n == 0) break;
     length += static_cast<std::size_t>(n);
@@ -209,9 +212,9 @@ Key loadKeyFile(const std::string& path) {
     }
   }
   if (problem.empty() && end - begin != 2 * kKeySize) {
-    problem = length > kMaxKeyFileBytes ? std::string("more than ") +
-                                              std::to_string(kMaxKeyFileBytes) + " bytes"
-                                        : std::to_string(end - begin) + " hex digits";
+    problem = length > kMaxKeyFileBytes
+                  ? std::string("more than ") + std::to_string(kMaxKeyFileBytes) + " bytes"
+                  : std::to_string(end - begin) + " hex digits";
   }
   if (!problem.empty()) {
     sodium_memzero(text, sizeof(text));
@@ -235,7 +238,10 @@ void writeNewKeyFile(const std::string& path) {
   startSodium();
   std::array<std::uint8_t, kKeySize> bytes{};
   randombytes_buf(bytes.data(), bytes.size());
-  char text[2 * kKeySize + 2];  // the digits, a newline (and sodium_bin2hex's NUL before it)
+  // The digits and a newline (sodium_bin2hex ends the digits with a NUL, which the newline
+  // replaces; the last byte is room for it and is not written).
+  constexpr std::size_t kFileBytes = 2 * kKeySize + 1;
+  char text[kFileBytes + 1];
   sodium_bin2hex(text, 2 * kKeySize + 1, bytes.data(), bytes.size());  // lowercase
   text[2 * kKeySize] = '\n';
   sodium_memzero(bytes.data(), bytes.size());
@@ -256,8 +262,8 @@ void writeNewKeyFile(const std::string& path) {
   // The umask may have taken bits away (a key its owner cannot read): exactly 0600.
   int error = ::fchmod(file.fd, 0600) == 0 ? 0 : errno;
   std::size_t written = 0;
-  while (error == 0 && written < sizeof(text)) {
-    const ssize_t n = ::write(file.fd, text + written, sizeof(text) - written);
+  while (error == 0 && written < kFileBytes) {
+    const ssize_t n = ::write(file.fd, text + written, kFileBytes - written);
     if (n < 0 && errno == EINTR) continue;
     if (n > 0)
       written += static_cast<std::size_t>(n);
@@ -270,8 +276,7 @@ void writeNewKeyFile(const std::string& path) {
   file.fd = -1;
   if (error != 0) {
     ::unlink(path.c_str());
-    throw std::runtime_error("cannot write key file " + quoted(path) + ": " +
-                             std::strerror(error));
+    throw std::runtime_error("cannot write key file " + quoted(path) + ": " + std::strerror(error));
   }
 }
 
@@ -291,8 +296,7 @@ int Signer::signAt(const char* channel, std::uint8_t* buf, int payload_size, int
   putBe32(trailer + kKeyIdAt, key_.id);
   putBe32(trailer + kSenderAt, sender_);
   putBe64(trailer + kTimestampAt, static_cast<std::uint64_t>(timestamp));
-  computeMac(key_, channel, trailer, buf, static_cast<std::size_t>(payload_size),
-             trailer + kMacAt);
+  computeMac(key_, channel, trailer, buf, static_cast<std::size_t>(payload_size), trailer + kMacAt);
   std::memcpy(trailer + kMagicAt, kSignatureMagic.data(), kSignatureMagic.size());
   return payload_size + kSignatureSize;
 }

@@ -23,9 +23,9 @@
 
 namespace stride::msg {
 
-constexpr int kSignatureSize = 36;    // the trailer's bytes
-constexpr int kKeySize = 32;          // the shared secret's bytes
-constexpr int kSignatureMacSize = 16; // HMAC-SHA256 truncated to its first 16 bytes
+constexpr int kSignatureSize = 36;     // the trailer's bytes
+constexpr int kKeySize = 32;           // the shared secret's bytes
+constexpr int kSignatureMacSize = 16;  // HMAC-SHA256 truncated to its first 16 bytes
 // The last 4 bytes of a signed message.
 constexpr std::array<std::uint8_t, 4> kSignatureMagic = {'S', 'T', 'S', '1'};
 // A sender a Verifier does not know yet is accepted only with a timestamp newer than this much
@@ -52,7 +52,8 @@ Key makeKey(const std::array<std::uint8_t, kKeySize>& bytes);
 // or when its content is not exactly 64 hex digits.
 Key loadKeyFile(const std::string& path);
 // Writes a new random key to a file that must not exist yet: 64 lowercase hex digits and a
-// newline, mode 0600. Throws std::runtime_error naming the file when it exists or cannot be written.
+// newline, mode 0600. Throws std::runtime_error naming the file when it exists or cannot be
+// written.
 void writeNewKeyFile(const std::string& path);
 
 // A random nonzero sender id (libsodium's generator): one per process.

@@ -12,6 +12,8 @@ packages=(
   libyaml-cpp-dev          # configuration files
   libcli11-dev             # command lines
   nlohmann-json3-dev       # JSON the programs write (run summaries, experiment results)
+  libsodium-dev            # message signing: HMAC-SHA256, random keys and sender ids
+  libssl-dev               # message signing: SHA-256 of the payload (libcrypto)
   libgtest-dev libgmock-dev  # tests
   libbenchmark-dev         # tools/bench
   libomp-dev               # OpenMP (per-knot parallelism)
