@@ -10,6 +10,7 @@ set(STRIDE_EXPORTED_MODULES
   terrain                     # terrain files, surface and contact queries, elevation grids
   config                      # robot YAML (+ URDF, SRDF) loader
   messages                    # LCM types and their validation
+  signing                     # authenticated messages (libsodium's HMAC, OpenSSL's SHA-256)
   controller                  # stride-mpc's library: the tick, the node, its configuration
   sim sim_node                # the mock robot's physics; its LCM node
   log_segments drive)         # tools/: command segments; controller + mock robot in one process
@@ -30,7 +31,7 @@ add_library(Stride::solver ALIAS stride_solver)
 # Stride::stride: everything.
 add_library(stride_all INTERFACE)
 target_link_libraries(stride_all INTERFACE stride_solver stride_terrain stride_config stride_messages
-                      stride_controller stride_sim stride_sim_node stride_drive)
+                      stride_signing stride_controller stride_sim stride_sim_node stride_drive)
 set_target_properties(stride_all PROPERTIES EXPORT_NAME stride)
 add_library(Stride::stride ALIAS stride_all)
 list(APPEND _stride_targets stride_solver stride_all)
@@ -56,7 +57,7 @@ foreach(_dir solver/multibody solver/contact solver/ocp solver/ddp terrain confi
 endforeach()
 
 # The programs (stride-bench and the tests' helpers stay in the build tree).
-install(TARGETS stride-mpc stride-sim stride-drive stride-teleop stride-log-summary
+install(TARGETS stride-mpc stride-sim stride-drive stride-teleop stride-log-summary stride-keygen
                 stride-check-dynamics stride-dynamics-demo stride-paper-astronaut
                 stride-paper-large-stride stride-viz
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})

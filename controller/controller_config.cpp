@@ -305,7 +305,7 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   const YAML::Node lcm = root["lcm"];
   r.onlyKeys(lcm, "lcm",
              {"input", "output", "state", "policy", "status", "plan", "command", "model", "horizon",
-              "horizon_rate_hz", "terrain"});
+              "horizon_rate_hz", "terrain", "key_file"});
   if (lcm) {
     r.get(lcm, "input", "lcm", c.input_url);
     r.get(lcm, "output", "lcm", c.output_url);
@@ -318,6 +318,10 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(lcm, "horizon", "lcm", c.horizon_channel);
     r.get(lcm, "terrain", "lcm", c.terrain_channel);
     r.get(lcm, "horizon_rate_hz", "lcm", c.horizon_rate_hz);
+    r.get(lcm, "key_file", "lcm", c.key_file);
+    if (!c.key_file.empty() && c.key_file.front() != '/')
+      c.key_file =
+          (std::filesystem::path(yaml_path).parent_path() / c.key_file).lexically_normal().string();
     if (!(c.horizon_rate_hz >= 0.0 && c.horizon_rate_hz <= c.rate_hz))
       r.fail("lcm.horizon_rate_hz", "must be in [0, rate_hz]");
   }

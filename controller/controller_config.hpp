@@ -78,6 +78,9 @@ struct ControllerConfig {
   // horizon_t (the whole predicted horizon, for viewers) per second; 0: not published.
   double horizon_rate_hz = 10.0;
   std::string input_url, output_url;  // empty: LCM_DEFAULT_URL
+  // The shared key that signs and checks messages (lcm.key_file, relative to the YAML, or
+  // stride-mpc --key-file); empty: the wire is unauthenticated (messages/README.md, "Signing").
+  std::string key_file;
 
   double max_state_age = 0.05;  // s; an older state is stale
   Fallback fallback = Fallback::Previous;

@@ -14,6 +14,7 @@
 #include "config/command_line.hpp"
 #include "config/describe_model.hpp"
 #include "controller/run_loop.hpp"
+#include "messages/wire_auth.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -25,7 +26,7 @@ void onSignal(int) {
 int main(int argc, char** argv) {
   CLI::App app{"stride-mpc: real-time whole-body MPC (KKT-DDP) over LCM"};
   stride::commandLineConventions(app, "stride-mpc");
-  std::string config_path, replay, output, input_url, output_url, summary;
+  std::string config_path, replay, output, input_url, output_url, summary, key_file;
   bool lockstep = false, print_model = false;
   double duration = 0.0, slow_host = 1.0;
   std::vector<std::string> robots_dirs;
@@ -37,6 +38,10 @@ int main(int argc, char** argv) {
   app.add_option("--output-url", output_url, "LCM URL to publish on (overrides the YAML)");
   app.add_option("--duration", duration, "stop after this many seconds (0: on SIGINT/SIGTERM)");
   app.add_option("--summary", summary, "write the run's counters and latencies as JSON here");
+  app.add_option("--key-file", key_file,
+                 "the shared key (overrides lcm.key_file): policies and status are signed with "
+                 "it, and only states, commands, plans and maps signed with it are taken "
+                 "(messages/README.md, \"Signing\"); a replay reads its log unverified");
   app.add_option("--robots-dir", robots_dirs,
                  "where package:// URIs of the robot YAML are looked for before ROS_PACKAGE_PATH "
                  "(repeatable)");
@@ -66,6 +71,12 @@ int main(int argc, char** argv) {
         std::printf(" %s", g.c_str());
       std::printf("\n");
       return 0;
+    }
+    if (!key_file.empty()) config.key_file = key_file;
+    if (!replay.empty()) {
+      config.key_file.clear();  // a file, not a bus: read as recorded, signatures stripped
+    } else if (config.key_file.empty()) {
+      stride::msg::keyForProgram("", "stride-mpc");  // says the wire is unauthenticated
     }
     if (!input_url.empty()) config.input_url = input_url;
     if (!output_url.empty()) config.output_url = output_url;

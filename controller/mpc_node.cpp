@@ -22,12 +22,18 @@ constexpr std::int64_t kMaxStampLeadUs = 1000000;  // stamps may run 1 s ahead o
 constexpr int kRebaseStates = 20;
 constexpr std::int64_t kRebaseUs = 200000;
 constexpr std::int64_t kMaxRebaseWarnings = 5;
+// What the signing publisher preallocates before the node knows its messages' sizes (reserve).
+constexpr int kSignedCapacity = 1 << 12;
 }  // namespace
 
 MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time)
     : config_(config),
       mpc_(config),
-      out_(out),
+      auth_(config.key_file.empty()
+                ? msg::WireAuth()
+                : msg::WireAuth(msg::loadKeyFile(config.key_file), "stride-mpc")),
+      signed_out_(out, auth_, kSignedCapacity),
+      out_(signed_out_),
       time_(time),
       commands_(config.command, mpc_.gaits()) {
   const Model& model = mpc_.robot().model;
@@ -60,6 +66,8 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
   msg::shape(horizon_, mpc_.horizonKnots(), model.nq,
              static_cast<int>(mpc_.robot().contacts.size()), mpc_.horizonFootholds());
   horizon_buffer_.resize(horizon_.getEncodedSize());
+  signed_out_.reserve(static_cast<int>(
+      std::max({buffer_.size(), horizon_buffer_.size(), model_buffer_.size()})));
 }
 
 robot_model_t robotModelMessage(const Robot& robot, int nu) {
@@ -159,13 +167,20 @@ void MpcNode::reject(msg::Reject reason) {
   ++rejected_[static_cast<int>(reason)];
 }
 
+int MpcNode::authenticated(int slot, const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  const int size =
+      auth_.receive(slot, channel.c_str(), static_cast<const std::uint8_t*>(rbuf->data),
+                    static_cast<int>(rbuf->data_size));
+  if (size < 0) reject(msg::Reject::Unauthenticated);
+  return size;
+}
+
 void MpcNode::onState(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-  msg::Reject why =
-      msg::checkStateWire(rbuf->data, static_cast<int>(rbuf->data_size), wire_, kMaxContactFlags);
-  if (why == msg::Reject::WrongModel)
-    noteWrongModel(rbuf->data, static_cast<int>(rbuf->data_size), channel);
-  if (why == msg::Reject::None &&
-      !msg::decode(rbuf->data, static_cast<int>(rbuf->data_size), incoming_))
+  const int size = authenticated(kStateSlot, rbuf, channel);
+  if (size < 0) return;
+  msg::Reject why = msg::checkStateWire(rbuf->data, size, wire_, kMaxContactFlags);
+  if (why == msg::Reject::WrongModel) noteWrongModel(rbuf->data, size, channel);
+  if (why == msg::Reject::None && !msg::decode(rbuf->data, size, incoming_))
     why = msg::Reject::Undecodable;
   if (why == msg::Reject::None) why = msg::checkState(incoming_, floating_);
   if (why != msg::Reject::None) {  // not a state at all: says nothing about the robot's clock
@@ -243,10 +258,12 @@ std::int64_t MpcNode::arrivalMicros(std::int64_t recv_utime) {
 }
 
 void MpcNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  // With a key, only a controller that has it is a rival (the robot refuses the others' policies
+  // unread: they are counted as refused, not as a rival's).
+  const int size = authenticated(kPolicySlot, rbuf, channel);
   std::int64_t source = 0;
-  if (!msg::readPolicySource(rbuf->data, static_cast<int>(rbuf->data_size), source) ||
-      source == source_id_)
-    return;  // our own, or too short to say whose
+  if (size < 0 || !msg::readPolicySource(rbuf->data, size, source) || source == source_id_)
+    return;  // refused, our own, or too short to say whose
   ++rival_policies_;
   for (int i = 0; i < n_rivals_; ++i)
     if (rivals_[i] == source) return;
@@ -261,11 +278,11 @@ void MpcNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channe
                theirs, channel.c_str(), ours);
 }
 
-void MpcNode::onPlan(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-  msg::Reject why = msg::checkPlanWire(rbuf->data, static_cast<int>(rbuf->data_size),
-                                       kMaxContactFlags, kMaxPlanPhases);
-  if (why == msg::Reject::None &&
-      plan_msg_.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0)
+void MpcNode::onPlan(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  const int size = authenticated(kPlanSlot, rbuf, channel);
+  if (size < 0) return;
+  msg::Reject why = msg::checkPlanWire(rbuf->data, size, kMaxContactFlags, kMaxPlanPhases);
+  if (why == msg::Reject::None && plan_msg_.decode(rbuf->data, 0, size) < 0)
     why = msg::Reject::Undecodable;
   if (why == msg::Reject::None) why = msg::checkPlan(plan_msg_);
   if (why != msg::Reject::None) {
@@ -275,8 +292,12 @@ void MpcNode::onPlan(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   plan_pending_ = true;
 }
 
-void MpcNode::onCommand(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-  const int size = static_cast<int>(rbuf->data_size);
+void MpcNode::onCommand(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  const int size = authenticated(kCommandSlot, rbuf, channel);
+  if (size < 0) {
+    ++commands_malformed_;
+    return;
+  }
   msg::Reject why = msg::checkCommandWire(rbuf->data, size);
   if (why == msg::Reject::None && command_msg_.decode(rbuf->data, 0, size) < 0)
     why = msg::Reject::Undecodable;
@@ -300,8 +321,9 @@ void MpcNode::onCommand(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   last_command_utime_ = command_msg_.utime;
 }
 
-void MpcNode::onTerrain(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-  const int size = static_cast<int>(rbuf->data_size);
+void MpcNode::onTerrain(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  const int size = authenticated(kTerrainSlot, rbuf, channel);
+  if (size < 0) return;
   msg::Reject why = msg::checkTerrainWire(rbuf->data, size, config_.terrain.max_cells);
   if (why == msg::Reject::None && terrain_msg_.decode(rbuf->data, 0, size) != size)
     why = msg::Reject::Undecodable;

@@ -29,6 +29,7 @@
 
 #include "controller/mpc.hpp"
 #include "messages/publisher.hpp"
+#include "messages/wire_auth.hpp"
 #include "stride/robot_model_t.hpp"
 
 namespace stride {
@@ -89,6 +90,8 @@ class MpcNode {
   // Replaces the random source id (a replay: its output is then the same bits on every run).
   void setSourceId(std::int64_t id);
   std::int64_t rivalPolicies() const { return rival_policies_; }
+  // Messages signed (with the key of lcm.key_file) or not, and the refusals by reason.
+  const msg::WireAuth& auth() const { return auth_; }
   // Times the robot's clock was taken after its stamps stayed ahead of the time that passed (a
   // clock offset) or behind the newest state (a new robot): onState.
   std::int64_t clockRebasesAhead() const { return rebases_ahead_; }
@@ -106,6 +109,8 @@ class MpcNode {
 
  private:
   void reject(msg::Reject reason);
+  // The size to decode of a message on a slot's channel, or -1 (refused: counted).
+  int authenticated(int slot, const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void noteWrongModel(const void* buf, int size, const std::string& channel);
   void publishModelIfDue();
   void publishHorizonIfDue();
@@ -116,7 +121,11 @@ class MpcNode {
 
   ControllerConfig config_;
   Mpc mpc_;
-  Publisher& out_;
+  // Signatures (config.key_file): what comes in is checked per channel, what goes out signed.
+  msg::WireAuth auth_;
+  enum Slot { kStateSlot, kCommandSlot, kPlanSlot, kTerrainSlot, kPolicySlot };
+  msg::SigningPublisher signed_out_;
+  Publisher& out_;  // signed_out_
   TimeSource time_;
   bool floating_;
   robot_state_t incoming_, newest_;

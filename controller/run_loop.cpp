@@ -227,6 +227,12 @@ void writeSummary(const MpcNode& node, const std::string& path) {
         static_cast<long long>(node.clockRebasesAhead() + node.clockRebasesBack()),
         static_cast<long long>(node.clockRebasesAhead()),
         static_cast<long long>(node.clockRebasesBack()));
+  if (node.auth().keyed())
+    std::printf(
+        "stride-mpc: signed with key %08x; %lld messages not signed with it refused%s%s%s\n",
+        node.auth().keyId(), static_cast<long long>(node.auth().refused()),
+        node.auth().refused() > 0 ? " (" : "", msg::refusedText(node.auth()).c_str(),
+        node.auth().refused() > 0 ? ")" : "");
   if (node.rivalPolicies() > 0)
     std::printf("stride-mpc: %lld policies of another controller on '%s' (a robot follows one)\n",
                 static_cast<long long>(node.rivalPolicies()), node.config().policy_channel.c_str());
@@ -240,6 +246,14 @@ void writeSummary(const MpcNode& node, const std::string& path) {
   j["rival_policies"] = node.rivalPolicies();  // another controller's, on this one's channel
   // The robot's clock taken anew after its stamps stayed ahead (a clock offset) or went back (a
   // new robot): MpcNode::onState.
+  // Messages refused for their signatures, by reason (null: no key, the wire unauthenticated).
+  const msg::WireAuth& auth = node.auth();
+  j["unauthenticated"] =
+      auth.keyed() ? nlohmann::ordered_json{{"unsigned", auth.refused(msg::Verdict::Unsigned)},
+                                            {"wrong_key", auth.refused(msg::Verdict::WrongKey)},
+                                            {"forged", auth.refused(msg::Verdict::Forged)},
+                                            {"replayed", auth.refused(msg::Verdict::Replayed)}}
+                   : nlohmann::ordered_json(nullptr);
   j["clock_rebases"] = {{"offset", node.clockRebasesAhead()},
                         {"new_robot", node.clockRebasesBack()}};
   j["tick_latency"] = timingJson(lat);

@@ -27,6 +27,8 @@ const char* describe(Reject reason) {
       return "stamp older than the allowed age";
     case Reject::WrongModel:
       return "another robot's model (hash or sizes)";
+    case Reject::Unauthenticated:
+      return "not signed with our key (unsigned, forged, replayed or another key's)";
   }
   return "unknown";
 }

@@ -31,8 +31,9 @@ enum class Reject : std::uint8_t {
   OutOfOrder,         // stamp not newer than the last accepted one
   Stale,              // stamp older than the allowed age
   WrongModel,         // another robot's or model's message: model hash, nq or nv not ours
+  Unauthenticated,    // with a key: unsigned, forged, replayed or another key's (wire_auth.hpp)
 };
-constexpr int kRejectReasons = static_cast<int>(Reject::WrongModel) + 1;
+constexpr int kRejectReasons = static_cast<int>(Reject::Unauthenticated) + 1;
 const char* describe(Reject reason);
 
 // Quaternions within this distance of unit norm are accepted (and renormalized by the reader);

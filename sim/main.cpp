@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> pushes;
   stride::sim::SimOptions sim;
   stride::sim::SimNodeOptions node_options;
+  std::string key_file;
   app.add_option("--robot", robot_yaml, "robot YAML (config/robots/)")->required();
   app.add_flag("--lockstep", lockstep,
                "advance one state period only after the controller answered (deterministic)");
@@ -86,6 +87,10 @@ int main(int argc, char** argv) {
   app.add_option("--robots-dir", robots_dirs,
                  "where package:// URIs of the robot YAML are looked for before ROS_PACKAGE_PATH "
                  "(repeatable)");
+  app.add_option("--key-file", key_file,
+                 "the shared key (64 hex digits, mode 0600; stride-keygen makes one): states and "
+                 "maps are signed with it, and only policies signed with it are taken "
+                 "(messages/README.md, \"Signing\"); without one the wire is unauthenticated");
   app.add_flag("--print-model", print_model,
                "print the robot in wire order (q, v, u, contacts, limits) and exit");
   app.footer(
@@ -120,6 +125,7 @@ int main(int argc, char** argv) {
       std::printf("%s", stride::describeModel(robot).c_str());
       return 0;
     }
+    node_options.key = stride::msg::keyForProgram(key_file, "stride-sim");
     url = stride::lcmUrl(url);
     if (url.empty()) return stride::noLcmUrl("stride-sim", "pass --url");
     lcm::LCM lcm(url);

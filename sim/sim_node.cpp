@@ -55,7 +55,9 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
       options_(options),
       plant_(options.plant.enabled() ? plantOf(robot, options.plant) : robot),
       sim_(plant_, sim),
-      out_(out),
+      auth_(options.key ? msg::WireAuth(*options.key, "stride-sim") : msg::WireAuth()),
+      signed_out_(out, auth_, 1 << 12),
+      out_(signed_out_),
       evaluator_(robot.model, actuatedDimension(robot.model)),
       hold_(robot.model, robot.default_q, holdGain(options.hold_kp, robot.joint_kp, 5.0),
             holdGain(options.hold_kd, robot.joint_kd, 0.1), sim.dt),
@@ -72,6 +74,7 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
   state_msg_.model_hash = modelHash(robot);
   wire_ = {state_msg_.model_hash, model.nq, model.nv, sim_.nu(), robot_.name.c_str()};
   buffer_.resize(state_msg_.getEncodedSize());
+  signed_out_.reserve(std::max(static_cast<int>(buffer_.size()), mapper_.messageSize()));
   q_pub_ = Eigen::VectorXd::Zero(model.nq);
   v_pub_ = Eigen::VectorXd::Zero(model.nv);
   tau_cmd_ = Eigen::VectorXd::Zero(sim_.nu());
@@ -114,7 +117,15 @@ void SimNode::reset(const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
 
 void SimNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
   const Model& model = robot_.model;
-  const int size = static_cast<int>(rbuf->data_size);
+  // With a key, a policy not signed with it is never read (a rival or a forger without the key
+  // changes nothing on the robot).
+  const int size = auth_.receive(0, channel.c_str(), static_cast<const std::uint8_t*>(rbuf->data),
+                                 static_cast<int>(rbuf->data_size));
+  if (size < 0) {
+    ++stats_.policies_unauthenticated;
+    ++stats_.policies_rejected;
+    return;
+  }
   // Cheap checks on the raw bytes first (model, sizes, source): a flood of foreign policies costs
   // no decoding.
   const msg::Reject wire = msg::checkPolicyWire(rbuf->data, size, wire_, options_.max_policy_knots);
@@ -371,6 +382,12 @@ void SimNode::writeSummary(const std::string& path) const {
       static_cast<long long>(s.hold_steps), static_cast<long long>(s.exhausted_steps),
       static_cast<long long>(s.stand_down_steps), static_cast<long long>(s.stand_downs),
       static_cast<long long>(s.lockstep_timeouts));
+  if (auth_.keyed())
+    std::printf(
+        "stride-sim: signed with key %08x; %lld policies not signed with it refused%s%s%s\n",
+        auth_.keyId(), static_cast<long long>(s.policies_unauthenticated),
+        auth_.refused() > 0 ? " (" : "", msg::refusedText(auth_).c_str(),
+        auth_.refused() > 0 ? ")" : "");
   const terrain::Terrain& terrain = sim_.terrain();
   const SimCounters& counters = sim_.counters();
   std::printf(
@@ -399,6 +416,7 @@ void SimNode::writeSummary(const std::string& path) const {
   j["policies_rejected"] = s.policies_rejected;
   j["policies_wrong_model"] = s.policies_wrong_model;
   j["policies_rival"] = s.policies_rival;
+  j["policies_unauthenticated"] = s.policies_unauthenticated;
   j["source_switches"] = s.source_switches;
   j["waiting_steps"] = s.waiting_steps;
   j["hold_steps"] = s.hold_steps;

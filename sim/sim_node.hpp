@@ -14,11 +14,13 @@
 #include <array>
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
+#include <optional>
 #include <string>
 
 #include "config/robot_config.hpp"
 #include "messages/publisher.hpp"
 #include "messages/validate.hpp"
+#include "messages/wire_auth.hpp"
 #include "sim/actuators.hpp"
 #include "sim/disturbances.hpp"
 #include "sim/plant.hpp"
@@ -56,6 +58,9 @@ struct SimNodeOptions {
   double fall_height = 0.5, fall_tilt_deg = 60.0;
   // The elevation map the robot publishes (its perception's stand-in).
   TerrainMapOptions map;
+  // The shared key (stride-sim --key-file): the robot signs its states and maps and takes only
+  // policies signed with it (messages/README.md, "Signing"). None: unauthenticated.
+  std::optional<msg::Key> key;
 };
 
 // The robot's default posture standing on the terrain at its default place: the base raised by the
@@ -70,7 +75,10 @@ struct SimNodeStats {
   std::int64_t policies = 0, policies_rejected = 0;
   std::int64_t policies_wrong_model = 0;  // of policies_rejected: another model's
   std::int64_t policies_rival = 0;        // of policies_rejected: a rival controller's
-  std::int64_t source_switches = 0;       // a new controller followed after a silence
+  // Of policies_rejected: not signed with the robot's key (unsigned, forged, replayed, another
+  // key's): never read.
+  std::int64_t policies_unauthenticated = 0;
+  std::int64_t source_switches = 0;  // a new controller followed after a silence
   // On the hold PD: before the first policy came (waiting, e.g. the controller's start-up solve
   // in real time), and after (a policy that did not apply: a fallback of the robot).
   std::int64_t waiting_steps = 0, hold_steps = 0, exhausted_steps = 0, steps = 0;
@@ -157,7 +165,9 @@ class SimNode {
   SimNodeOptions options_;
   Robot plant_;  // what the physics integrates (options_.plant); robot_ is what the loop knows
   Simulator sim_;
-  Publisher& out_;
+  msg::WireAuth auth_;  // options.key: policies checked, states and maps signed
+  msg::SigningPublisher signed_out_;
+  Publisher& out_;  // signed_out_
   PolicyEvaluator evaluator_;
   HoldPolicy hold_;
   StandDown stand_down_;

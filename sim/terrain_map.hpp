@@ -44,6 +44,9 @@ class TerrainMapper {
   const terrain::ElevationMap& lastMap() const { return map_; }
   int cellsPerSide() const { return map_.rows; }
 
+  // The encoded size of a map (fixed at construction): what a publisher preallocates for.
+  int messageSize() const { return static_cast<int>(buffer_.size()); }
+
  private:
   const terrain::Terrain& terrain_;
   TerrainMapOptions options_;

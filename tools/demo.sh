@@ -10,7 +10,8 @@
 #                 [--realtime | --lockstep] [--robots-dir DIR]... [--check-tracking]
 #                 [--host-network] [--out DIR] [--summary FILE] [--spy] [--viz [--viz-port P]]
 #                 [--slow-host F] [--kill-controller T] [--pause-controller T D]
-#                 [--kill-sim T] [--flood RATE] [--rival]
+#                 [--kill-sim T] [--flood RATE] [--rival | --rival-key]
+#                 [--key-file F | --no-signing]
 #                 [--terrain NAME|FILE [--map-rate HZ]]
 #
 #   --robot NAME      stride_quad (default), solo12, anymal_c, stride_humanoid, talos_reduced:
@@ -76,6 +77,12 @@
 #                     the duration: the controller must take the new robot over as it is (issue
 #                     19; real time, with a command script); its output in DIR/sim-restarted.txt.
 #                     tools/faults.sh --kill-sim runs it
+#   --key-file F      sign and check every message with this key (messages/README.md,
+#                     "Signing"); by default each run makes a fresh one, DIR/key (stride-keygen),
+#                     shared by the robot, the controller and the teleop
+#   --no-signing      no key: the wire unauthenticated, as before signing (each program says so)
+#   --rival-key       --rival, the rival given the key (a second controller of the operator's:
+#                     the robot keeps the first while it speaks; sim/README.md, "Rival")
 #   --rival           also run a second stride-mpc on the robot's channels with another plan (its
 #                     commands from STRIDE_RIVAL_COMMAND, where nobody sends: it stands while the
 #                     robot walks; on the side core at nice 10): the robot must follow the first
@@ -88,7 +95,7 @@ build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
 spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood="" kill_sim="" rival=0
-pause_at="" pause_for="" terrain="" map_rate=""
+pause_at="" pause_for="" terrain="" map_rate="" signing=1 key_file="" rival_key=0
 robots_dirs=()
 args=("$@")
 need_value() { [ $# -ge 2 ] || { echo "demo.sh: $1 needs a value (--help)" >&2; exit 2; }; }
@@ -120,6 +127,9 @@ while [ $# -gt 0 ]; do
     --flood) need_value "$@"; flood="$2"; shift 2 ;;
     --kill-sim) need_value "$@"; kill_sim="$2"; shift 2 ;;
     --rival) rival=1; shift ;;
+    --rival-key) rival=1 rival_key=1; shift ;;
+    --key-file) need_value "$@"; key_file=$(realpath "$2"); shift 2 ;;
+    --no-signing) signing=0; shift ;;
     -h|--help) sed -n '2,/^set -euo/{/^#/p}' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown option '$1' (--help)" >&2; exit 2 ;;
   esac
@@ -332,6 +342,20 @@ sim_args=(--robot "$robot_yaml" "${dirs_args[@]}" --duration "$sim_duration"
 [ -n "$terrain" ] && sim_args+=(--terrain "$terrain")
 [ -n "$map_rate" ] && sim_args+=(--map-rate "$map_rate")
 rm -f "$out/sim.json" "$out/sim-restarted.json"
+# Authenticated messages (messages/README.md, "Signing"): a fresh key for every run, unless one
+# was given or signing was turned off. The robot, the controller and the teleop share it; the
+# rival and the flood do not (--rival-key gives the rival the key).
+key_args=()
+if [ "$signing" = 1 ]; then
+  if [ -z "$key_file" ]; then
+    key_file="$out/key"
+    rm -f "$key_file"
+    "$build/tools/stride-keygen" "$key_file" > /dev/null
+  fi
+  key_args=(--key-file "$key_file")
+fi
+mpc_args+=("${key_args[@]}")
+sim_args+=("${key_args[@]}")
 if [ "$mode" = lockstep ]; then
   mpc_args+=(--lockstep)
   sim_args+=(--lockstep --rate "$rate")
@@ -385,6 +409,7 @@ if [ "$rival" = 1 ]; then
     -e '/^lcm:/a\  command: STRIDE_RIVAL_COMMAND' "$config" > "$rival_yaml"
   grep -q '^lcm:' "$rival_yaml" || printf 'lcm:\n  command: STRIDE_RIVAL_COMMAND\n' >> "$rival_yaml"
   rival_args=(--config "$rival_yaml" "${dirs_args[@]}" --summary "$out/mpc-rival.json")
+  [ "$rival_key" = 1 ] && rival_args+=("${key_args[@]}")
   [ "$mode" = lockstep ] && rival_args+=(--lockstep)
   timeout -k 10 "$limit" nice -n 10 "${side[@]}" "$build/controller/stride-mpc" "${rival_args[@]}" \
     > "$out/mpc-rival.txt" 2>&1 &
@@ -439,14 +464,14 @@ if [ "$commands" = none ]; then
   fi
   echo "demo: $robot, $mode, ${duration} s of robot time, no commands (the robot stands until you"
   echo "  send some); drive it from another terminal with"
-  echo "  ${join}env LCM_DEFAULT_URL='$LCM_DEFAULT_URL' $teleop_bin --gaits $gaits"
+  echo "  ${join}env LCM_DEFAULT_URL='$LCM_DEFAULT_URL' $teleop_bin --gaits $gaits ${key_args[*]}"
   echo "logging to $log"
   sim_status=0
   timeout -k 10 "$limit" taskset -c 0 "$build/sim/stride-sim" "${sim_args[@]}" > "$out/sim.txt" 2>&1 ||
     sim_status=$?
 elif [ "$teleop" = 0 ]; then
   # The script's t = 0 is the first state the teleop receives: it listens before the sim starts.
-  timeout -k 10 "$limit" "${side[@]}" "$teleop_bin" --commands "$commands" --gaits "$gaits" \
+  timeout -k 10 "$limit" "${side[@]}" "$teleop_bin" --commands "$commands" --gaits "$gaits" "${key_args[@]}" \
     > "$out/teleop.txt" 2>&1 &
   teleop_pid=$!
   pids+=($teleop_pid)
@@ -497,7 +522,7 @@ else
   trap 'true' INT  # a stray SIGINT must not end the demo before its summary
   sim_status=0
   bash -c 'echo $$ > "$1"; shift; exec "$@"' teleop "$pidfile" \
-    "${side[@]}" "$teleop_bin" --gaits "$gaits" || true
+    "${side[@]}" "$teleop_bin" --gaits "$gaits" "${key_args[@]}" || true
   trap - INT
   if ! kill -0 "$sim_pid" 2>/dev/null; then
     wait "$sim_pid" || sim_status=$?

@@ -2,8 +2,10 @@
 // the controller keeps them up. Physics is asserted, not exact numbers: base height and tilt within
 // bounds, feet really lifting, progress forward, recovery after a push.
 #include <gtest/gtest.h>
+#include <stdlib.h>
 
 #include "controller_cases.hpp"
+#include "messages/signing.hpp"
 #include "tools/drive/closed_loop.hpp"
 
 namespace stride {
@@ -98,6 +100,56 @@ TEST(ClosedLoop, QuadrupedTrotsWithNoiseDelayAndDrops) {
   for (const drive::Sample& s : r.samples) max_tilt = std::max(max_tilt, tiltDeg(s.q));
   EXPECT_LT(max_tilt, 10.0);
   EXPECT_EQ(r.sim.policies_rejected, 0);
+}
+
+// Issue 33: with signing on (the robot, its controller and the commands share a key), a rival
+// without the key changes nothing even where the source rule would have let it take the robot
+// (a source timeout of 0: the newest policy wins): its policies are refused unread. Signing
+// itself changes nothing on the robot (bit for bit the unsigned run). A second controller WITH
+// the key is the source rule's case again: refused while the first speaks, followed if the rule
+// lets it (the rule's risks: sim/README.md, "Rival").
+TEST(ClosedLoop, WithSigningARivalWithoutTheKeyCannotTakeTheRobot) {
+  char dir[] = "/tmp/stride-key-XXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  const std::string key = std::string(dir) + "/key";
+  msg::writeNewKeyFile(key);
+  const ControllerConfig config = loadControllerConfig(controller_cases::configPath("stride_quad"));
+  ControllerConfig keyed = config;
+  keyed.key_file = key;
+  ControllerConfig trotting = config;  // no key
+  trotting.gait.plan_file = std::string(STRIDE_CONFIG_DIR) + "/plans/quad_trot_then_stand.yaml";
+  drive::Options o;
+  o.duration = 2.5;
+  const drive::Run plain = drive::run(config, o);
+  const drive::Run alone = drive::run(keyed, o);
+  ASSERT_EQ(alone.samples.size(), plain.samples.size());
+  for (std::size_t i = 0; i < plain.samples.size(); ++i)
+    ASSERT_EQ(alone.samples[i].q, plain.samples[i].q) << "signed, t " << plain.samples[i].t;
+  o.rival = &trotting;
+  o.sim.source_timeout = 0.0;  // the weakest rule: the newest policy wins
+  const drive::Run rivalled = drive::run(keyed, o);
+  ASSERT_EQ(rivalled.samples.size(), alone.samples.size());
+  for (std::size_t i = 0; i < alone.samples.size(); ++i)
+    ASSERT_EQ(rivalled.samples[i].q, alone.samples[i].q) << "t " << alone.samples[i].t;
+  EXPECT_GT(rivalled.sim.policies_unauthenticated, 200);  // ~ one per tick, refused unread
+  EXPECT_EQ(rivalled.sim.policies_rival, 0);
+  EXPECT_EQ(rivalled.sim.source_switches, 0);
+  EXPECT_EQ(rivalled.rival_policies, 0) << "nor is it a rival to the robot's controller";
+
+  ControllerConfig trotting_keyed = trotting;  // a second controller with the key
+  trotting_keyed.key_file = key;
+  o.rival = &trotting_keyed;
+  o.sim.source_timeout = sim::SimNodeOptions().source_timeout;
+  const drive::Run second = drive::run(keyed, o);
+  for (std::size_t i = 0; i < alone.samples.size(); ++i)
+    ASSERT_EQ(second.samples[i].q, alone.samples[i].q) << "t " << alone.samples[i].t;
+  EXPECT_GT(second.sim.policies_rival, 200);  // refused by the source rule
+  EXPECT_EQ(second.sim.policies_unauthenticated, 0);
+  o.sim.source_timeout = 0.0;
+  const drive::Run taken = drive::run(keyed, o);
+  int lifted = 0;
+  for (const drive::Sample& s : taken.samples) lifted += s.t > 0.2 && s.feet_down < 4;
+  EXPECT_GT(lifted, 20) << "with the key and no rule, the second controller moves the feet";
 }
 
 }  // namespace

@@ -3,6 +3,9 @@
 // (and the predicted horizon with its footholds), encoding them and handing them to the
 // publisher, through fallbacks too.
 #include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <optional>
 
 #include <algorithm>
 #include <chrono>
@@ -13,6 +16,7 @@
 #include "allocation_counter.hpp"
 #include "controller/mpc_node.hpp"
 #include "controller_cases.hpp"
+#include "messages/signing.hpp"
 
 namespace stride {
 namespace {
@@ -38,21 +42,29 @@ TEST(ControllerNoAllocation, CounterSeesAllocations) {
             1);
 }
 
-void tickNoAllocation(const std::string& robot, int ticks) {
+// With `key_file`, the states come signed and the node checks them and signs what it sends
+// (messages/README.md, "Signing"): that allocates nothing either.
+void tickNoAllocation(const std::string& robot, int ticks, const std::string& key_file = "") {
   ControllerConfig config = loadControllerConfig(controller_cases::configPath(robot));
   config.max_previous_ticks = 2;
   config.max_state_age *= kSlowdown;
+  config.key_file = key_file;
   Sink out;
   MpcNode node(config, out, TimeSource::RealTime);  // stale = arrived too long ago
+  std::optional<msg::Signer> signer;
+  if (!key_file.empty()) signer.emplace(msg::loadKeyFile(key_file), 5);
   robot_state_t s = controller_cases::standingState(node.mpc().robot(), 1000);
-  std::vector<unsigned char> bytes(s.getEncodedSize());
+  std::vector<unsigned char> bytes(s.getEncodedSize() + msg::kSignatureSize);
   const auto period = static_cast<std::int64_t>(1e6 / config.rate_hz);
   auto feed = [&](std::int64_t utime) {
     s.utime = utime;
     // A little motion, so that every tick has work to do.
     s.v[2] = 0.01 * std::sin(1e-5 * static_cast<double>(utime));
-    s.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-    lcm::ReceiveBuffer rbuf{bytes.data(), static_cast<uint32_t>(bytes.size()), 0};
+    int n = s.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    if (signer)
+      n = signer->sign(config.state_channel.c_str(), bytes.data(), n,
+                       static_cast<int>(bytes.size()));
+    lcm::ReceiveBuffer rbuf{bytes.data(), static_cast<uint32_t>(n), 0};
     node.onState(&rbuf, config.state_channel);
   };
   feed(1000);
@@ -124,6 +136,7 @@ void tickNoAllocation(const std::string& robot, int ticks) {
   EXPECT_EQ(statuses,
             (std::vector<int>{kPolicyPrevious, kPolicyPrevious, kPolicyHold, kPolicyHold}));
   EXPECT_GT(out.bytes, 0);
+  EXPECT_EQ(node.rejected(), 0);
 }
 
 // The horizon goes out with the footholds the gait generator chose, and writing them allocates
@@ -231,6 +244,13 @@ TEST(ControllerNoAllocation, QuadrupedTicks) {
 }
 TEST(ControllerNoAllocation, HumanoidTicks) {
   tickNoAllocation("stride_humanoid", 10);
+}
+TEST(ControllerNoAllocation, QuadrupedTicksSigned) {
+  char dir[] = "/tmp/stride-key-XXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  const std::string key = std::string(dir) + "/key";
+  msg::writeNewKeyFile(key);
+  tickNoAllocation("stride_quad", 30, key);
 }
 
 }  // namespace

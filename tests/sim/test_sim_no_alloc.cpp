@@ -7,12 +7,17 @@
 
 #include "allocation_counter.hpp"
 
+#include <stdlib.h>
+
 #include <cmath>
 #include <random>
 
+#include "config/model_hash.hpp"
+#include "messages/signing.hpp"
 #include "sim/actuators.hpp"
 #include "sim/disturbances.hpp"
 #include "sim/sensing.hpp"
+#include "sim/sim_node.hpp"
 #include "sim_cases.hpp"
 #include "solver/multibody/lie_group.hpp"
 
@@ -121,6 +126,51 @@ TEST(SimNoAllocation, PolicyAndDisturbances) {
   });
   EXPECT_EQ(n, 0);
   EXPECT_TRUE(std::isfinite(sink));
+}
+
+// The robot's node with a key (messages/README.md, "Signing"): signing each state it publishes and
+// checking each policy it takes allocate nothing.
+TEST(SimNoAllocation, SignedStatesAndPolicies) {
+  const Robot& r = sim_test::robot("stride_quad");
+  char dir[] = "/tmp/stride-key-XXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  const std::string path = std::string(dir) + "/key";
+  msg::writeNewKeyFile(path);
+  struct Sink : Publisher {
+    long bytes = 0;
+    void publish(const std::string&, const void*, int size) override { bytes += size; }
+  } out;
+  sim::SimNodeOptions options;
+  options.key = msg::loadKeyFile(path);
+  sim::SimNode node(r, sim::SimOptions{}, options, out);
+  node.reset(r.default_q, Eigen::VectorXd::Zero(r.model.nv));
+  msg::Signer controller(*options.key, 21);
+  policy_t p{};
+  msg::shape(p, 4, r.model.nq, r.model.nv, 12);
+  p.status = p.phase = 0;
+  p.tick = 0;
+  p.t0 = 0.0;
+  p.model_hash = modelHash(r);
+  p.source_id = 1;
+  p.dt = 0.01;
+  for (int k = 0; k < 4; ++k)
+    for (int i = 0; i < r.model.nq; ++i) p.x_ref[k][i] = r.default_q[i];
+  std::vector<std::uint8_t> bytes(p.getEncodedSize() + msg::kSignatureSize);
+  const auto policyAt = [&](std::int64_t utime) {
+    p.utime = p.knot0_utime = utime;
+    const int n = p.encode(bytes.data(), 0, p.getEncodedSize());
+    const int size =
+        controller.sign("STRIDE_POLICY", bytes.data(), n, static_cast<int>(bytes.size()));
+    lcm::ReceiveBuffer rbuf{bytes.data(), static_cast<uint32_t>(size), 0};
+    node.onPolicy(&rbuf, "STRIDE_POLICY");
+  };
+  policyAt(node.publishState());  // the first policy sizes the robot's copy
+  const long n = allocations([&] {
+    for (int i = 0; i < 20; ++i) policyAt(node.publishState());
+  });
+  EXPECT_EQ(n, 0);
+  EXPECT_EQ(node.stats().policies, 21);
+  EXPECT_EQ(node.stats().policies_unauthenticated, 0);
 }
 
 }  // namespace

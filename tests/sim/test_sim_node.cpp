@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <stdlib.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -10,6 +12,7 @@
 #include <vector>
 
 #include "config/model_hash.hpp"
+#include "messages/signing.hpp"
 #include "sim/sim_node.hpp"
 #include "sim_cases.hpp"
 
@@ -82,6 +85,72 @@ TEST(SimNode, StatesCarryTheModelHashAndAnotherModelsPoliciesAreRefused) {
   feed(holdPolicy(robot, 19, 18, modelHash(robot)));
   EXPECT_EQ(node.stats().policies, 1);
   EXPECT_TRUE(node.answered(1000000));
+}
+
+// Issue 33, authenticated messages: a robot with a key signs its states and takes only policies
+// signed with it. A rival or a forger without the key changes nothing: unsigned, forged,
+// replayed and another key's policies are refused unread and counted.
+TEST(SimNode, WithAKeyOnlySignedPoliciesAreTaken) {
+  const Robot& robot = sim_test::robot("stride_quad");
+  char dir[] = "/tmp/stride-key-XXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  msg::writeNewKeyFile(std::string(dir) + "/key");
+  msg::writeNewKeyFile(std::string(dir) + "/other");
+  const msg::Key key = msg::loadKeyFile(std::string(dir) + "/key");
+  const msg::Key other = msg::loadKeyFile(std::string(dir) + "/other");
+  struct Raw : Publisher {
+    std::vector<std::uint8_t> state;
+    void publish(const std::string&, const void* data, int size) override {
+      state.assign(static_cast<const std::uint8_t*>(data),
+                   static_cast<const std::uint8_t*>(data) + size);
+    }
+  } out;
+  sim::SimNodeOptions options;
+  options.key = key;
+  sim::SimNode node(robot, sim::SimOptions{}, options, out);
+  node.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
+  ASSERT_GE(node.publishState(), 0);
+  // Its state verifies with the key, and carries the plain state.
+  msg::Verifier controller(key);
+  int payload = 0;
+  ASSERT_EQ(controller.check("STRIDE_STATE", out.state.data(), static_cast<int>(out.state.size()),
+                             payload),
+            msg::Verdict::Ok);
+  robot_state_t state;
+  ASSERT_EQ(state.decode(out.state.data(), 0, payload), payload);
+  EXPECT_EQ(state.model_hash, modelHash(robot));
+
+  msg::Signer ours(key, 11), theirs(other, 11);
+  const auto bytes = [&](std::int64_t utime, msg::Signer* signer) {
+    policy_t p = holdPolicy(robot, 19, 18, modelHash(robot));
+    p.utime = p.knot0_utime = utime;
+    std::vector<std::uint8_t> b = encode(p);
+    const int n = static_cast<int>(b.size());
+    b.resize(b.size() + msg::kSignatureSize);
+    b.resize(signer ? signer->sign("STRIDE_POLICY", b.data(), n, static_cast<int>(b.size())) : n);
+    return b;
+  };
+  const auto feed = [&](std::vector<std::uint8_t> b) {
+    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
+    node.onPolicy(&rbuf, "STRIDE_POLICY");
+  };
+  testing::internal::CaptureStderr();
+  feed(bytes(1000000, nullptr));
+  feed(bytes(1000000, &theirs));
+  std::vector<std::uint8_t> forged = bytes(1000000, &ours);
+  forged[100] ^= 4;  // a gain changed on the way
+  feed(forged);
+  EXPECT_EQ(node.stats().policies, 0);
+  const std::vector<std::uint8_t> good = bytes(1000000, &ours);
+  feed(good);
+  EXPECT_EQ(node.stats().policies, 1);
+  feed(good);  // replayed
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(node.stats().policies, 1);
+  EXPECT_EQ(node.stats().policies_unauthenticated, 4);
+  EXPECT_EQ(node.stats().policies_rejected, 4);
+  EXPECT_EQ(node.stats().policies_rival, 0);
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 4) << "the first of each reason: " << err;
 }
 
 // A valid policy whose knot 0 sits at any stamp, down to -2^63 µs: its time on the robot's clock

@@ -1,5 +1,7 @@
 #include "tools/drive/closed_loop.hpp"
 
+#include "messages/wire_auth.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <lcm/lcm-cpp.hpp>
@@ -54,6 +56,11 @@ Run run(const ControllerConfig& config, const Options& options) {
   const Robot robot = mpc->mpc().robot();
   sim::SimNodeOptions o = options.sim;
   o.state_rate_hz = config.rate_hz;
+  // Signatures (messages/README.md, "Signing"): the controller's key (its config's key_file) is
+  // the robot's and the commands' too, unless the robot was given its own.
+  if (!o.key && !config.key_file.empty()) o.key = msg::loadKeyFile(config.key_file);
+  msg::WireAuth teleop = o.key ? msg::WireAuth(*o.key, "stride-drive") : msg::WireAuth();
+  std::vector<std::uint8_t> command_bytes;
   // The mock robot; a restart (options.sim_lost_at) is a new node, at the default posture, whose
   // clock goes on from the old one's plus the outage (as stride-sim's monotonic stamps would).
   std::unique_ptr<sim::SimNode> sim;
@@ -140,7 +147,12 @@ Run run(const ControllerConfig& config, const Options& options) {
       command.yaw_rate = c.yaw_rate;
       command.gait = c.gait;
       command.body_height = c.body_height;
-      lcm.publish(config.command_channel, &command);
+      const int size = command.getEncodedSize();
+      command_bytes.resize(static_cast<std::size_t>(size) + msg::kSignatureSize);
+      command.encode(command_bytes.data(), 0, size);
+      const int n = teleop.send(config.command_channel.c_str(), command_bytes.data(), size,
+                                static_cast<int>(command_bytes.size()));
+      lcm.publish(config.command_channel, command_bytes.data(), static_cast<unsigned>(n));
       r.commands.push_back({t, c.vx, c.vy, c.yaw_rate, c.gait, c.body_height});
     }
     drain(lcm);

@@ -71,7 +71,7 @@ void writeJson(const std::string& path, const stride::drive::Run& run,
 int main(int argc, char** argv) {
   CLI::App app{"stride-drive: drive a robot with a command script, in one process, in lock-step"};
   stride::commandLineConventions(app, "stride-drive");
-  std::string config_path, script_path, summary, trace_path, terrain_name;
+  std::string config_path, script_path, summary, trace_path, terrain_name, key_file;
   double ground = 0.0;
   std::vector<std::string> robots_dirs, pushes;
   stride::drive::Options options;
@@ -88,6 +88,9 @@ int main(int argc, char** argv) {
   app.add_option("--push", pushes, "a push on the base: start:duration:fx,fy,fz (repeatable)");
   app.add_option("--log", options.log, "write every message as an LCM log (lcm-logger's format)");
   app.add_option("--summary", summary, "write the segments as JSON here");
+  app.add_option("--key-file", key_file,
+                 "sign every message with this key, and check it, as the programs do with it "
+                 "(messages/README.md, \"Signing\"; in process, the wire is memq://)");
   app.add_option("--trace", trace_path,
                  "write one CSV row per controller period: base pose and velocity, tilt, feet "
                  "down, the policy's status and the solve (to see how a run went, or fell)");
@@ -132,6 +135,7 @@ int main(int argc, char** argv) {
     stride::ControllerConfig config = stride::loadControllerConfig(config_path);
     if (controller_mu > 0.0) config.locomotion.mu = controller_mu;
     config.robots_dirs = robots_dirs;
+    if (!key_file.empty()) config.key_file = key_file;
     options.script = stride::loadCommandScript(script_path);
     if (!terrain_name.empty())
       options.terrain = std::make_shared<const stride::terrain::Terrain>(

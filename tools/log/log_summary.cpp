@@ -22,6 +22,7 @@
 
 #include "config/command_line.hpp"
 #include "controller/statistics.hpp"
+#include "messages/signing.hpp"
 #include "messages/validate.hpp"
 #include "stride/mpc_status_t.hpp"
 #include "stride/robot_state_t.hpp"
@@ -91,8 +92,11 @@ struct CommandReader {
 
   void read(const lcm::LogEvent& e) {
     stride::command_t m;
-    if (stride::msg::checkCommandWire(e.data, e.datalen) != stride::msg::Reject::None ||
-        m.decode(e.data, 0, e.datalen) < 0 ||
+    // Signed or not (messages/README.md, "Signing"): the summary reads, it does not verify.
+    const int size = static_cast<int>(
+        stride::msg::unsignedPayloadSize(static_cast<const std::uint8_t*>(e.data), e.datalen));
+    if (stride::msg::checkCommandWire(e.data, size) != stride::msg::Reject::None ||
+        m.decode(e.data, 0, size) < 0 ||
         stride::msg::checkCommand(m) != stride::msg::Reject::None ||
         (!utimes.empty() && m.utime <= utimes.back())) {
       ++rejects;
@@ -364,9 +368,10 @@ int main(int argc, char** argv) {
       stride::mpc_status_t st;
       // The string lengths on the bytes first (a corrupt one would make the decoder read past the
       // event).
-      if (stride::msg::checkStatusWire(e->data, static_cast<int>(e->datalen)) !=
-              stride::msg::Reject::None ||
-          st.decode(e->data, 0, static_cast<int>(e->datalen)) < 0) {
+      const int size = static_cast<int>(stride::msg::unsignedPayloadSize(
+          static_cast<const std::uint8_t*>(e->data), static_cast<int>(e->datalen)));
+      if (stride::msg::checkStatusWire(e->data, size) != stride::msg::Reject::None ||
+          st.decode(e->data, 0, size) < 0) {
         ++bad;
         continue;
       }

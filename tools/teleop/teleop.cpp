@@ -19,6 +19,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <lcm/lcm-cpp.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,7 @@
 #include "config/robot_config.hpp"
 #include "controller/command_script.hpp"
 #include "messages/validate.hpp"
+#include "messages/wire_auth.hpp"
 #include "tools/teleop/keyboard_command.hpp"
 #include "tools/teleop/raw_terminal.hpp"
 #include "tools/teleop/script_player.hpp"
@@ -55,15 +57,19 @@ std::int64_t monotonicMicros() {
   return static_cast<std::int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
 }
 
-// Encodes and publishes commands; counts them and the failures.
+// Encodes, signs (with a key: messages/README.md, "Signing") and publishes commands; counts them
+// and the failures.
 class CommandSender {
  public:
-  CommandSender(lcm::LCM& lcm, std::string channel) : lcm_(lcm), channel_(std::move(channel)) {}
+  CommandSender(lcm::LCM& lcm, std::string channel, stride::msg::WireAuth& auth)
+      : lcm_(lcm), channel_(std::move(channel)), auth_(auth) {}
   void send(const stride::command_t& c) {
     const int size = c.getEncodedSize();
-    buffer_.resize(static_cast<std::size_t>(size));
+    buffer_.resize(static_cast<std::size_t>(size) + stride::msg::kSignatureSize);
     c.encode(buffer_.data(), 0, size);
-    if (lcm_.publish(channel_, buffer_.data(), static_cast<unsigned>(size)) == 0)
+    const int n =
+        auth_.send(channel_.c_str(), buffer_.data(), size, static_cast<int>(buffer_.size()));
+    if (n > 0 && lcm_.publish(channel_, buffer_.data(), static_cast<unsigned>(n)) == 0)
       ++sent_;
     else
       ++failures_;
@@ -74,6 +80,7 @@ class CommandSender {
  private:
   lcm::LCM& lcm_;
   std::string channel_;
+  stride::msg::WireAuth& auth_;
   std::vector<unsigned char> buffer_;
   long sent_ = 0, failures_ = 0;
 };
@@ -91,10 +98,10 @@ stride::command_t toMessage(const stride::teleop::TeleopCommand& c, std::int64_t
 
 // ---- keyboard -----------------------------------------------------------------------------------
 
-int runKeyboard(lcm::LCM& lcm, const std::string& channel, GaitSet gaits,
-                const stride::teleop::KeyboardLimits& limits, double rate_hz) {
+int runKeyboard(lcm::LCM& lcm, const std::string& channel, stride::msg::WireAuth& auth,
+                GaitSet gaits, const stride::teleop::KeyboardLimits& limits, double rate_hz) {
   stride::teleop::KeyboardCommand keys(gaits, limits);
-  CommandSender sender(lcm, channel);
+  CommandSender sender(lcm, channel, auth);
   std::string gait_keys;
   const auto& names = stride::teleop::gaitNames(gaits);
   for (std::size_t i = 0; i < names.size(); ++i)
@@ -164,11 +171,18 @@ std::string describeEntry(const stride::ScriptedCommand& c) {
 // state is size-checked before decoding and content-checked after, as every Stride program does.
 class ScriptInput {
  public:
-  ScriptInput(stride::teleop::ScriptPlayer& player, CommandSender& sender, const char* until)
-      : player_(player), sender_(sender), until_(until) {}
+  ScriptInput(stride::teleop::ScriptPlayer& player, CommandSender& sender,
+              stride::msg::WireAuth& auth, const char* until)
+      : player_(player), sender_(sender), auth_(auth), until_(until) {}
 
-  void handle(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    const int size = static_cast<int>(rbuf->data_size);
+  void handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    // The robot's clock only from the robot (with a key: signed with it).
+    const int size = auth_.receive(0, channel.c_str(), static_cast<const std::uint8_t*>(rbuf->data),
+                                   static_cast<int>(rbuf->data_size));
+    if (size < 0) {
+      ++rejected_;
+      return;
+    }
     if (model_.nq == 0 && !learnModel(rbuf->data, size)) {
       ++rejected_;
       return;
@@ -222,6 +236,7 @@ class ScriptInput {
 
   stride::teleop::ScriptPlayer& player_;
   CommandSender& sender_;
+  stride::msg::WireAuth& auth_;
   const char* until_;  // what ends the repetition
   stride::robot_state_t state_;
   stride::msg::WireModel model_;  // nq 0 until the first plausible state
@@ -230,11 +245,12 @@ class ScriptInput {
 };
 
 int runScript(lcm::LCM& lcm, const std::string& channel, const std::string& state_channel,
-              const std::string& path, std::vector<stride::ScriptedCommand> script,
+              stride::msg::WireAuth& auth, const std::string& path,
+              std::vector<stride::ScriptedCommand> script,
               const stride::teleop::ScriptPlayerOptions& options) {
   stride::teleop::ScriptPlayer player(std::move(script), options);
-  CommandSender sender(lcm, channel);
-  ScriptInput input(player, sender,
+  CommandSender sender(lcm, channel, auth);
+  ScriptInput input(player, sender, auth,
                     options.duration > 0.0 ? "SIGINT/SIGTERM or --duration" : "SIGINT/SIGTERM");
   lcm::Subscription* sub = lcm.subscribe(state_channel, &ScriptInput::handle, &input);
   if (sub == nullptr) {
@@ -291,8 +307,8 @@ int main(int argc, char** argv) {
       "stride-teleop: body velocity commands for stride-mpc, from the keyboard or a command "
       "script played on the robot's clock"};
   stride::commandLineConventions(app, "stride-teleop");
-  std::string url, channel = "STRIDE_COMMAND", state_channel = "STRIDE_STATE",
-                   gaits_name = "quadruped", commands;
+  std::string key_file, url, channel = "STRIDE_COMMAND", state_channel = "STRIDE_STATE",
+                             gaits_name = "quadruped", commands;
   stride::teleop::KeyboardLimits limits;
   stride::teleop::ScriptPlayerOptions script_options;
   double rate_hz = 20.0;
@@ -333,6 +349,10 @@ int main(int argc, char** argv) {
   app.add_option(
       "--commands", commands,
       "play this command script (controller/command_script.hpp) instead of the keyboard");
+  app.add_option("--key-file", key_file,
+                 "the shared key: commands are signed with it, and (script) the robot's states "
+                 "must be (messages/README.md, \"Signing\"); without one the wire is "
+                 "unauthenticated");
   app.add_option("--state-channel", state_channel, "script: the robot's clock comes from here")
       ->capture_default_str();
   app.add_option("--hold", script_options.hold,
@@ -374,9 +394,14 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "stride-teleop: cannot open LCM '%s'\n", url.c_str());
       return 2;
     }
+    const std::optional<stride::msg::Key> key =
+        stride::msg::keyForProgram(key_file, "stride-teleop");
+    stride::msg::WireAuth auth =
+        key ? stride::msg::WireAuth(*key, "stride-teleop") : stride::msg::WireAuth();
     if (!commands.empty())
-      return runScript(lcm, channel, state_channel, commands, std::move(script), script_options);
-    return runKeyboard(lcm, channel, gaits, limits, rate_hz);
+      return runScript(lcm, channel, state_channel, auth, commands, std::move(script),
+                       script_options);
+    return runKeyboard(lcm, channel, auth, gaits, limits, rate_hz);
   } catch (const std::exception& e) {  // unwinding restores the terminal
     std::fprintf(stderr, "\nstride-teleop: %s\n", e.what());
     return 1;

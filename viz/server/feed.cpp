@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "config/model_hash.hpp"
+#include "messages/signing.hpp"
 #include "solver/contact/knot_dynamics.hpp"
 #include "stride/command_t.hpp"
 #include "viz/server/frames.hpp"
@@ -117,6 +118,9 @@ void Feed::loadRobot(const std::string& yaml) {
 
 Feed::Took Feed::take(const std::string& channel, const void* data, int size) {
   Took took = Took::None;
+  // The viewer only reads: a signed message is read as the plain one it carries, unverified
+  // (messages/README.md, "Signing").
+  size = static_cast<int>(msg::unsignedPayloadSize(static_cast<const std::uint8_t*>(data), size));
   // A channel may be configured twice (e.g. one name for everything in a test): first match wins.
   if (channel == channels_.model)
     took = takeModel(data, size);
