@@ -117,10 +117,11 @@ if fault == "kill-sim":
     sys.exit(0)
 s = load("sim.json")
 line = ("tilt max %.1f deg, base %.3f..%.3f m, walked %.2f m; %d steps standing down, %d past a "
-        "policy's end, %d controller switches; %d policies taken, %d of another model refused"
+        "policy's end, %d controller switches; %d policies taken, %d of another model refused, %d "
+        "not signed with the key refused"
         % (s["max_tilt_deg"], s["base_height_min_m"], s["base_height_max_m"], s["distance_m"],
            s["stand_down_steps"], s["exhausted_steps"], s["source_switches"], s["policies"],
-           s["policies_wrong_model"]))
+           s["policies_wrong_model"], s["policies_unauthenticated"]))
 if fault == "rival":
     m, r = load("mpc.json"), load("mpc-rival.json")
     line += ("; %d of the rival refused; the controller saw %d of the rival's policies, the rival "

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# lcm-spy decodes every Stride channel (issue 17: the model message shows, state and policy stay
-# decodable): a short in-process drive (on a terrain: its elevation maps too) writes a log of all
+# lcm-spy decodes every Stride channel, signed or not (issue 17: the model message shows, state
+# and policy stay decodable; issue 33: signed): a short in-process drive (on a terrain: its elevation maps too) writes a log of all
 # channels, and LcmSpyDecodes.java looks
 # each message's class up by fingerprint the way lcm-spy does, from stride_lcm_types.jar. The
 # elevation map (terrain_t) also from a map with unknown (NaN) cells the C++ encoder wrote, and the
@@ -22,3 +22,12 @@ java -cp "$jar:$lcm_jar:/usr/share/java/jchart2d.jar:$dir" LcmSpyDecodes "$dir/s
   STRIDE_TERRAIN=terrain_t STRIDE_HORIZON=horizon_t \
   "corpus:$(dirname "$0")/../fuzz/corpus/viz_terrain-box_step=terrain_t" \
   "corpus:$(dirname "$0")/../fuzz/corpus/viz_horizon-standing=horizon_t"
+# Signed messages (issue 33: a signature trailer after the LCM bytes) decode the same: lcm-spy reads
+# from the front. A session with signing on, its key made here (mode 0600, as stride-keygen's).
+python3 -c "import os, sys; fd = os.open(sys.argv[1], os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600); os.write(fd, (os.urandom(32).hex() + '\n').encode())" "$dir/key"
+"$drive" --config "$config/controller/stride_quad.yaml" \
+  --commands "$config/commands/stride_quad.yaml" --terrain step_up_down --duration 1.5 \
+  --key-file "$dir/key" --log "$dir/signed.lcmlog" > /dev/null
+java -cp "$jar:$lcm_jar:/usr/share/java/jchart2d.jar:$dir" LcmSpyDecodes "$dir/signed.lcmlog" STRIDE_STATE=robot_state_t \
+  STRIDE_POLICY=policy_t STRIDE_STATUS=mpc_status_t STRIDE_MODEL=robot_model_t STRIDE_COMMAND=command_t \
+  STRIDE_TERRAIN=terrain_t STRIDE_HORIZON=horizon_t

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "messages/signing.hpp"
 #include "stride/command_t.hpp"
 #include "stride/mpc_status_t.hpp"
 #include "stride/robot_state_t.hpp"
@@ -21,10 +22,16 @@ namespace {
 
 enum class Robot { Tracks, SlowInSegment1, FallsInSegment2 };
 
+// Signs what write() writes, when set (messages/README.md, "Signing").
+stride::msg::Signer* g_signer = nullptr;
+
 template <typename Message>
 void write(lcm::LogFile& log, const std::string& channel, const Message& m, std::int64_t utime) {
-  std::vector<unsigned char> bytes(m.getEncodedSize());
-  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  std::vector<unsigned char> bytes(m.getEncodedSize() + stride::msg::kSignatureSize);
+  const int n = m.encode(bytes.data(), 0, m.getEncodedSize());
+  bytes.resize(
+      g_signer ? g_signer->sign(channel.c_str(), bytes.data(), n, static_cast<int>(bytes.size()))
+               : n);
   lcm::LogEvent e{};
   e.timestamp = utime;
   e.channel = channel;
@@ -241,4 +248,74 @@ TEST(LogSummary, TheMockRobotsWhyIsSaid) {
   r = summarize(log, "--sim-summary " + sim);
   EXPECT_EQ(r.output.find("robot: "), std::string::npos) << r.output;
   EXPECT_TRUE(r.json["why"].is_null());
+}
+
+// Issue 33, the logger's race: lcm-logger stopped 0.3 s before the robot's last state, and the
+// robot fell in those 0.3 s (its own summary says so, with the stamp of its last state). The
+// summary says the log's loss, calls the robot fallen (never "did not fall" first) and exits 4.
+TEST(LogSummary, AFallAfterTheLoggerStoppedIsAFall) {
+  const std::string log = writeSession("tail", Robot::Tracks);  // last state at 16 000 000 us
+  const std::string sim = testing::TempDir() + "/tail_sim.json";
+  std::ofstream(sim) << nlohmann::json{{"fell", true}, {"last_state_utime", 16300000}}.dump();
+  const Summary r = summarize(log, "--sim-summary " + sim);
+  EXPECT_EQ(r.status, 4) << r.output;
+  EXPECT_NE(r.output.find("log: the logger stopped 0.300 s before the robot's last state"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("did not fall"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(", FELL\n"), std::string::npos) << r.output;
+  EXPECT_EQ(r.json["fell"], true);
+  EXPECT_NEAR(r.json["log_tail_lost_s"].get<double>(), 0.3, 1e-9);
+  // The logger had it all: no loss said.
+  std::ofstream(sim) << nlohmann::json{{"fell", false}, {"last_state_utime", 16000000}}.dump();
+  const Summary whole = summarize(log, "--sim-summary " + sim);
+  EXPECT_EQ(whole.status, 0) << whole.output;
+  EXPECT_EQ(whole.output.find("log: the logger stopped"), std::string::npos) << whole.output;
+  EXPECT_EQ(whole.json["log_tail_lost_s"], 0.0);
+}
+
+// Issue 33: --fault-end says whether control came back after a fault: every segment starting 2 s
+// after it tracked (exit 6 if not), and when the command was first tracked.
+TEST(LogSummary, RecoveryAfterAFault) {
+  const Summary ok = summarize(writeSession("recovers", Robot::Tracks), "--fault-end 1.0");
+  EXPECT_EQ(ok.status, 0) << ok.output;
+  EXPECT_NE(ok.output.find("recovery: the fault ended at 1.00 s; 2 of 2 segments starting 2 s "
+                           "after it tracked: control came back"),
+            std::string::npos)
+      << ok.output;
+  EXPECT_EQ(ok.json["recovery"]["segments_after"], 2);
+  EXPECT_EQ(ok.json["recovery"]["recovered"], true);
+  EXPECT_EQ(ok.json["recovery"]["time_to_tracking_s"], 0.0);  // standing, as commanded
+  const Summary slow =
+      summarize(writeSession("slow_after", Robot::SlowInSegment1), "--fault-end 1.0");
+  EXPECT_EQ(slow.status, 6) << slow.output;
+  EXPECT_NE(slow.output.find("1 of 2 segments starting 2 s after it tracked: control did NOT come "
+                             "back"),
+            std::string::npos)
+      << slow.output;
+  EXPECT_EQ(slow.json["recovery"]["recovered"], false);
+  // Past every segment's start: not judged, and not a failure of recovery either (the fault
+  // ended too late in the run to tell).
+  const Summary late = summarize(writeSession("late", Robot::Tracks), "--fault-end 8.0");
+  EXPECT_EQ(late.status, 0) << late.output;
+  EXPECT_NE(late.output.find("no checked segment starts 2 s after it: not judged"),
+            std::string::npos)
+      << late.output;
+  EXPECT_EQ(late.json["recovery"]["recovered"], false);
+}
+
+// Signed messages in a log (a session with signing on) read as the plain ones: the summary reads,
+// it does not verify.
+TEST(LogSummary, ASignedSessionReadsAsThePlainOne) {
+  const stride::msg::Key key = stride::msg::makeKey({1, 2, 3});
+  stride::msg::Signer signer(key, 5);
+  g_signer = &signer;
+  const std::string log = writeSession("signed", Robot::Tracks);
+  g_signer = nullptr;
+  const Summary plain = summarize(writeSession("unsigned", Robot::Tracks), "");
+  const Summary r = summarize(log, "");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(r.json["segments"], plain.json["segments"]);
+  EXPECT_EQ(r.json["command_rejects"], plain.json["command_rejects"]);
+  EXPECT_EQ(r.json["distance_m"], plain.json["distance_m"]);
 }

@@ -14,6 +14,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "messages/signing.hpp"
 #include "viz/server/feed.hpp"
 #include "viz/server/frames.hpp"
 #include "viz/server/log_document.hpp"
@@ -232,6 +233,28 @@ TEST(Feed, StatesBeforeTheRobotIsKnownAreDropped) {
   EXPECT_EQ(feed.rejected(Channels{}.model), 1);
   ASSERT_EQ(feed.warnings().size(), 1u);
   EXPECT_NE(feed.warnings()[0].find("stride_quad"), std::string::npos);
+}
+
+// The viewer only reads: a signed message (issue 33: a signature trailer after the LCM bytes) is
+// taken as the plain one it carries, unverified; a signed state of another model is still refused.
+TEST(Feed, SignedMessagesAreReadAsThePlainOnes) {
+  Feed feed(Channels{}, quadSource());
+  msg::Signer signer(msg::makeKey({9, 9, 9}), 4);
+  const auto sign = [&](std::vector<unsigned char> b, const std::string& channel) {
+    const int n = static_cast<int>(b.size());
+    b.resize(b.size() + msg::kSignatureSize);
+    b.resize(signer.sign(channel.c_str(), b.data(), n, static_cast<int>(b.size())));
+    return b;
+  };
+  take(feed, Channels{}.model, sign(encode(quadModel()), Channels{}.model));
+  ASSERT_NE(feed.robot(), nullptr);
+  take(feed, Channels{}.state, sign(encode(standingState(1000)), Channels{}.state));
+  EXPECT_EQ(feed.accepted(Channels{}.state), 1);
+  EXPECT_EQ(feed.rejected(Channels{}.state), 0);
+  robot_state_t other = standingState(2000);
+  other.model_hash ^= 1;
+  take(feed, Channels{}.state, sign(encode(other), Channels{}.state));
+  EXPECT_EQ(feed.rejected(Channels{}.state), 1);
 }
 
 TEST(Feed, TheRobotIsFoundByTheNameOnTheWire) {

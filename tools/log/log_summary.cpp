@@ -235,7 +235,7 @@ int main(int argc, char** argv) {
       "Exit status: 0 read, upright (and tracked, with --check-tracking); 1 a segment missed its "
       "command (--check-tracking) or the log or summary could not be read or written; 2 a usage "
       "error; 4 the robot fell (as stride-sim's); 5 more messages lost than --max-lost; 6 control "
-      "did not come back after the fault (--fault-end).");
+      "did not come back after the fault (--fault-end; not when no segment starts after it).");
   app.add_option("--tolerance", tolerance.relative,
                  "tracking: allowed error as a fraction of the commanded value")
       ->check(CLI::Range(0.0, 10.0))
@@ -635,6 +635,7 @@ int main(int argc, char** argv) {
   }
   if (fell) return 4;
   if (max_lost >= 0 && lost > max_lost) return 5;
-  if (judge_recovery && !recovery.recovered) return 6;
+  // Not judged (no segment after the fault) is no verdict either way: said, not a failure.
+  if (judge_recovery && recovery.segments_after > 0 && !recovery.recovered) return 6;
   return check_tracking && !tracked ? 1 : 0;
 }
