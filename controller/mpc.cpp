@@ -435,6 +435,16 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
       finishStatus(tick_start, kPolicyNone);
       return false;
     }
+    // Past the re-solves, a start-up solve that took more than half a policy's span is not sent
+    // either: its policy would reach the robot at or past its end (issue 33: 4 of 10 real-time
+    // restarts of the humanoid sent one 0.2 s old, and one of those robots fell). The next tick
+    // is a regular one from this solution, bounded by its deadline.
+    const double policy_ms = 1e3 * (policy_.knots - 1) * config_.locomotion.dt;
+    if (ok && startup_tick_ && real_time && status_.solve_ms > 0.5 * policy_ms) {
+      ++counters_.startup_resolves;
+      finishStatus(tick_start, kPolicyNone);
+      return false;
+    }
     if (ok) {
       // A line search that takes no step, tick after tick, while μ climbs to its limit is stuck
       // on a warm start the new references broke (a sudden stand on a frozen robot lifted the
