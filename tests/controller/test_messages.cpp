@@ -250,19 +250,23 @@ TEST_F(NodeInput, RejectsAndCountsMalformedStates) {
   EXPECT_EQ(out_.statuses, 1);
 }
 
+// A standing state of the node's robot stamped `utime`, as LCM hands it over: received at
+// recv_utime (wall clock, µs; 0: unknown, taken as now).
+void feedState(MpcNode& node, std::int64_t utime, std::int64_t recv_utime = 0) {
+  robot_state_t m = standingState(node.mpc().robot(), utime);
+  std::vector<unsigned char> b(m.getEncodedSize());
+  m.encode(b.data(), 0, static_cast<int>(b.size()));
+  lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), recv_utime};
+  node.onState(&rbuf, "STRIDE_STATE");
+}
+
 // Real time: a stamp that jumps far ahead of the time that passed is refused (else every later,
 // correct estimate would be "out of order" and the controller locked out).
 TEST(NodeRealTime, StampJumpingAheadIsRejected) {
   const ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
   Recorder out;
   MpcNode node(config, out, TimeSource::RealTime);
-  auto feed = [&](std::int64_t utime) {
-    robot_state_t m = standingState(node.mpc().robot(), utime);
-    std::vector<unsigned char> b(m.getEncodedSize());
-    m.encode(b.data(), 0, static_cast<int>(b.size()));
-    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
-    node.onState(&rbuf, "STRIDE_STATE");
-  };
+  auto feed = [&](std::int64_t utime) { feedState(node, utime); };
   feed(1000000);
   feed(1001000);
   feed(1000000000000);  // 11 days later, a few microseconds after the last one arrived
@@ -283,11 +287,7 @@ TEST(NodeRealTime, ABacklogDoesNotLockTheControllerOut) {
   clock_gettime(CLOCK_REALTIME, &ts);
   const std::int64_t wall = static_cast<std::int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
   auto feed = [&](std::int64_t utime, std::int64_t recv_utime) {
-    robot_state_t m = standingState(node.mpc().robot(), utime);
-    std::vector<unsigned char> b(m.getEncodedSize());
-    m.encode(b.data(), 0, static_cast<int>(b.size()));
-    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), recv_utime};
-    node.onState(&rbuf, "STRIDE_STATE");
+    feedState(node, utime, recv_utime);
   };
   // 1000 states of a 1 kHz robot received 2.5 .. 1.5 s ago (the queue's capacity), the next
   // 1.5 s dropped by the full queue, then the robot's fresh states.
@@ -305,13 +305,7 @@ TEST(NodeRealTime, AStampLeadThatPersistsIsAClockOffset) {
   const ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
   Recorder out;
   MpcNode node(config, out, TimeSource::RealTime);
-  auto feed = [&](std::int64_t utime) {
-    robot_state_t m = standingState(node.mpc().robot(), utime);
-    std::vector<unsigned char> b(m.getEncodedSize());
-    m.encode(b.data(), 0, static_cast<int>(b.size()));
-    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
-    node.onState(&rbuf, "STRIDE_STATE");
-  };
+  auto feed = [&](std::int64_t utime) { feedState(node, utime); };
   feed(1000000);
   node.tick(Mpc::Clock::now() + std::chrono::seconds(10));
   const double plan_time = node.mpc().status().plan_time;
@@ -344,11 +338,7 @@ TEST(NodeStamps, StampsThatStartAgainAreANewRobot) {
   Recorder out;
   MpcNode node(config, out, TimeSource::Stamps);
   auto feed = [&](std::int64_t utime) {
-    robot_state_t m = standingState(node.mpc().robot(), utime);
-    std::vector<unsigned char> b(m.getEncodedSize());
-    m.encode(b.data(), 0, static_cast<int>(b.size()));
-    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
-    node.onState(&rbuf, "STRIDE_STATE");
+    feedState(node, utime);
     if (node.tickDue()) node.tick(Mpc::Clock::time_point::max());
   };
   for (std::int64_t t = 5000000; t <= 6000000; t += 5000) feed(t);
