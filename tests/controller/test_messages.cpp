@@ -505,27 +505,44 @@ TEST(NodeSigned, RefusesWhatIsNotSignedWithItsKey) {
     EXPECT_NE(err.find(said), std::string::npos) << said << " in: " << err;
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 4) << "the first of each, once: " << err;
 
-  // Commands: an unsigned one changes nothing, a signed one is taken.
+  // Commands: unsigned, another key's, forged and replayed ones change nothing; a signed one is
+  // taken.
   command_t c;
   c.utime = 7000;
   c.gait = "trot";
   c.vx = 0.3;
-  const auto sendCommand = [&](msg::Signer* signer) {
+  const auto commandBytes = [&](msg::Signer* signer) {
     std::vector<std::uint8_t> b(c.getEncodedSize() + msg::kSignatureSize);
     const int n = c.encode(b.data(), 0, c.getEncodedSize());
     b.resize(signer ? signer->sign("STRIDE_COMMAND", b.data(), n, static_cast<int>(b.size())) : n);
+    return b;
+  };
+  const auto sendCommand = [&](std::vector<std::uint8_t> b) {
     lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
     node.onCommand(&rbuf, "STRIDE_COMMAND");
   };
+  msg::Signer teleop(key, 9), other_teleop(other, 9);
   testing::internal::CaptureStderr();
-  sendCommand(nullptr);
+  sendCommand(commandBytes(nullptr));
+  sendCommand(commandBytes(&other_teleop));
+  std::vector<std::uint8_t> forged_command = commandBytes(&teleop);
+  forged_command[30] ^= 0x10;  // vx changed on the way
+  sendCommand(forged_command);
   EXPECT_EQ(node.commands().counters().accepted, 0);
-  msg::Signer teleop(key, 9);
   c.utime = 8000;
-  sendCommand(&teleop);
-  testing::internal::GetCapturedStderr();
+  const std::vector<std::uint8_t> command = commandBytes(&teleop);
+  sendCommand(command);
+  EXPECT_EQ(node.commands().counters().accepted, 1);
+  sendCommand(command);  // replayed
+  const std::string command_err = testing::internal::GetCapturedStderr();
   EXPECT_EQ(node.commands().counters().accepted, 1);
   EXPECT_EQ(node.auth().refused(msg::Verdict::Unsigned), 3);
+  EXPECT_EQ(node.auth().refused(msg::Verdict::WrongKey), 2);
+  EXPECT_EQ(node.auth().refused(msg::Verdict::Forged), 2);
+  EXPECT_EQ(node.auth().refused(msg::Verdict::Replayed), 2);
+  EXPECT_EQ(node.commandsMalformed(), 4);
+  EXPECT_EQ(std::count(command_err.begin(), command_err.end(), '\n'), 4)
+      << "the command channel's first of each, once: " << command_err;
 
   // Its policy goes out signed; it verifies with the key, and comes back as its own, not a rival's.
   feed(bytes(state(9000), &robot));
