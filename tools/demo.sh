@@ -82,7 +82,7 @@
 #                     shared by the robot, the controller and the teleop
 #   --no-signing      no key: the wire unauthenticated, as before signing (each program says so)
 #   --rival-key       --rival, the rival given the key (a second controller of the operator's:
-#                     the robot keeps the first while it speaks; sim/README.md, "Rival")
+#                     the robot keeps the first while it speaks; messages/README.md, "Signing")
 #   --rival           also run a second stride-mpc on the robot's channels with another plan (its
 #                     commands from STRIDE_RIVAL_COMMAND, where nobody sends: it stands while the
 #                     robot walks; on the side core at nice 10): the robot must follow the first
@@ -341,7 +341,7 @@ sim_args=(--robot "$robot_yaml" "${dirs_args[@]}" --duration "$sim_duration"
   --summary "$out/sim.json")
 [ -n "$terrain" ] && sim_args+=(--terrain "$terrain")
 [ -n "$map_rate" ] && sim_args+=(--map-rate "$map_rate")
-rm -f "$out/sim.json" "$out/sim-restarted.json"
+rm -f "$out/sim.json" "$out/sim-restarted.json" "$out/kill.txt" "$out/pause.txt" "$out/sim-restart.txt"
 # Authenticated messages (messages/README.md, "Signing"): a fresh key for every run, unless one
 # was given or signing was turned off. The robot, the controller and the teleop share it; the
 # rival and the flood do not (--rival-key gives the rival the key).
