@@ -10,6 +10,7 @@
 #include "controller/mpc.hpp"
 #include "controller/mpc_node.hpp"
 #include "controller_cases.hpp"
+#include "sanitizers.hpp"
 
 namespace stride {
 namespace {
@@ -29,7 +30,7 @@ TEST(ControllerConfig, ShippedConfigsLoad) {
 }
 
 std::string configError(const std::string& yaml) {
-  const std::string path = testing::TempDir() + "/stride_bad_config.yaml";
+  const std::string path = ::testing::TempDir() + "/stride_bad_config.yaml";
   std::ofstream(path) << yaml;
   try {
     loadControllerConfig(path);
@@ -133,7 +134,7 @@ TEST(Gait, PlanFile) {
   EXPECT_EQ(plan.phases.size(), 14u);
   EXPECT_FALSE(plan.isClosed("FL_foot", 1.15));
   EXPECT_TRUE(plan.isClosed("FL_foot", 10.0));
-  const std::string bad = testing::TempDir() + "/stride_bad_plan.yaml";
+  const std::string bad = ::testing::TempDir() + "/stride_bad_plan.yaml";
   std::ofstream(bad) << "phases:\n  - {duration: -1, contacts: [FL_foot]}\n";
   EXPECT_THROW(loadContactPlan(bad), ConfigError);
   std::ofstream(bad) << "phases:\n  - {contacts: [FL_foot]}\n";
@@ -368,13 +369,15 @@ TEST(Mpc, AControllerStoppedLongerThanItsHorizonDrivesAgain) {
   mpc.setCommand(forward,
                  static_cast<int>(std::find(gaits.begin(), gaits.end(), "trot") - gaits.begin()));
   robot_state_t s = standingState(mpc.robot(), 1000000);
-  const auto period = std::chrono::microseconds(5000);
+  // The wall-clock budgets, longer under the sanitizers (the work is slower there, not the robot).
+  constexpr int kSlow = testing::kSanitizerSlowdown;
+  const auto period = std::chrono::microseconds(5000 * kSlow);
   const auto tickRealTime = [&](std::int64_t dt_us) {
     s.utime += dt_us;
     const auto start = Mpc::Clock::now();
     // An answer due 1.5 ms after the tick's start: a prepared tick's rollout fits, a whole
     // iteration does not (as on a loaded host, where the pause was seen).
-    const bool sent = mpc.tick(&s, 0.0, start + std::chrono::microseconds(1500));
+    const bool sent = mpc.tick(&s, 0.0, start + std::chrono::microseconds(1500 * kSlow));
     mpc.prepare(start + period + period / 2);
     return sent;
   };
@@ -403,13 +406,10 @@ TEST(Mpc, DeadlineMissesCountAnswersAfterTheDeadline) {
   Mpc mpc(config);
   robot_state_t s = standingState(mpc.robot(), 0);
   const auto past = [] { return Mpc::Clock::now() - std::chrono::milliseconds(1); };
-  // The start-up solve runs to convergence before the first policy, without a deadline (made
-  // again on newer states while it takes longer than a period: ALongStartUpSolveIsMadeAgain...).
-  int startup_ticks = 1;
-  while (!mpc.tick(&s, 0.0, past())) {
-    ASSERT_LE(++startup_ticks, 1 + Mpc::kMaxStartupResolves);
-    s.utime += 5000;
-  }
+  // The start-up solve runs to convergence before the first policy, without a deadline (in real
+  // time made again on newer states while it takes longer than a period, whatever the host's
+  // speed: ALongStartUpSolveIsMadeAgain...; here it answers, as in lock-step).
+  ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
   EXPECT_EQ(mpc.counters().deadline_misses, 0);
   ASSERT_TRUE(preparedTick(mpc, s, 5000));
   EXPECT_EQ(mpc.counters().deadline_misses, 0);
@@ -473,11 +473,21 @@ TEST(Mpc, ALongStartUpSolveIsMadeAgainOnTheNewestState) {
     const int ticks = startUp(mpc, s);
     EXPECT_LE(ticks, Mpc::kMaxStartupResolves + 1);
     std::printf("stride_quad's start-up here: a policy at tick %d\n", ticks);
-    EXPECT_EQ(mpc.policy().status, kPolicySolved);
-    EXPECT_EQ(mpc.policy().utime, s.utime);
-    s.utime += 5000;
-    ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
-    EXPECT_FALSE(mpc.startupTick());
+    if (mpc.policy().utime != s.utime) {
+      // A host too slow for any start-up solve within half a policy (the sanitizers' 3-10x): the
+      // last one is withheld too, and the next tick, a regular one, answers.
+      EXPECT_TRUE(testing::kAddressSanitizer) << "at this host's speed a start-up solve answers";
+      EXPECT_EQ(ticks, Mpc::kMaxStartupResolves + 1);
+      s.utime += 5000;
+      ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+      EXPECT_FALSE(mpc.startupTick());
+      EXPECT_EQ(mpc.policy().utime, s.utime);
+    } else {
+      EXPECT_EQ(mpc.policy().status, kPolicySolved);
+      s.utime += 5000;
+      ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+      EXPECT_FALSE(mpc.startupTick());
+    }
   }
   {  // Lock-step (no deadline): the first solve answers.
     ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
