@@ -66,8 +66,8 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
   msg::shape(horizon_, mpc_.horizonKnots(), model.nq,
              static_cast<int>(mpc_.robot().contacts.size()), mpc_.horizonFootholds());
   horizon_buffer_.resize(horizon_.getEncodedSize());
-  signed_out_.reserve(static_cast<int>(
-      std::max({buffer_.size(), horizon_buffer_.size(), model_buffer_.size()})));
+  signed_out_.reserve(
+      static_cast<int>(std::max({buffer_.size(), horizon_buffer_.size(), model_buffer_.size()})));
 }
 
 robot_model_t robotModelMessage(const Robot& robot, int nu) {
