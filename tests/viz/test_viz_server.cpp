@@ -211,6 +211,8 @@ class Live : public ::testing::Test {
     options.info_period = 0.2;
     server = std::make_unique<HttpServer>(options, Json{{"mode", "live"}, {"url", "memq://"}});
     live = std::make_unique<LiveSource>(lcm, *feed, *server, 1000.0);
+    // Counted on the source's thread, after the LiveSource's own handler for the same message.
+    lcm.subscribe("STRIDE_STATUS", &Live::onStatus, this);
     server_thread = std::thread([this] { server->run(); });
     source_thread = std::thread([this] { live->run(stop); });
   }
@@ -220,8 +222,16 @@ class Live : public ::testing::Test {
     if (server_thread.joinable()) server_thread.join();
     if (source_thread.joinable()) source_thread.join();
   }
-  // One millisecond's messages.
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&) { ++handled_; }
+  // One millisecond's messages. memq:// keeps every message not yet handled, whatever the
+  // subscription's queue capacity (UDP drops beyond it), so a publisher faster than the source
+  // (a slow host, the sanitizers) would grow LCM's queue, not the server's: the publisher waits
+  // (up to 1 s) until the source is at most kAhead status messages behind.
   void publish(std::int64_t utime) {
+    const auto give_up = Clock::now() + std::chrono::seconds(1);
+    while (published_ - handled_.load() > kAhead && Clock::now() < give_up)
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    ++published_;
     const robot_state_t s = standingState(utime);
     lcm.publish("STRIDE_STATE", &s);
     horizon_.utime = utime;
@@ -243,6 +253,9 @@ class Live : public ::testing::Test {
   std::atomic<bool> stop{false};
   std::thread server_thread, source_thread;
   horizon_t horizon_ = standingHorizon(0, 100);
+  static constexpr long kAhead = 20;
+  long published_ = 0;
+  std::atomic<long> handled_{0};
 };
 
 TEST_F(Live, ABrowserThatNeverReadsCostsBoundedMemory) {
