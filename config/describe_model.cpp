@@ -53,7 +53,8 @@ std::string describeModel(const Robot& robot) {
   std::memcpy(&h, &signed_hash, 8);
   std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(h));
   out << "model hash " << hash << " (int64 " << signed_hash
-      << "; of the joint names, types and order, and the contact frames): every robot_state_t "
+      << "; of the joint names, types and order, the contact frames and the kinematic tree's "
+         "geometry): every robot_state_t "
          "and policy_t carries it in model_hash\n";
 
   auto row = [&](const std::string& index, const std::string& name, const std::string& what) {

@@ -1,5 +1,7 @@
 #include "config/model_hash.hpp"
 
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 
 namespace stride {
@@ -12,6 +14,26 @@ void fnv1a(std::uint64_t& h, const std::string& s) {
     h *= 1099511628211ULL;
   }
   h *= 1099511628211ULL;  // the terminating NUL: h ^= 0 leaves h, the multiplication remains
+}
+
+// A placement as text, rounded: translation to the millimetre, rotation (and axis) entries to
+// 1e-3, so that the same geometry from two parsers, compilers or instruction sets hashes alike
+// (the last bits of cos and sin of a URDF's rpy differ between them; a value within a few ulp of
+// a rounding boundary, as 0.0005 m exactly, is the one case that could still differ). "-0" is "0".
+void fnv1aRounded(std::uint64_t& h, const double* x, int n, double unit) {
+  std::string text;
+  char buf[32];
+  for (int i = 0; i < n; ++i) {
+    const long long r = std::llround(x[i] / unit);
+    std::snprintf(buf, sizeof buf, "%lld,", r);
+    text += buf;
+  }
+  fnv1a(h, text);
+}
+
+void fnv1aPlacement(std::uint64_t& h, const SE3& m) {
+  fnv1aRounded(h, m.p.data(), 3, 1e-3);
+  fnv1aRounded(h, m.R.data(), 9, 1e-3);
 }
 }  // namespace
 
@@ -28,12 +50,30 @@ std::vector<WireJoint> wireJoints(const Model& model) {
 
 std::int64_t modelHash(const Robot& robot) {
   std::uint64_t h = 14695981039346656037ULL;
-  for (const WireJoint& j : wireJoints(robot.model)) {
+  const Model& model = robot.model;
+  for (const WireJoint& j : wireJoints(model)) {
     fnv1a(h, j.name);
     fnv1a(h, j.type);
   }
+  // The kinematic tree's geometry (issue 34: ANYmal B and C share every joint name): each joint's
+  // parent, placement and axis. Not masses, inertias or limits.
+  fnv1a(h, "geometry");
+  for (int i = 1; i < model.njoints(); ++i) {
+    const Joint& j = model.joints[i];
+    fnv1a(h, std::to_string(j.parent));
+    fnv1aPlacement(h, j.placement);
+    fnv1aRounded(h, j.axis.data(), 3, 1e-3);
+  }
   fnv1a(h, "contacts");
-  for (const ContactSpec& c : robot.contacts) fnv1a(h, c.frame);
+  for (const ContactSpec& c : robot.contacts) {
+    fnv1a(h, c.frame);
+    for (const Frame& f : model.frames)  // the first of that name, as Model::getFrameId
+      if (f.name == c.frame) {
+        fnv1a(h, std::to_string(f.parentJoint));
+        fnv1aPlacement(h, f.placement);
+        break;
+      }
+  }
   std::int64_t out;
   std::memcpy(&out, &h, 8);
   return out;

@@ -2,8 +2,10 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
+#include <sstream>
 
 #include "config/robot_config.hpp"
 
@@ -67,6 +69,21 @@ int commandAt(const std::vector<ScriptedCommand>& script, double t) {
   int i = 0;
   while (i + 1 < static_cast<int>(script.size()) && script[i + 1].at <= t) ++i;
   return i;
+}
+
+void checkScriptGaits(const std::vector<ScriptedCommand>& script, const std::string& path,
+                      const std::vector<std::string>& gaits, const std::string& what) {
+  for (std::size_t i = 0; i < script.size(); ++i) {
+    const std::string& g = script[i].gait;
+    if (g.empty() || std::find(gaits.begin(), gaits.end(), g) != gaits.end()) continue;  // "": keep
+    std::string list;
+    for (const std::string& n : gaits) list += (list.empty() ? "" : ", ") + n;
+    std::ostringstream at;
+    at << script[i].at;
+    throw ConfigError("command script '" + path + "': entry " + std::to_string(i) + " (at " +
+                      at.str() + " s): gait '" + g + "': " + what + " walks with " + list +
+                      " only");
+  }
 }
 
 }  // namespace stride

@@ -28,6 +28,14 @@ struct ScriptedCommand {
 // an empty script.
 std::vector<ScriptedCommand> loadCommandScript(const std::string& path);
 
+// Throws ConfigError naming the file, the entry, its time and the robot's gaits when an entry asks
+// for a gait not in `gaits` (gaitNames(contacts): trot on a biped). The controller would refuse
+// that command and keep the gait in force: a script meant for another robot would walk on
+// silently in the wrong gait (issue 34). `what` names the robot ("the robot of 'x.yaml'", "a biped
+// (--gaits biped)").
+void checkScriptGaits(const std::vector<ScriptedCommand>& script, const std::string& path,
+                      const std::vector<std::string>& gaits, const std::string& what);
+
 // The entry in force at time t (the last with at <= t; the first before it).
 int commandAt(const std::vector<ScriptedCommand>& script, double t);
 

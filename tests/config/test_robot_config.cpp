@@ -17,6 +17,7 @@
 #include "config/robot_config.hpp"
 #include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/frames.hpp"
+#include "solver/multibody/urdf.hpp"
 
 namespace stride {
 namespace {
@@ -567,7 +568,7 @@ TEST(ModelHash, TellsRobotsOfTheSameSizesApart) {
   EXPECT_NE(modelHash(loadRobot(kHumanoid)), modelHash(quad));
   // Pinned: estimators in the field carry this number; a change to the hash's definition (or to
   // the joint type names it reads, toString(JointType)) must be a decision, not an accident.
-  EXPECT_EQ(static_cast<std::uint64_t>(modelHash(quad)), 0x08b107c975d49d74ULL);
+  EXPECT_EQ(static_cast<std::uint64_t>(modelHash(quad)), 0xea5842469bb5543aULL);
 
   Robot changed = quad;  // the contacts in another order: the phase bits mean other feet
   std::swap(changed.contacts[0], changed.contacts[1]);
@@ -580,8 +581,40 @@ TEST(ModelHash, TellsRobotsOfTheSameSizesApart) {
   EXPECT_NE(modelHash(changed), modelHash(quad));
   changed = quad;  // masses and limits retuned: the same wire
   changed.model.effortLimit *= 2.0;
+  changed.model.inertias[3].m *= 1.5;
   changed.name = "retuned";
   EXPECT_EQ(modelHash(changed), modelHash(quad));
+  changed = quad;  // a shank 1 cm longer: another robot (issue 34)
+  changed.model.joints[3].placement.p.z() -= 0.01;
+  EXPECT_NE(modelHash(changed), modelHash(quad));
+  changed = quad;  // a joint's axis the other way
+  changed.model.joints[2].axis = -changed.model.joints[2].axis;
+  EXPECT_NE(modelHash(changed), modelHash(quad));
+  changed = quad;  // a foot frame moved
+  changed.model.frames[changed.model.getFrameId(quad.contacts[0].frame)].placement.p.x() += 0.01;
+  EXPECT_NE(modelHash(changed), modelHash(quad));
+  changed = quad;  // a placement that differs in its last bits (another parser or compiler)
+  changed.model.joints[3].placement.p.z() += 1e-12;
+  changed.model.joints[3].placement.R(0, 1) += 1e-12;
+  EXPECT_EQ(modelHash(changed), modelHash(quad));
+
+  // ANYmal B and ANYmal C: the same joint names, types and order and the same foot names; other
+  // legs (issue 34: a B controller took a C robot's states).
+  const Robot anymal_c = loadRobot(robotYaml("anymal_c"), {kPackages});
+  Robot anymal_b = anymal_c;
+  anymal_b.model = buildModelFromUrdf(
+      kPackages + "/example-robot-data/robots/anymal_b_simple_description/robots/anymal.urdf",
+      RootJoint::FreeFlyer);
+  const std::vector<WireJoint> b_joints = wireJoints(anymal_b.model),
+                               c_joints = wireJoints(anymal_c.model);
+  ASSERT_EQ(b_joints.size(), c_joints.size());
+  for (std::size_t i = 0; i < b_joints.size(); ++i) {
+    EXPECT_EQ(b_joints[i].name, c_joints[i].name);
+    EXPECT_EQ(b_joints[i].type, c_joints[i].type);
+  }
+  for (const ContactSpec& c : anymal_c.contacts)
+    EXPECT_NO_THROW(anymal_b.model.getFrameId(c.frame)) << c.frame;
+  EXPECT_NE(modelHash(anymal_b), modelHash(anymal_c));
 
   const std::vector<WireJoint> joints = wireJoints(quad.model);
   ASSERT_EQ(joints.size(), 13u);

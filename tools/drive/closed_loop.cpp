@@ -197,6 +197,8 @@ Run run(const ControllerConfig& config, const Options& options) {
       s.forward_passes = solver->forwardPasses();
     }
     s.solve_ms = status.solve_ms;
+    s.prepare_ms = status.prepare_ms;
+    s.tick_ms = status.tick_ms;
     s.clamped_steps = sim->simulator().counters().clamped_steps;
     s.tau = sim->simulator().appliedTorque();
     if (options.each) options.each(s);

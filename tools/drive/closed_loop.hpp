@@ -29,7 +29,9 @@ struct Sample {
   double ground = 0.0;                          // the terrain's height under the base
   unsigned feet_mask = 0;                       // bit c: contact c carries load
   int backward_passes = 0, forward_passes = 0;  // of the tick's solve
-  double solve_ms = 0.0;
+  // The tick's figures from its status (mpc_status_t): the solve after the state came in, the
+  // preparation it used (run ahead, in the previous period), the whole tick.
+  double solve_ms = 0.0, prepare_ms = 0.0, tick_ms = 0.0;
   // The mock robot's 1 kHz steps so far whose torque was clamped to the effort limits, and the
   // torque applied in the last one (nu): a robot short of torque shows here first.
   std::int64_t clamped_steps = 0;

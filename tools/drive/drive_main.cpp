@@ -8,24 +8,70 @@
 //                sim/command_line.hpp, the same options as stride-sim's]
 //                [--lose-controller AT [--controller-back-after S]] [--stand-down-grace S]
 //                [--stand-down-ramp S]
-// Exit status: 0; 1 with --check-tracking when a segment missed its command or the robot fell;
-// 2 for bad arguments or files.
+// Exit status, as stride-sim's and stride-log-summary's: 0; 4 when the robot fell, 3 when the
+// simulation diverged (whether or not --check-tracking); 1 with --check-tracking when a segment
+// missed its command; 2 for bad arguments or files.
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "config/command_line.hpp"
+#include "controller/command_script.hpp"
+#include "controller/gait.hpp"
 #include "sim/command_line.hpp"
 #include "terrain/terrain_file.hpp"
 #include "tools/drive/closed_loop.hpp"
 
 namespace {
 
+// The controller's timing over a run, from its status messages (lock-step: the controller's own
+// work, the host's load aside; the real-time figures are stride-mpc's --summary).
+struct Timing {
+  double period_ms = 0.0, wall_s = 0.0;
+  std::int64_t ticks = 0;
+  double solve[3] = {0, 0, 0}, prepare[3] = {0, 0, 0}, tick[3] = {0, 0, 0};  // p50, p99, max
+};
+
+void quantiles(std::vector<double> x, double out[3]) {
+  if (x.empty()) return;
+  std::sort(x.begin(), x.end());
+  const auto at = [&x](double p) {
+    return x[std::min(x.size() - 1, static_cast<std::size_t>(p * static_cast<double>(x.size())))];
+  };
+  out[0] = at(0.5);
+  out[1] = at(0.99);
+  out[2] = x.back();
+}
+
+Timing timingOf(const stride::drive::Run& run, double rate_hz, double wall_s) {
+  Timing t;
+  t.period_ms = 1000.0 / rate_hz;
+  t.wall_s = wall_s;
+  t.ticks = static_cast<std::int64_t>(run.samples.size());
+  std::vector<double> solve, prepare, tick;
+  for (const stride::drive::Sample& s : run.samples) {
+    solve.push_back(s.solve_ms);
+    prepare.push_back(s.prepare_ms);
+    tick.push_back(s.tick_ms);
+  }
+  quantiles(solve, t.solve);
+  quantiles(prepare, t.prepare);
+  quantiles(tick, t.tick);
+  return t;
+}
+
+nlohmann::ordered_json quantileJson(const double q[3]) {
+  return {{"p50", q[0]}, {"p99", q[1]}, {"max", q[2]}};
+}
+
 void writeJson(const std::string& path, const stride::drive::Run& run,
-               const std::vector<stride::logs::Segment>& segments, bool tracked) {
+               const std::vector<stride::logs::Segment>& segments, bool tracked,
+               const Timing& timing) {
   nlohmann::ordered_json j;
   j["fell"] = run.fell();
   j["diverged"] = run.sim.diverged;
@@ -48,6 +94,19 @@ void writeJson(const std::string& path, const stride::drive::Run& run,
   j["sole_flat_fraction"] = std::isfinite(run.sole_flat_fraction)
                                 ? nlohmann::ordered_json(run.sole_flat_fraction)
                                 : nlohmann::ordered_json(nullptr);
+  const double robot_s = run.samples.empty() ? 0.0 : run.samples.back().t;
+  j["timing"] = {
+      {"period_ms", timing.period_ms},
+      {"ticks", timing.ticks},
+      {"solve_ms", quantileJson(timing.solve)},
+      {"prepare_ms", quantileJson(timing.prepare)},
+      {"tick_ms", quantileJson(timing.tick)},
+      // The share of the period the tick and its preparation take (the budget, p50 and p99).
+      {"budget_share_p50", (timing.tick[0] + timing.prepare[0]) / timing.period_ms},
+      {"budget_share_p99", (timing.tick[1] + timing.prepare[1]) / timing.period_ms},
+      {"deadline_misses", run.mpc.deadline_misses},
+      {"wall_s", timing.wall_s},
+      {"robot_s_per_wall_s", timing.wall_s > 0.0 ? robot_s / timing.wall_s : 0.0}};
   j["segments"] = nlohmann::ordered_json::array();
   for (const stride::logs::Segment& s : segments) {
     nlohmann::ordered_json segment;
@@ -127,7 +186,7 @@ int main(int argc, char** argv) {
   app.add_option("--map-latency", options.sim.map.latency, "the maps' latency [s]");
   app.add_flag("--check-tracking", check,
                "exit 1 when a segment of 2 s or more misses its command by more than max(15%, "
-               "0.05 m/s, 0.1 rad/s), or the robot fell");
+               "0.05 m/s, 0.1 rad/s) (a fall always exits 4, a diverged simulation 3)");
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
   if (!stride::sim::finishMockRobotOptions(mock_args, options.sim, "stride-drive")) return 2;
@@ -137,6 +196,12 @@ int main(int argc, char** argv) {
     config.robots_dirs = robots_dirs;
     if (!key_file.empty()) config.key_file = key_file;
     options.script = stride::loadCommandScript(script_path);
+    {  // the script's gaits must be the robot's (the controller would refuse the others)
+      const stride::Robot robot = stride::loadRobot(config.robot_yaml, config.robots_dirs);
+      stride::checkScriptGaits(options.script, script_path,
+                               stride::gaitNames(static_cast<int>(robot.contacts.size())),
+                               "the robot of '" + config_path + "'");
+    }
     if (!terrain_name.empty())
       options.terrain = std::make_shared<const stride::terrain::Terrain>(
           stride::terrain::loadTerrainFile(stride::terrain::findTerrainFile(
@@ -179,7 +244,11 @@ int main(int argc, char** argv) {
                      s.tau.size() ? s.tau.cwiseAbs().maxCoeff() : 0.0);
       };
     }
+    const auto wall0 = std::chrono::steady_clock::now();
     const stride::drive::Run run = stride::drive::run(config, options);
+    const Timing timing =
+        timingOf(run, config.rate_hz,
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count());
     if (trace) std::fclose(trace);
     const std::vector<stride::logs::Segment> segments = run.segments(segment_options);
     const std::vector<stride::logs::TrackingMiss> misses = stride::logs::checkTracking(segments);
@@ -191,6 +260,12 @@ int main(int argc, char** argv) {
     if (const std::string differs = stride::sim::describeMockRobot(options.sim, options.physics);
         !differs.empty())
       std::printf("  the robot differs from a perfect one: %s\n", differs.c_str());
+    std::printf(
+        "  timing (lock-step, this host): tick p50/p99/max %.2f/%.2f/%.2f ms, preparation "
+        "p50/p99 %.2f/%.2f ms, of a %.1f ms period; %.1f s of robot time per s\n",
+        timing.tick[0], timing.tick[1], timing.tick[2], timing.prepare[0], timing.prepare[1],
+        timing.period_ms,
+        timing.wall_s > 0.0 && !run.samples.empty() ? run.samples.back().t / timing.wall_s : 0.0);
     if (run.q_end.size() >= 7) {
       std::printf(
           "  terrain '%s': final base (%.3f, %.3f, %.3f) m, %.3f m above the terrain under it, "
@@ -233,8 +308,10 @@ int main(int argc, char** argv) {
     std::printf("stride-drive: %s\n", tracked      ? "every segment tracked its command"
                                       : run.fell() ? "the robot fell"
                                                    : "some segments missed their command");
-    if (!summary.empty()) writeJson(summary, run, segments, tracked);
+    if (!summary.empty()) writeJson(summary, run, segments, tracked, timing);
     if (!options.log.empty()) std::printf("log: %s\n", options.log.c_str());
+    if (run.sim.diverged) return 3;
+    if (run.fell()) return 4;
     return check && !tracked ? 1 : 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "stride-drive: %s\n", e.what());

@@ -285,21 +285,6 @@ int runScript(lcm::LCM& lcm, const std::string& channel, const std::string& stat
   return status;
 }
 
-// The script's gaits must be the robot's: the controller would reject the others (and count them).
-void checkGaits(const std::vector<stride::ScriptedCommand>& script, const std::string& path,
-                GaitSet gaits, const std::string& gaits_name) {
-  const auto& names = stride::teleop::gaitNames(gaits);
-  for (std::size_t i = 0; i < script.size(); ++i) {
-    const std::string& g = script[i].gait;
-    if (g.empty() || std::find(names.begin(), names.end(), g) != names.end()) continue;
-    std::string list;
-    for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-    throw stride::ConfigError("command script '" + path + "': entry " + std::to_string(i) +
-                              ": gait '" + g + "' is not one of " + list + " (--gaits " +
-                              gaits_name + ")");
-  }
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -375,7 +360,8 @@ int main(int argc, char** argv) {
   if (!commands.empty()) {
     try {
       script = stride::loadCommandScript(commands);
-      checkGaits(script, commands, gaits, gaits_name);
+      stride::checkScriptGaits(script, commands, stride::teleop::gaitNames(gaits),
+                               "a " + gaits_name + " (--gaits " + gaits_name + ")");
     } catch (const std::exception& e) {
       std::fprintf(stderr, "stride-teleop: %s\n", e.what());
       return 2;
