@@ -6,19 +6,29 @@
 # runs inside a private network namespace this script creates (only a loopback interface,
 # multicast routed to it, ttl=0): nothing reaches the host's network.
 #
-#   tools/demo.sh [--robot NAME | --humanoid] [--commands FILE | --teleop] [--duration S]
-#                 [--realtime | --lockstep] [--robots-dir DIR]... [--check-tracking]
-#                 [--host-network] [--out DIR] [--summary FILE] [--spy] [--viz [--viz-port P]]
+#   tools/demo.sh [--robot NAME | --humanoid | --config FILE] [--no-setup]
+#                 [--commands FILE | --teleop] [--duration S] [--realtime | --lockstep]
+#                 [--robots-dir DIR]... [--check-tracking] [--host-network] [--out DIR]
+#                 [--summary FILE] [--spy] [--viz [--viz-port P]]
 #                 [--slow-host F] [--kill-controller T] [--pause-controller T D]
 #                 [--kill-sim T] [--flood RATE] [--rival | --rival-key]
 #                 [--key-file F | --no-signing]
 #                 [--terrain NAME|FILE [--map-rate HZ]]
 #
-#   --robot NAME      stride_quad (default), solo12, anymal_c, stride_humanoid, talos_reduced:
-#                     config/controller/NAME.yaml; solo12, anymal_c and talos_reduced need
+#   --robot NAME      a shipped robot: stride_quad (default), solo12, anymal_c, stride_humanoid,
+#                     talos_reduced: config/controller/NAME.yaml (a name, never a path: another
+#                     configuration is --config FILE); solo12, anymal_c and talos_reduced need
 #                     example-robot-data (--robots-dir, ROS_PACKAGE_PATH, or build/robot_packages,
 #                     which the build makes from ../shared)
 #   --humanoid        short for --robot stride_humanoid
+#   --config FILE     drive any controller configuration (stride-mpc --config FILE): its paths
+#                     (robot:, gait.plan_file, lcm.key_file) are relative to FILE's folder; only
+#                     read, never written. Its name in the output is FILE's without .yaml; the
+#                     default command script is the in-house robot's of its kind
+#                     (config/commands/stride_quad.yaml for a robot that trots, else
+#                     stride_humanoid.yaml; terrain_... with --terrain)
+#   --no-setup        skip the set-up (tools/install-deps.sh: apt-get; tools/build.sh: cmake and
+#                     the build) and run on the build as it is; the same as STRIDE_DEMO_NO_SETUP=1
 #   --terrain T       the world the robot walks in: a terrain file, or NAME for
 #                     config/terrain/NAME.yaml (stairs_anymal_c, ramp_solo12, rough_stride_quad,
 #                     step_talos_reduced, ...; format in terrain/README.md); default flat ground.
@@ -93,7 +103,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 
-robot=stride_quad commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
+robot=stride_quad by_name=0 user_config="" no_setup=0 commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
 spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood="" kill_sim="" rival=0
 pause_at="" pause_for="" terrain="" map_rate="" signing=1 key_file="" rival_key=0
 robots_dirs=()
@@ -101,8 +111,10 @@ args=("$@")
 need_value() { [ $# -ge 2 ] || { echo "demo.sh: $1 needs a value (--help)" >&2; exit 2; }; }
 while [ $# -gt 0 ]; do
   case "$1" in
-    --robot) need_value "$@"; robot="$2"; shift 2 ;;
-    --humanoid) robot=stride_humanoid; shift ;;
+    --robot) need_value "$@"; robot="$2" by_name=1; shift 2 ;;
+    --humanoid) robot=stride_humanoid by_name=1; shift ;;
+    --config) need_value "$@"; user_config="$2"; shift 2 ;;
+    --no-setup) no_setup=1; shift ;;
     --terrain) need_value "$@"; terrain="$2"; shift 2 ;;
     --map-rate) need_value "$@"; map_rate="$2"; shift 2 ;;
     --commands) need_value "$@"; commands="$2"; shift 2 ;;
@@ -135,11 +147,23 @@ while [ $# -gt 0 ]; do
   esac
 done
 
-config="$root/config/controller/$robot.yaml"
-if [ ! -f "$config" ]; then
-  echo "demo.sh: no robot '$robot' (config/controller/$robot.yaml); the robots:" \
-    $(cd "$root/config/controller" && ls *.yaml | sed 's/\.yaml$//') >&2
-  exit 2
+[ "$by_name" = 1 ] && [ -n "$user_config" ] &&
+  { echo "demo.sh: --robot/--humanoid or --config, not both" >&2; exit 2; }
+if [ -n "$user_config" ]; then
+  # The user's configuration, read where it is (stride-mpc resolves its paths from its folder).
+  [ -f "$user_config" ] && [ -r "$user_config" ] ||
+    { echo "demo.sh: no configuration file '$user_config'" >&2; exit 2; }
+  config=$(realpath -- "$user_config")
+  robot=$(basename -- "$config" | sed -E 's/\.ya?ml$//')
+else
+  # A shipped robot's name only, never a path (issue 34: a path disguised as a name).
+  config="$root/config/controller/$robot.yaml"
+  if ! [[ "$robot" =~ ^[A-Za-z0-9_]+$ ]] || [ ! -f "$config" ]; then
+    echo "demo.sh: no robot '$robot' (config/controller/NAME.yaml); the robots:" \
+      $(cd "$root/config/controller" && ls -- *.yaml | sed 's/\.yaml$//') >&2
+    echo "  another configuration: --config FILE" >&2
+    exit 2
+  fi
 fi
 if [ -n "$terrain" ]; then
   if [ -f "$terrain" ]; then
@@ -152,52 +176,65 @@ if [ -n "$terrain" ]; then
     exit 2
   fi
 fi
-if [ "$teleop" = 1 ]; then
-  [ -n "$commands" ] && { echo "demo.sh: --teleop or --commands, not both" >&2; exit 2; }
-  [ -n "$duration" ] && { echo "demo.sh: --teleop runs until you quit it (x); no --duration" >&2; exit 2; }
-  [ "$mode" = lockstep ] && {
-    echo "demo.sh: --teleop runs in real time (the keyboard's commands are on the wall clock)" >&2
-    exit 2
-  }
-  mode=realtime
-  [ -t 0 ] || { echo "demo.sh: --teleop reads the keyboard: stdin must be a terminal" >&2; exit 2; }
-elif [ "$commands" = none ]; then
-  duration="${duration:-60}"
+# The command source, the duration and the mode; the default command script is the robot's
+# (config/commands/NAME.yaml), for --config the in-house robot's of its kind, known once the
+# model is loaded (below).
+commands_and_duration() {
+  if [ "$teleop" = 1 ]; then
+    [ -n "$commands" ] && { echo "demo.sh: --teleop or --commands, not both" >&2; exit 2; }
+    [ -n "$duration" ] && { echo "demo.sh: --teleop runs until you quit it (x); no --duration" >&2; exit 2; }
+    [ "$mode" = lockstep ] && {
+      echo "demo.sh: --teleop runs in real time (the keyboard's commands are on the wall clock)" >&2
+      exit 2
+    }
+    mode=realtime
+    [ -t 0 ] || { echo "demo.sh: --teleop reads the keyboard: stdin must be a terminal" >&2; exit 2; }
+  elif [ "$commands" = none ]; then
+    duration="${duration:-60}"
+  else
+    # On a terrain, the robot's slower walk over it (config/commands/terrain_NAME.yaml) if it has one.
+    if [ -z "$commands" ] && [ -n "$terrain" ] && [ -f "$root/config/commands/terrain_$script_robot.yaml" ]; then
+      commands="$root/config/commands/terrain_$script_robot.yaml"
+    fi
+    commands="${commands:-$root/config/commands/$script_robot.yaml}"
+    [ -f "$commands" ] || { echo "demo.sh: no command script '$commands'" >&2; exit 2; }
+    commands=$(cd "$(dirname "$commands")" && echo "$(pwd)/$(basename "$commands")")
+    if [ -z "$duration" ]; then
+      # The last entry's time (entries `- {at: T, ...}` or `- at: T`), comments stripped.
+      last=$(sed 's/#.*//' "$commands" | grep -oE '(^|[{ ,-])at: *[-+0-9.eE]+' |
+        sed 's/.*at: *//' | tail -n 1)
+      [ -n "$last" ] || { echo "demo.sh: '$commands' has no entry with 'at:'" >&2; exit 2; }
+      duration=$(awk -v t="$last" 'BEGIN { printf "%g", t + 4 }')
+    fi
+  fi
+  awk -v d="$duration" 'BEGIN { exit !(d == "" || d + 0 > 0) }' ||
+    { echo "demo.sh: --duration must be a positive number of seconds" >&2; exit 2; }
+  [ -z "$mode" ] && mode=realtime
+  if [ -n "$kill_sim" ]; then
+    # A restarted mock robot in lock-step would stamp from 0 again, which the controller refuses as
+    # stamps going back; with the keyboard or no commands the demo does not run the sim itself.
+    { [ "$mode" = realtime ] && [ "$teleop" = 0 ] && [ "$commands" != none ]; } || {
+      echo "demo.sh: --kill-sim needs real time and a command script" >&2
+      exit 2
+    }
+    awk -v k="$kill_sim" -v d="$duration" 'BEGIN { exit !(k + 0 > 0 && k + 0 < d + 0) }' ||
+      { echo "demo.sh: --kill-sim T must be within the duration" >&2; exit 2; }
+  fi
+  return 0
+}
+script_robot=$robot
+defer_commands=0
+if [ -n "$user_config" ] && [ "$teleop" = 0 ] && [ -z "$commands" ]; then
+  defer_commands=1
 else
-  # On a terrain, the robot's slower walk over it (config/commands/terrain_NAME.yaml) if it has one.
-  if [ -z "$commands" ] && [ -n "$terrain" ] && [ -f "$root/config/commands/terrain_$robot.yaml" ]; then
-    commands="$root/config/commands/terrain_$robot.yaml"
-  fi
-  commands="${commands:-$root/config/commands/$robot.yaml}"
-  [ -f "$commands" ] || { echo "demo.sh: no command script '$commands'" >&2; exit 2; }
-  commands=$(cd "$(dirname "$commands")" && echo "$(pwd)/$(basename "$commands")")
-  if [ -z "$duration" ]; then
-    # The last entry's time (entries `- {at: T, ...}` or `- at: T`), comments stripped.
-    last=$(sed 's/#.*//' "$commands" | grep -oE '(^|[{ ,-])at: *[-+0-9.eE]+' |
-      sed 's/.*at: *//' | tail -n 1)
-    [ -n "$last" ] || { echo "demo.sh: '$commands' has no entry with 'at:'" >&2; exit 2; }
-    duration=$(awk -v t="$last" 'BEGIN { printf "%g", t + 4 }')
-  fi
-fi
-awk -v d="$duration" 'BEGIN { exit !(d == "" || d + 0 > 0) }' ||
-  { echo "demo.sh: --duration must be a positive number of seconds" >&2; exit 2; }
-[ -z "$mode" ] && mode=realtime
-if [ -n "$kill_sim" ]; then
-  # A restarted mock robot in lock-step would stamp from 0 again, which the controller refuses as
-  # stamps going back; with the keyboard or no commands the demo does not run the sim itself.
-  { [ "$mode" = realtime ] && [ "$teleop" = 0 ] && [ "$commands" != none ]; } || {
-    echo "demo.sh: --kill-sim needs real time and a command script" >&2
-    exit 2
-  }
-  awk -v k="$kill_sim" -v d="$duration" 'BEGIN { exit !(k + 0 > 0 && k + 0 < d + 0) }' ||
-    { echo "demo.sh: --kill-sim T must be within the duration" >&2; exit 2; }
+  commands_and_duration
 fi
 out="${out:-$build/demo}"
 summary="${summary:-$out/summary.json}"
 
-# Set-up (skipped inside the namespace: the outer invocation did it; and by tests, which run on a
-# tree already built: STRIDE_DEMO_NO_SETUP=1).
-if [ -z "${STRIDE_DEMO_INSIDE:-}" ] && [ -z "${STRIDE_DEMO_NO_SETUP:-}" ]; then
+# Set-up (skipped inside the namespace: the outer invocation did it; and with --no-setup or
+# STRIDE_DEMO_NO_SETUP=1, as the tests do, which run on a tree already built).
+if [ -z "${STRIDE_DEMO_INSIDE:-}" ] && [ -z "${STRIDE_DEMO_NO_SETUP:-}" ] && [ "$no_setup" = 0 ]; then
   "$root/tools/install-deps.sh"
   "$root/tools/build.sh"
 fi
@@ -223,6 +260,13 @@ robot_yaml=$(echo "$model" | sed -n 's/^  yaml  //p')
 gaits=biped
 echo "$model" | grep -q '^gaits:.* trot' && gaits=quadruped
 rate=$(sed -n 's/^rate_hz: *\([0-9.]*\).*/\1/p' "$config")  # lock-step: a state per tick
+if [ "$defer_commands" = 1 ]; then
+  script_robot=stride_humanoid
+  [ "$gaits" = quadruped ] && script_robot=stride_quad
+  commands_and_duration
+  [ -z "${STRIDE_DEMO_INSIDE:-}" ] &&
+    echo "demo: $robot ($config) plays $commands (the in-house robot's of its kind; --commands FILE)"
+fi
 
 if [ -z "${STRIDE_DEMO_INSIDE:-}" ] && [ "$host_network" = 0 ]; then
   # Re-run this script in a new network namespace (as root directly, else as a user namespace's
@@ -267,12 +311,14 @@ export LCM_DEFAULT_URL='udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304'
 log="$out/session.lcmlog"
 rm -f "$log" "$out/teleop.txt"
 pids=()
+rival_dir=""
 cleanup() {
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
   # The host's end of the viewer's forward (started before the namespace: same user, so ours to
   # stop).
   [ -n "${STRIDE_DEMO_VIZ_FORWARD:-}" ] && kill "$STRIDE_DEMO_VIZ_FORWARD" 2>/dev/null || true
   wait 2>/dev/null || true
+  [ -z "$rival_dir" ] || rm -rf "$rival_dir"
 }
 trap cleanup EXIT
 # Waits up to $3 s for the pattern $2 in the file $1 while the process $4 lives.
@@ -399,14 +445,38 @@ if [ -n "$flood" ]; then
   pids+=($!)
 fi
 if [ "$rival" = 1 ]; then
-  # The rival's YAML: the robot's, with the robot file's path made absolute (it is relative to the
-  # YAML) and the command channel moved where nobody sends.
-  rival_yaml="$out/rival.yaml"
-  config_dir=$(cd "$(dirname "$config")" && pwd)
-  robot_entry=$(sed -n 's/^robot: *//p' "$config")
-  case "$robot_entry" in /* | package://*) ;; *) robot_entry="$config_dir/$robot_entry" ;; esac
-  sed -e "s|^robot: .*|robot: $robot_entry|" -e '/^  command: /d' \
-    -e '/^lcm:/a\  command: STRIDE_RIVAL_COMMAND' "$config" > "$rival_yaml"
+  # The rival's YAML, in a temporary folder (the robot's configuration is only read): the robot's,
+  # with its paths made absolute (robot:, gait.plan_file, lcm.key_file: relative to the YAML's
+  # folder) and the command channel moved where nobody sends.
+  rival_dir=$(mktemp -d)
+  rival_yaml="$rival_dir/rival.yaml"
+  python3 - "$config" "$rival_dir/absolute.yaml" <<'PY'
+import json, os, re, sys
+src, dst = sys.argv[1], sys.argv[2]
+base = os.path.dirname(os.path.abspath(src))
+def scalar(text):  # a scalar's text: quoted, or plain up to a comment
+    text = text.strip()
+    if text[:1] == '"':
+        m = re.match(r'"((?:[^"\\]|\\.)*)"', text)
+        return json.loads('"%s"' % m.group(1)) if m else None
+    if text[:1] == "'":
+        m = re.match(r"'((?:[^']|'')*)'", text)
+        return m.group(1).replace("''", "'") if m else None
+    return re.split(r'\s+#', text)[0].strip()
+out = []
+for line in open(src).read().splitlines():
+    m = re.match(r'^(\s*)(robot|plan_file|key_file):(.*)$', line)
+    if m and (m.group(2) == 'robot') == (m.group(1) == ''):
+        v = scalar(m.group(3))
+        if v and not v.startswith('/') and not v.startswith('package://'):
+            line = '%s%s: %s' % (m.group(1), m.group(2),
+                                 json.dumps(os.path.normpath(os.path.join(base, v))))
+    out.append(line)
+with open(dst, 'w') as f:
+    f.write('\n'.join(out) + '\n')
+PY
+  sed -e '/^  command: /d' -e '/^lcm:/a\  command: STRIDE_RIVAL_COMMAND' "$rival_dir/absolute.yaml" \
+    > "$rival_yaml"
   grep -q '^lcm:' "$rival_yaml" || printf 'lcm:\n  command: STRIDE_RIVAL_COMMAND\n' >> "$rival_yaml"
   rival_args=(--config "$rival_yaml" "${dirs_args[@]}" --summary "$out/mpc-rival.json")
   [ "$rival_key" = 1 ] && rival_args+=("${key_args[@]}")

@@ -15,6 +15,8 @@
 // over the 2 s of climbing that follow.
 // The public robots are read from the package view of ../shared (build/robot_packages); without
 // it they are skipped with a message.
+// controller_tick/config:NAME and tick_parts/config:NAME/*: the same on any configuration,
+// stride-bench --config FILE (main.cpp; NAME is FILE's name without .yaml).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -31,6 +33,7 @@
 #include "sim/sim_node.hpp"
 #include "solver/ocp/knot.hpp"
 #include "terrain/terrain_file.hpp"
+#include "tools/bench/controller_source.hpp"
 
 namespace stride::bench {
 namespace {
@@ -39,8 +42,8 @@ namespace {
 // at once, walking forward (the hard ticks are the stepping ones).
 struct ClosedLoop {
   // terrain: a name in config/terrain/ (the mock robot publishes its maps), or null: flat ground.
-  explicit ClosedLoop(const char* robot, const char* terrain = nullptr)
-      : config(configFor(robot)),
+  explicit ClosedLoop(const ControllerSource& source, const char* terrain = nullptr)
+      : config(loadController(source)),
         lcm("memq://"),
         publisher(lcm),
         mpc(config, publisher, TimeSource::Stamps),
@@ -48,12 +51,6 @@ struct ClosedLoop {
     mpc.subscribe(lcm);
     sim.subscribe(lcm);
     reset();
-  }
-  static ControllerConfig configFor(const char* robot) {
-    ControllerConfig c =
-        loadControllerConfig(std::string(STRIDE_CONFIG_DIR) + "/controller/" + robot + ".yaml");
-    c.robots_dirs = {STRIDE_ROBOT_PACKAGES};
-    return c;
   }
   static sim::SimOptions worldOf(const char* terrain) {
     sim::SimOptions o;
@@ -109,11 +106,11 @@ struct ClosedLoop {
   sim::SimNode sim;
 };
 
-void controllerTick(benchmark::State& state, const char* robot, double warmup,
+void controllerTick(benchmark::State& state, const ControllerSource& source, double warmup,
                     const char* terrain) {
   std::unique_ptr<ClosedLoop> made;
   try {
-    made = std::make_unique<ClosedLoop>(robot, terrain);
+    made = std::make_unique<ClosedLoop>(source, terrain);
   } catch (const std::exception& e) {
     state.SkipWithError(e.what());  // a public robot whose description is not here
     return;
@@ -163,8 +160,15 @@ void controllerTick(benchmark::State& state, const char* robot, double warmup,
 
 // The parts of one tick's FDDP iteration on the problem the controller has 3 s into the gait
 // (stepping): derivatives of all knots, the backward pass, one rollout of the line search.
-void tickParts(benchmark::State& state, const char* robot, int part) {
-  ClosedLoop loop(robot);
+void tickParts(benchmark::State& state, const ControllerSource& source, int part) {
+  std::unique_ptr<ClosedLoop> made;
+  try {
+    made = std::make_unique<ClosedLoop>(source);
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  ClosedLoop& loop = *made;
   while (loop.sim.simulator().time() < 3.0) {
     if (!loop.period()) {
       state.SkipWithError("the robot fell during the warm-up");
@@ -183,13 +187,13 @@ void tickParts(benchmark::State& state, const char* robot, int part) {
   }
 }
 
-BENCHMARK_CAPTURE(tickParts, quad_derivatives, "stride_quad", 0)
+BENCHMARK_CAPTURE(tickParts, quad_derivatives, shippedController("stride_quad"), 0)
     ->Name("tick_parts/stride_quad/derivatives")
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(tickParts, quad_backward, "stride_quad", 1)
+BENCHMARK_CAPTURE(tickParts, quad_backward, shippedController("stride_quad"), 1)
     ->Name("tick_parts/stride_quad/backward")
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(tickParts, quad_forward, "stride_quad", 2)
+BENCHMARK_CAPTURE(tickParts, quad_forward, shippedController("stride_quad"), 2)
     ->Name("tick_parts/stride_quad/forward")
     ->Unit(benchmark::kMillisecond);
 
@@ -204,12 +208,12 @@ const bool registered = [] {
                                                  {"talos_reduced", 100}};
   for (const auto& [robot, ticks] : configs)
     benchmark::RegisterBenchmark((std::string("controller_tick/") + robot).c_str(), controllerTick,
-                                 robot, 1.5, nullptr)
+                                 shippedController(robot), 1.5, nullptr)
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond)
         ->Iterations(ticks);
-  benchmark::RegisterBenchmark("controller_tick/anymal_c_stairs", controllerTick, "anymal_c", 5.5,
-                               "stairs_anymal_c")
+  benchmark::RegisterBenchmark("controller_tick/anymal_c_stairs", controllerTick,
+                               shippedController("anymal_c"), 5.5, "stairs_anymal_c")
       ->UseManualTime()
       ->Unit(benchmark::kMillisecond)
       ->Iterations(400);
@@ -217,4 +221,23 @@ const bool registered = [] {
 }();
 
 }  // namespace
+
+// Any configuration (stride-bench --config FILE): as the shipped ones, 2 s of its periods after
+// 1.5 s (standing, then the first steps); the parts 3 s into the gait.
+void registerControllerBenchmarks(const ControllerSource& source, const std::string& name,
+                                  const ControllerConfig& config) {
+  const auto ticks = std::max<benchmark::IterationCount>(
+      1, static_cast<benchmark::IterationCount>(std::lround(2.0 * config.rate_hz)));
+  benchmark::RegisterBenchmark(("controller_tick/" + name).c_str(), controllerTick, source, 1.5,
+                               nullptr)
+      ->UseManualTime()
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(ticks);
+  const char* parts[] = {"derivatives", "backward", "forward"};
+  for (int part = 0; part < 3; ++part)
+    benchmark::RegisterBenchmark(("tick_parts/" + name + "/" + parts[part]).c_str(), tickParts,
+                                 source, part)
+        ->Unit(benchmark::kMillisecond);
+}
+
 }  // namespace stride::bench

@@ -6,22 +6,23 @@
 // (so gait phases, touch-downs and shifts all come by). Counter period_ms: the controller's
 // period, for scale. The public robots are read from the package view of ../shared
 // (build/robot_packages); without it they are skipped with a message.
+// reference_update/config:NAME: the same on any configuration (stride-bench --config FILE), at
+// half its max_velocity forward.
 #include <benchmark/benchmark.h>
 
 #include "controller/controller_config.hpp"
 #include "controller/gait.hpp"
 #include "solver/ocp/locomotion.hpp"
+#include "tools/bench/controller_source.hpp"
 
 namespace stride::bench {
 namespace {
 
-void referenceUpdate(benchmark::State& state, const char* robot, double speed) {
+void referenceUpdate(benchmark::State& state, const ControllerSource& source, double speed) {
   ControllerConfig config;
   Robot r;
   try {
-    config =
-        loadControllerConfig(std::string(STRIDE_CONFIG_DIR) + "/controller/" + robot + ".yaml");
-    config.robots_dirs = {STRIDE_ROBOT_PACKAGES};
+    config = loadController(source);
     r = loadRobot(config.robot_yaml, config.robots_dirs);
   } catch (const std::exception& e) {
     state.SkipWithError(e.what());  // a public robot whose description is not here
@@ -56,21 +57,29 @@ void referenceUpdate(benchmark::State& state, const char* robot, double speed) {
   state.counters["period_ms"] = 1e3 * period;
 }
 
-BENCHMARK_CAPTURE(referenceUpdate, stride_quad, "stride_quad", 0.5)
+BENCHMARK_CAPTURE(referenceUpdate, stride_quad, shippedController("stride_quad"), 0.5)
     ->Name("reference_update/stride_quad")
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(referenceUpdate, solo12, "solo12", 0.5)
+BENCHMARK_CAPTURE(referenceUpdate, solo12, shippedController("solo12"), 0.5)
     ->Name("reference_update/solo12")
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(referenceUpdate, anymal_c, "anymal_c", 0.8)
+BENCHMARK_CAPTURE(referenceUpdate, anymal_c, shippedController("anymal_c"), 0.8)
     ->Name("reference_update/anymal_c")
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(referenceUpdate, stride_humanoid, "stride_humanoid", 0.3)
+BENCHMARK_CAPTURE(referenceUpdate, stride_humanoid, shippedController("stride_humanoid"), 0.3)
     ->Name("reference_update/stride_humanoid")
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(referenceUpdate, talos_reduced, "talos_reduced", 0.3)
+BENCHMARK_CAPTURE(referenceUpdate, talos_reduced, shippedController("talos_reduced"), 0.3)
     ->Name("reference_update/talos_reduced")
     ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
+
+void registerReferenceBenchmark(const ControllerSource& source, const std::string& name,
+                                const ControllerConfig& config) {
+  benchmark::RegisterBenchmark(("reference_update/" + name).c_str(), referenceUpdate, source,
+                               0.5 * config.command.max_vx)
+      ->Unit(benchmark::kMicrosecond);
+}
+
 }  // namespace stride::bench
