@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "config/package_path.hpp"
+#include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/lie_group.hpp"
 #include "solver/multibody/srdf.hpp"
@@ -71,6 +72,19 @@ std::vector<ContactSpec> readContacts(const YAML::Node& contacts, const Model& m
     ContactSpec spec{need(c, "frame", path).as<std::string>(), need(c, "dim", path).as<int>()};
     if (!model.existFrame(spec.frame))
       fail(path, "contact frame '" + spec.frame + "' is not in the URDF");
+    // A moving joint's frame sits on the joint's axis (a knee, an ankle), not under the foot: the
+    // controller would plan forces at the joint (issue 34). The frames of the bodies it moves are
+    // what was meant.
+    if (const Frame& f = model.frames[model.getFrameId(spec.frame)]; f.type == FrameType::Joint) {
+      std::vector<std::string> bodies;
+      for (const Frame& g : model.frames)
+        if (g.parentJoint == f.parentJoint && g.type != FrameType::Joint) bodies.push_back(g.name);
+      fail(path,
+           "contacts[" + std::to_string(i) + "].frame: '" + spec.frame +
+               "' is a joint (its frame is on the joint's axis, not at the foot); name the "
+               "foot's link or frame instead" +
+               (bodies.empty() ? "" : " (the frames this joint moves: " + joined(bodies) + ")"));
+    }
     if (spec.dim != 3 && spec.dim != 6)
       fail(path, "contact '" + spec.frame + "' has dim " + std::to_string(spec.dim) + " (3 or 6)");
     for (const auto& other : out)
@@ -186,7 +200,153 @@ void putOnTheGround(Robot& robot, const std::string& base_source) {
     std::cerr << w.str();
   }
 }
+// The gaits pair feet by their index (gait.cpp: trot lifts 0 and 3, then 1 and 2; pace 0 and 2):
+// four feet must be listed front-left, front-right, hind-left, hind-right and two left, right. A
+// HyQ listed FL, HL, FR, HR trotted as a bound and was still "tracked" (issue 34). Judged by the
+// feet's positions in the base frame at the default posture.
+void checkFootOrder(const Robot& robot) {
+  const Model& model = robot.model;
+  const int n = static_cast<int>(robot.contacts.size());
+  if (!model.hasFreeFlyer() || (n != 2 && n != 4)) return;
+  Data data(model);
+  framesForwardKinematics(model, data, robot.default_q);
+  const SE3& base = data.oMi[1];
+  std::vector<Eigen::Vector3d> p;
+  for (const ContactSpec& c : robot.contacts)
+    p.push_back(base.R.transpose() * (data.oMf[model.getFrameId(c.frame)].p - base.p));
+  std::vector<int> order(n);  // the right order: by position
+  for (int i = 0; i < n; ++i) order[i] = i;
+  if (n == 2) {
+    std::sort(order.begin(), order.end(), [&p](int a, int b) { return p[a].y() > p[b].y(); });
+  } else {
+    std::sort(order.begin(), order.end(), [&p](int a, int b) { return p[a].x() > p[b].x(); });
+    for (int pair : {0, 2})
+      if (p[order[pair]].y() < p[order[pair + 1]].y()) std::swap(order[pair], order[pair + 1]);
+  }
+  bool right = true;
+  for (int i = 0; i < n; ++i) right = right && order[i] == i;
+  if (right) return;
+  static const char* kQuad[] = {"front-left", "front-right", "hind-left", "hind-right"};
+  static const char* kBiped[] = {"left", "right"};
+  const char* const* names = n == 4 ? kQuad : kBiped;
+  std::ostringstream what;
+  what << std::fixed << std::setprecision(3) << "contacts are not in the order the gaits assume ("
+       << (n == 4 ? "front-left, front-right, hind-left, hind-right" : "left, right")
+       << "): at the default posture, in the base frame [m],";
+  for (int i = 0; i < n; ++i) {
+    const int slot = static_cast<int>(std::find(order.begin(), order.end(), i) - order.begin());
+    what << (i ? ";" : "") << " contacts[" << i << "] '" << robot.contacts[i].frame << "' at (x "
+         << p[i].x() << ", y " << p[i].y() << ") is " << names[slot];
+  }
+  what << ". List them as:";
+  for (int i = 0; i < n; ++i) what << (i ? "," : "") << " " << robot.contacts[order[i]].frame;
+  fail(robot.yaml_path, what.str());
+}
+
+// The support polygon's signed distance to a point in the ground plane: negative inside, the
+// distance to the polygon (a segment for two point feet, a point for one) outside.
+double outsideSupport(std::vector<Eigen::Vector2d> pts, const Eigen::Vector2d& x) {
+  // Convex hull (monotone chain), counter-clockwise.
+  std::sort(pts.begin(), pts.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  const auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a,
+                        const Eigen::Vector2d& b) {
+    return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
+  };
+  std::vector<Eigen::Vector2d> hull;
+  for (int pass = 0; pass < 2; ++pass) {
+    const std::size_t start = hull.size();
+    for (const Eigen::Vector2d& q : pts) {
+      while (hull.size() >= start + 2 && cross(hull[hull.size() - 2], hull.back(), q) <= 1e-12)
+        hull.pop_back();
+      hull.push_back(q);
+    }
+    hull.pop_back();
+    std::reverse(pts.begin(), pts.end());
+  }
+  if (hull.empty()) hull = pts;  // all points equal
+  double nearest = std::numeric_limits<double>::infinity();
+  bool inside = hull.size() >= 3;
+  for (std::size_t i = 0; i < hull.size(); ++i) {
+    const Eigen::Vector2d& a = hull[i];
+    const Eigen::Vector2d& b = hull[(i + 1) % hull.size()];
+    const Eigen::Vector2d ab = b - a;
+    const double t =
+        ab.squaredNorm() > 0 ? std::clamp((x - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+    nearest = std::min(nearest, (a + t * ab - x).norm());
+    if (hull.size() >= 3 && cross(a, b, x) < 0) inside = false;
+  }
+  return inside ? -nearest : nearest;
+}
+
+// The support polygon's corners in the ground plane: point feet, and the four corners of each
+// sole (data: frame placements up to date).
+std::vector<Eigen::Vector2d> supportPoints(const Robot& robot, const Data& data) {
+  std::vector<Eigen::Vector2d> support;
+  for (const ContactSpec& c : robot.contacts) {
+    const SE3& f = data.oMf[robot.model.getFrameId(c.frame)];
+    if (c.dim == 3) {
+      support.push_back(f.p.head<2>());
+      continue;
+    }
+    for (const double sx : {-1.0, 1.0})
+      for (const double sy : {-1.0, 1.0})
+        support.push_back((f.p + f.R * Eigen::Vector3d(sx * robot.sole_half_extents.x(),
+                                                       sy * robot.sole_half_extents.y(), 0.0))
+                              .head<2>());
+  }
+  return support;
+}
+
+// Standing still at the default posture needs the centre of mass over the support polygon (the
+// feet, or the soles' corners). Bolt's posture put it 1.9 cm behind its feet and the robot pitched
+// back 31 degrees at start-up (issue 34). Beyond kBalanceWarning outside: a warning with the
+// distance; beyond kBalanceError: an error (no controller holds a robot started that way).
+constexpr double kBalanceWarning = 0.005, kBalanceError = 0.05;
+
+void checkBalance(const Robot& robot) {
+  const double d = comOutsideSupport(robot, robot.default_q);
+  if (d <= kBalanceWarning) return;
+  const Model& model = robot.model;
+  Data data(model);
+  const Eigen::Vector3d com = centerOfMass(model, data, robot.default_q);
+  updateFramePlacements(model, data);
+  const std::vector<Eigen::Vector2d> support = supportPoints(robot, data);
+  // Where it is, in the base's heading: behind or ahead, left or right of the feet's centre.
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector2d& q : support) centre += q / static_cast<double>(support.size());
+  const SE3& base = data.oMi[1];
+  const Eigen::Vector2d heading = base.R.col(0).head<2>().normalized();
+  const Eigen::Vector2d offset = com.head<2>() - centre;
+  const double ahead = offset.dot(heading),
+               left = offset.dot(Eigen::Vector2d(-heading.y(), heading.x()));
+  std::ostringstream what;
+  what << std::fixed << std::setprecision(1) << "the default posture's centre of mass is "
+       << d * 100 << " cm outside the support polygon of its "
+       << (robot.contacts.size() == 2 && robot.contacts[0].dim == 3 ? "two point feet (a line)"
+                                                                    : "feet")
+       << " (" << std::abs(ahead) * 100 << " cm " << (ahead < 0 ? "behind" : "ahead of") << ", "
+       << std::abs(left) * 100 << " cm " << (left < 0 ? "right" : "left")
+       << " of the feet's centre): the robot starts falling; move the feet under it (hip and knee "
+          "angles, or the SRDF posture)";
+  if (d > kBalanceError)
+    fail(robot.yaml_path, what.str() + " (more than " +
+                              std::to_string(static_cast<int>(kBalanceError * 100)) +
+                              " cm: refused)");
+  std::cerr << "warning: robot config '" << robot.yaml_path << "': " << what.str() << "\n";
+}
 }  // namespace
+
+double comOutsideSupport(const Robot& robot, const Eigen::VectorXd& q) {
+  const Model& model = robot.model;
+  if (!model.hasFreeFlyer() || robot.contacts.empty())
+    return -std::numeric_limits<double>::infinity();
+  Data data(model);
+  const Eigen::Vector3d com = centerOfMass(model, data, q);
+  updateFramePlacements(model, data);
+  return outsideSupport(supportPoints(robot, data), com.head<2>());
+}
 
 Robot loadRobot(const std::string& yaml_path, const std::vector<std::string>& robots_dirs) {
   YAML::Node root;
@@ -248,6 +408,13 @@ Robot loadRobot(const std::string& yaml_path, const std::vector<std::string>& ro
         fail(yaml_path, "sole_half_extents must be two positive numbers");
       robot.sole_half_extents << e[0], e[1];
     }
+    for (std::size_t i = 0; i < robot.contacts.size(); ++i)
+      if (robot.contacts[i].dim == 6 && !root["sole_half_extents"])
+        fail(yaml_path, "contacts[" + std::to_string(i) + "] '" + robot.contacts[i].frame +
+                            "' has dim 6 (a flat sole) but 'sole_half_extents' is not given: the "
+                            "sole's half length and half width [m] along the contact frame's x "
+                            "and y (half the foot's collision box), e.g. sole_half_extents: [0.1, "
+                            "0.05]; or dim 3 for a point foot");
     applyTorqueLimits(root["torque_limits"], model, yaml_path);
     if (const YAML::Node pd = root["joint_pd"]) {
       checkKeys(pd, {"kp", "kd"}, yaml_path, "joint_pd.");
@@ -262,6 +429,8 @@ Robot loadRobot(const std::string& yaml_path, const std::vector<std::string>& ro
     robot.default_q = readPosture(root, robot, yaml_path, base_source);
     putOnTheGround(robot, base_source);
     model.referenceConfigurations["default"] = robot.default_q;
+    checkFootOrder(robot);
+    checkBalance(robot);
   } catch (const YAML::Exception& e) {
     fail(yaml_path, std::string("bad value: ") + e.what());
   } catch (const UrdfError& e) {

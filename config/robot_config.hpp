@@ -41,6 +41,17 @@ struct Robot {
 // (ConfigError; RobotFileNotFound for a file that cannot be found) or the URDF/SRDF element
 // (wrapped UrdfError). Writes a warning to stderr when the given base height misses the ground
 // by more than 1 mm.
+// Refuses what would run but mean something else (issue 34): contacts not in the order the gaits
+// assume (four feet: front-left, front-right, hind-left, hind-right; two: left, right; judged by
+// their positions in the base frame at the default posture), a moving joint's frame as a contact,
+// dim 6 without sole_half_extents, and a default posture whose centre of mass is more than 5 cm
+// outside the support polygon (beyond 5 mm: a warning with the distance).
 Robot loadRobot(const std::string& yaml_path, const std::vector<std::string>& robots_dirs = {});
+
+// The signed distance [m] from the ground projection of the centre of mass at q to the support
+// polygon of the contacts (point feet, the soles' corners): negative inside, by the distance to
+// the nearest edge; positive outside (for two point feet the polygon is the segment between
+// them). A fixed-base robot or one without contacts: -infinity.
+double comOutsideSupport(const Robot& robot, const Eigen::VectorXd& q);
 
 }  // namespace stride

@@ -78,61 +78,23 @@ class ScopedEnv {
   bool had_ = false;
 };
 
-// The convex hull of points (counter-clockwise, Andrew's monotone chain).
-std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> p) {
-  std::sort(p.begin(), p.end(), [](const auto& a, const auto& b) {
-    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
-  });
-  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
-  };
-  std::vector<Eigen::Vector2d> h(2 * p.size());
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
-    h[k++] = p[i];
-  }
-  for (std::size_t i = p.size() - 1, t = k + 1; i-- > 0;) {
-    while (k >= t && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
-    h[k++] = p[i];
-  }
-  h.resize(k - 1);
-  return h;
-}
-
 // Contacts touch the ground (z = 0) in the default posture and the CoM projects inside the support
 // polygon: the hull of the point feet and of the soles' corners, at least 1 cm inside.
 void expectStandsOnTheGround(const Robot& robot) {
   Data data(robot.model);
   framesForwardKinematics(robot.model, data, robot.default_q);
-  std::vector<Eigen::Vector2d> support;
   for (const auto& c : robot.contacts) {
     const SE3& oMf = data.oMf[robot.model.getFrameId(c.frame)];
     EXPECT_NEAR(oMf.p.z(), 0.0, 1e-6) << robot.name << " " << c.frame;
+    // Flat within 2 mrad (talos' half_sitting rolls the ankles by 1.7 mrad).
     if (c.dim == 6) {
-      // Flat within 2 mrad (talos' half_sitting rolls the ankles by 1.7 mrad).
       EXPECT_LT(std::acos(std::min(1.0, oMf.R(2, 2))), 2e-3)
           << robot.name << " " << c.frame << " sole is not flat";
-      for (double sx : {-1.0, 1.0})
-        for (double sy : {-1.0, 1.0}) {
-          const Eigen::Vector3d corner(sx * robot.sole_half_extents.x(),
-                                       sy * robot.sole_half_extents.y(), 0.0);
-          support.push_back((oMf.p + oMf.R * corner).head<2>());
-        }
-    } else {
-      support.push_back(oMf.p.head<2>());
     }
   }
-  const Eigen::Vector3d com = centerOfMass(robot.model, data, robot.default_q);
-  EXPECT_GT(com.z(), 0.1) << robot.name;
-  const auto hull = convexHull(support);
-  ASSERT_GE(hull.size(), 3u) << robot.name << ": the support polygon has no area";
-  for (std::size_t i = 0; i < hull.size(); ++i) {
-    const Eigen::Vector2d a = hull[i], b = hull[(i + 1) % hull.size()];
-    const Eigen::Vector2d inward(-(b - a).y(), (b - a).x());
-    EXPECT_GT(inward.normalized().dot(com.head<2>() - a), 0.01)
-        << robot.name << ": CoM " << com.transpose() << " is outside the support polygon";
-  }
+  EXPECT_GT(centerOfMass(robot.model, data, robot.default_q).z(), 0.1) << robot.name;
+  EXPECT_LT(comOutsideSupport(robot, robot.default_q), -0.01)
+      << robot.name << ": the CoM is not 1 cm inside the support polygon";
 }
 
 TEST(RobotConfig, Quadruped) {
@@ -406,6 +368,101 @@ TEST(RobotConfig, BadInput) {
   EXPECT_EQ(quad.joint_kp, 20.0);
   EXPECT_EQ(quad.joint_kd, 0.3);
   EXPECT_EQ(loadRobot(writeFile(testDir() + "/test_pd.yaml", with(pd, ""))).joint_kp, 0.0);
+}
+
+// What would load and run but mean something else (issue 34) is refused, saying what is right.
+TEST(RobotConfig, FeetInAnotherOrderThanTheGaitsAssume) {
+  // HyQ's lf, lh, rf, rh: a pace became a bound. Here the quadruped's FR and HL swapped.
+  const std::string swapped =
+      replaced(replaced(quadText(), "{frame: FR_foot, dim: 3}", "{frame: @, dim: 3}"),
+               "{frame: HL_foot, dim: 3}", "{frame: FR_foot, dim: 3}");
+  const std::string error =
+      loadError(replaced(swapped, "{frame: @, dim: 3}", "{frame: HL_foot, dim: 3}"));
+  for (const char* part :
+       {"contacts are not in the order the gaits assume (front-left, front-right, hind-left, "
+        "hind-right)",
+        "contacts[1] 'HL_foot' at (x -", "is hind-left", "contacts[2] 'FR_foot' at (x 0.",
+        "is front-right", "List them as: FL_foot, FR_foot, HL_foot, HR_foot"})
+    EXPECT_NE(error.find(part), std::string::npos) << error;
+  // A biped: left, then right.
+  std::string humanoid = readFile(kHumanoid);
+  humanoid = replaced(replaced(humanoid, "{frame: L_sole, dim: 6}", "{frame: @, dim: 6}"),
+                      "{frame: R_sole, dim: 6}", "{frame: L_sole, dim: 6}");
+  humanoid = replaced(humanoid, "{frame: @, dim: 6}", "{frame: R_sole, dim: 6}");
+  const std::string path = writeFile(testDir() + "/humanoid/stride_humanoid.yaml", humanoid);
+  fs::copy(fs::path(kHumanoid).parent_path() / "stride_humanoid.urdf",
+           fs::path(path).parent_path() / "stride_humanoid.urdf",
+           fs::copy_options::overwrite_existing);
+  try {
+    loadRobot(path);
+    ADD_FAILURE() << "a biped listed right, left was accepted";
+  } catch (const ConfigError& e) {
+    const std::string w = e.what();
+    for (const char* part :
+         {"(left, right)", "'R_sole' at (x", "is right", "List them as: L_sole, R_sole"})
+      EXPECT_NE(w.find(part), std::string::npos) << w;
+  }
+}
+
+TEST(RobotConfig, AJointIsNotAContactFrame) {
+  expectConfigError(replaced(quadText(), "{frame: FL_foot, dim: 3}", "{frame: FL_KFE, dim: 3}"),
+                    "contacts[0].frame: 'FL_KFE' is a joint (its frame is on the joint's axis, not "
+                    "at the foot); name the foot's link or frame instead (the frames this joint "
+                    "moves: ");
+  const std::string what =
+      loadError(replaced(quadText(), "{frame: FL_foot, dim: 3}", "{frame: FL_KFE, dim: 3}"));
+  EXPECT_NE(what.find("FL_foot"), std::string::npos) << what << ": the foot's frame is suggested";
+}
+
+TEST(RobotConfig, AFlatSoleNeedsItsExtents) {
+  std::string humanoid = readFile(kHumanoid);
+  humanoid = replaced(humanoid, "sole_half_extents: [0.11, 0.065]\n", "");
+  const std::string path = writeFile(testDir() + "/humanoid/stride_humanoid.yaml", humanoid);
+  fs::copy(fs::path(kHumanoid).parent_path() / "stride_humanoid.urdf",
+           fs::path(path).parent_path() / "stride_humanoid.urdf",
+           fs::copy_options::overwrite_existing);
+  try {
+    loadRobot(path);
+    ADD_FAILURE() << "dim 6 without sole_half_extents was accepted (a sole of zero size)";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  "contacts[0] 'L_sole' has dim 6 (a flat sole) but 'sole_half_extents' is not "
+                  "given: the sole's half length and half width [m]"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// Bolt's SRDF posture puts its centre of mass 1.9 cm behind its point feet: a warning with the
+// distance; hips straighter, 6.5 cm: refused.
+TEST(RobotConfig, ACentreOfMassOutsideTheFeetIsSaid) {
+  ASSERT_FALSE(kPackages.empty()) << "no ../shared/robots/SOURCES.md: no package view";
+  const std::string bolt =
+      "name: bolt\n"
+      "urdf: package://example-robot-data/robots/bolt_description/robots/bolt.urdf\n"
+      "srdf: package://example-robot-data/robots/bolt_description/srdf/bolt.srdf\n"
+      "reference_posture: standing\n"
+      "root_joint: free-flyer\n"
+      "contacts:\n  - {frame: FL_FOOT, dim: 3}\n  - {frame: FR_FOOT, dim: 3}\n";
+  const std::string path = writeFile(testDir() + "/bolt.yaml", bolt);
+  testing::internal::CaptureStderr();
+  const Robot robot = loadRobot(path, {kPackages});
+  const std::string warning = testing::internal::GetCapturedStderr();
+  for (const char* part : {"warning: robot config", "bolt.yaml",
+                           "the default posture's centre of mass is 1.9 cm outside the support "
+                           "polygon of its two point feet (a line) (1.9 cm behind"})
+    EXPECT_NE(warning.find(part), std::string::npos) << warning;
+  EXPECT_NEAR(comOutsideSupport(robot, robot.default_q), 0.019, 0.0005);
+  const std::string error =
+      loadError(bolt + "default_posture:\n  joints: {FL_HFE: 0.6, FR_HFE: 0.6}\n", {kPackages});
+  EXPECT_NE(error.find("centre of mass is 6.5 cm outside the support polygon"), std::string::npos)
+      << error;
+  EXPECT_NE(error.find("(more than 5 cm: refused)"), std::string::npos) << error;
+  // The shipped robots stand 1 cm inside (expectStandsOnTheGround), without a word.
+  testing::internal::CaptureStderr();
+  loadRobot(kQuad);
+  loadRobot(kHumanoid);
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
 }
 
 // A misspelt key would otherwise silently leave its default in place.
