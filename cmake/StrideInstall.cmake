@@ -1,7 +1,9 @@
 # What a user of Stride gets, in the build tree (add_subdirectory) and installed
 # (cmake --install build --prefix P, then find_package(Stride 0.1) with P in CMAKE_PREFIX_PATH):
-# the libraries as Stride::<module>, their headers under include/stride mirroring the source tree,
-# the generated LCM headers, the programs, the robot and controller configurations.
+# the libraries as Stride::<module>, their headers as <stride/...> mirroring the source tree
+# (<stride/solver/ocp/knot.hpp>), the generated LCM headers (<stride/robot_state_t.hpp>), the
+# programs, the robot and controller configurations. cmake/README.md, "Headers": why and how.
+
 include(CMakePackageConfigHelpers)
 
 # Libraries a user may link, by module: stride_<module> is Stride::<module> in both cases.
@@ -36,6 +38,56 @@ set_target_properties(stride_all PROPERTIES EXPORT_NAME stride)
 add_library(Stride::stride ALIAS stride_all)
 list(APPEND _stride_targets stride_solver stride_all)
 
+# The public headers: the exported modules' headers, as <stride/DIR/NAME.hpp>, and the LCM types'
+# (messages/, generated), as <stride/TYPE.hpp>. Stride's own code includes the first from the
+# repository root ("solver/ocp/knot.hpp": include_directories in the top-level CMakeLists.txt), a
+# user cannot: the targets give users include/ only (installed) or the build tree's view of it,
+# ${STRIDE_INCLUDE_VIEW}, where each header is copied with its includes rewritten to <stride/...>
+# (cmake/StrideRewriteHeader.cmake), so that the installed headers need no other include
+# directory.
+set(STRIDE_INCLUDE_VIEW ${PROJECT_BINARY_DIR}/include)
+set(_stride_public_list ${PROJECT_BINARY_DIR}/stride_public_headers.txt)
+set(_stride_view_headers "")
+set(_stride_public "")
+foreach(_dir solver/multibody solver/contact solver/ocp solver/ddp terrain config messages controller sim
+             tools/log tools/drive)
+  file(GLOB _headers CONFIGURE_DEPENDS ${STRIDE_ROOT}/${_dir}/*.hpp)
+  # The programs' shared options (stride_sim_cli) are not a library a user links.
+  list(FILTER _headers EXCLUDE REGEX "sim/command_line.hpp$")
+  foreach(_header IN LISTS _headers)
+    file(RELATIVE_PATH _rel ${STRIDE_ROOT} ${_header})
+    set(_out ${STRIDE_INCLUDE_VIEW}/stride/${_rel})
+    add_custom_command(OUTPUT ${_out}
+      COMMAND ${CMAKE_COMMAND} -DSTRIDE_HEADER_IN=${_header} -DSTRIDE_HEADER_OUT=${_out}
+              -DSTRIDE_HEADER_LIST=${_stride_public_list}
+              -P ${CMAKE_CURRENT_LIST_DIR}/StrideRewriteHeader.cmake
+      DEPENDS ${_header} ${_stride_public_list} ${CMAKE_CURRENT_LIST_DIR}/StrideRewriteHeader.cmake
+      VERBATIM)
+    list(APPEND _stride_view_headers ${_out})
+    list(APPEND _stride_public stride/${_rel})
+    # Installed from the view, at include/stride/<the same path>.
+    if(STRIDE_INSTALL)
+      install(FILES ${_out} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/stride/${_dir})
+    endif()
+  endforeach()
+endforeach()
+# The LCM headers are generated as stride/TYPE.hpp already (messages/CMakeLists.txt, which puts
+# their directory on Stride::messages' build interface and installs them in include/stride).
+get_directory_property(_lcm_types DIRECTORY ${STRIDE_ROOT}/messages DEFINITION STRIDE_LCM_TYPES)
+foreach(_t IN LISTS _lcm_types)
+  list(APPEND _stride_public stride/${_t}.hpp)
+endforeach()
+# Rewritten only when the set of headers changes (file(CONFIGURE) leaves an equal file alone).
+list(JOIN _stride_public "\n" _stride_public_lines)
+file(CONFIGURE OUTPUT ${_stride_public_list} CONTENT "${_stride_public_lines}\n" @ONLY)
+add_custom_target(stride_headers ALL DEPENDS ${_stride_view_headers})
+# Every Stride library links stride_abi: the users of any of them get include/ (never the
+# repository root, nor include/stride), and the view is complete before they compile (an interface
+# library's dependencies are followed by the targets that link it).
+target_include_directories(stride_abi INTERFACE
+  $<BUILD_INTERFACE:${STRIDE_INCLUDE_VIEW}> $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+add_dependencies(stride_abi stride_headers)
+
 # A project that adds Stride with add_subdirectory(... EXCLUDE_FROM_ALL) does not build the
 # programs, which the rules below install: its own install would fail on them.
 if(NOT STRIDE_INSTALL)
@@ -46,15 +98,6 @@ install(TARGETS ${_stride_targets} EXPORT StrideTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-
-# Headers of the exported modules, at the paths they are included by ("solver/ocp/knot.hpp").
-foreach(_dir solver/multibody solver/contact solver/ocp solver/ddp terrain config messages controller sim
-             tools/log tools/drive)
-  file(GLOB _headers CONFIGURE_DEPENDS ${STRIDE_ROOT}/${_dir}/*.hpp)
-  # The programs' shared options (stride_sim_cli) are not a library a user links.
-  list(FILTER _headers EXCLUDE REGEX "sim/command_line.hpp$")
-  install(FILES ${_headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/stride/${_dir})
-endforeach()
 
 # The programs (stride-bench and the tests' helpers stay in the build tree).
 install(TARGETS stride-mpc stride-sim stride-drive stride-teleop stride-log-summary stride-keygen

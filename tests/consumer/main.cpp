@@ -1,5 +1,6 @@
 // Stride as a library: loads a robot with the config loader, runs its contact dynamics once and
 // one FDDP iteration of a short standing problem, and checks the results' sizes and finiteness.
+// Also checks a truncated message against the LCM types' checks (Stride::messages).
 // Usage: stride-consumer ROBOT.yaml; exit 0 when every check passes. Objects holding Eigen members
 // are made in the library and destroyed here (Robot, ContactData, the knots): with an Eigen
 // alignment that differs between the two, this is where it crashed (issue 17).
@@ -9,12 +10,16 @@
 #include <memory>
 #include <vector>
 
-#include "config/robot_config.hpp"
-#include "solver/contact/contact_dynamics.hpp"
-#include "solver/contact/knot_dynamics.hpp"
-#include "solver/ddp/solver.hpp"
-#include "solver/ocp/knot.hpp"
-#include "solver/ocp/residual_state.hpp"
+// Stride's headers as a user includes them: under stride/ (short_include.cpp, which must not
+// compile, tries the in-tree form). The LCM types too (<stride/robot_state_t.hpp>).
+#include <stride/config/robot_config.hpp>
+#include <stride/messages/validate.hpp>
+#include <stride/robot_state_t.hpp>
+#include <stride/solver/contact/contact_dynamics.hpp>
+#include <stride/solver/contact/knot_dynamics.hpp>
+#include <stride/solver/ddp/solver.hpp>
+#include <stride/solver/ocp/knot.hpp>
+#include <stride/solver/ocp/residual_state.hpp>
 
 using namespace stride;
 
@@ -79,6 +84,12 @@ int run(const char* yaml) {
   failures += check(finite, "solver: finite");
   failures +=
       check(solver.statsCount() == 1 && solver.stats()[0].step > 0.0, "solver: a step was taken");
+
+  // The generated LCM types and their checks: four bytes are no command.
+  const unsigned char truncated[4] = {1, 2, 3, 4};
+  failures += check(robot_state_t::getHash() != 0 &&
+                        msg::checkCommandWire(truncated, sizeof truncated) != msg::Reject::None,
+                    "messages: a truncated command is rejected");
   return failures == 0 ? 0 : 1;
 }
 
