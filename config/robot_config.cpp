@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "config/package_path.hpp"
@@ -374,16 +375,24 @@ Robot loadRobot(const std::string& yaml_path, const std::vector<std::string>& ro
   };
   try {
     checkKeys(root,
-              {"name", "urdf", "srdf", "reference_posture", "root_joint", "contacts",
-               "sole_half_extents", "torque_limits", "default_posture", "joint_pd"},
+              {"name", "urdf", "srdf", "reference_posture", "root_joint", "locked_joints",
+               "contacts", "sole_half_extents", "torque_limits", "default_posture", "joint_pd"},
               yaml_path, "");
     robot.name = need(root, "name", yaml_path).as<std::string>();
     robot.urdf_path = resolve("urdf");
     const std::string root_joint = need(root, "root_joint", yaml_path).as<std::string>();
     if (root_joint != "free-flyer" && root_joint != "fixed")
       fail(yaml_path, "root_joint must be 'free-flyer' or 'fixed', not '" + root_joint + "'");
+    // Joints held at an angle (grippers, a head): fixed joints of the model, their bodies merged
+    // into the parent; a URDF's <mimic> joints follow their locked leader, and an unlocked one is
+    // refused by the URDF builder (issue 34: full TALOS's 12 gripper mimics became free motors).
+    std::map<std::string, double> locked;
+    if (const YAML::Node l = root["locked_joints"]) {
+      if (!l.IsMap()) fail(yaml_path, "locked_joints must be a map joint: angle [rad or m]");
+      for (const auto& kv : l) locked[kv.first.as<std::string>()] = kv.second.as<double>();
+    }
     robot.model = buildModelFromUrdf(
-        robot.urdf_path, root_joint == "fixed" ? RootJoint::Fixed : RootJoint::FreeFlyer);
+        robot.urdf_path, root_joint == "fixed" ? RootJoint::Fixed : RootJoint::FreeFlyer, locked);
     Model& model = robot.model;
 
     if (root["srdf"]) {

@@ -5,15 +5,19 @@
 #include <urdf_parser/urdf_parser.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <iomanip>
 #include <limits>
 #include <map>
 #include <set>
 #include <sstream>
+#include <vector>
 
 namespace stride {
 
@@ -66,9 +70,17 @@ void validateInertial(const TiXmlElement* link, const std::string& source) {
          ctx + " has an inertia tensor that is not positive semi-definite" + where(inertia));
 }
 
+// What the structural checks learn on the way: each joint's type, the moving mimic joints.
+struct UrdfInfo {
+  std::map<std::string, std::string> joint_type;
+  std::vector<MimicJoint> mimics;  // moving joints only, file order
+};
+
 // Structural checks on the raw XML before urdfdom sees it, so that every error names the element
 // and its line: urdfdom itself only logs to the console and returns null.
-void validateStructure(const std::string& xml, const std::string& source) {
+UrdfInfo validateStructure(const std::string& xml, const std::string& source) {
+  UrdfInfo info;
+  std::vector<int> mimic_lines;
   TiXmlDocument doc;
   doc.Parse(xml.c_str());
   if (doc.Error()) {
@@ -122,6 +134,28 @@ void validateStructure(const std::string& xml, const std::string& source) {
                        ": kinematic loops are not supported");
     parent_joint_of[cl] = jn;
     children[pl].push_back(cl);
+    info.joint_type[jn] = type;
+    if (const TiXmlElement* m = j->FirstChildElement("mimic")) {
+      const std::string ctx = "joint '" + jn + "' <mimic>";
+      const char* leader = m->Attribute("joint");
+      if (!leader || !*leader) fail(source, ctx + " has no 'joint' attribute" + where(m));
+      MimicJoint mimic{jn, leader, 1.0, 0.0};
+      if (m->Attribute("multiplier"))
+        mimic.multiplier = numberAttribute(m, "multiplier", source, ctx);
+      if (m->Attribute("offset")) mimic.offset = numberAttribute(m, "offset", source, ctx);
+      // A fixed joint owns no coordinate: its tag couples nothing (talos_reduced's fingers).
+      if (std::string(type) != "fixed") {
+        info.mimics.push_back(mimic);
+        mimic_lines.push_back(m->Row());
+      }
+    }
+  }
+  for (std::size_t k = 0; k < info.mimics.size(); ++k) {
+    const MimicJoint& m = info.mimics[k];
+    const std::string at = " (line " + std::to_string(mimic_lines[k]) + ")";
+    if (!joints.count(m.leader))
+      fail(source, "joint '" + m.name + "' mimics '" + m.leader + "', which is not a joint" + at);
+    if (m.leader == m.name) fail(source, "joint '" + m.name + "' mimics itself" + at);
   }
   std::vector<std::string> roots;
   for (const auto& l : links)
@@ -144,6 +178,89 @@ void validateStructure(const std::string& xml, const std::string& source) {
     if (!reached.count(l))
       fail(source, "link '" + l + "' (child of joint '" + parent_joint_of[l] +
                        "') is not connected to the root link '" + roots[0] + "': kinematic loop");
+  return info;
+}
+
+std::string num(double x) {
+  std::ostringstream out;
+  out << std::setprecision(12) << x;
+  return out.str();
+}
+
+// The angle of every locked joint: the caller's, then the mimics of locked (or fixed) leaders,
+// through chains. Refuses bad names and angles, and moving mimic joints left free.
+std::map<std::string, double> lockedAngles(const urdf::ModelInterface& urdf_model,
+                                           const UrdfInfo& info, RootJoint root,
+                                           const std::map<std::string, double>& locked_joints,
+                                           const std::string& source) {
+  // Within its limits (none for continuous joints); `slack` for angles computed from a leader's.
+  const auto checkRange = [&](const std::string& name, double angle, double slack,
+                              const std::string& why) {
+    const urdf::Joint& j = *urdf_model.getJoint(name);
+    const char* unit = j.type == urdf::Joint::PRISMATIC ? " m" : " rad";
+    if (!std::isfinite(angle))
+      fail(source, "joint '" + name + "' locked at " + num(angle) + why + ": not a finite number");
+    if (!j.limits || j.type == urdf::Joint::CONTINUOUS) return;
+    if (angle < j.limits->lower - slack || angle > j.limits->upper + slack)
+      fail(source, "joint '" + name + "' locked at " + num(angle) + unit + why +
+                       ", outside its limits [" + num(j.limits->lower) + ", " +
+                       num(j.limits->upper) + "]" + unit);
+  };
+  std::map<std::string, double> angles;
+  for (const auto& [name, angle] : locked_joints) {
+    const auto type = info.joint_type.find(name);
+    if (type == info.joint_type.end()) {
+      if (root == RootJoint::FreeFlyer && name == "root_joint")
+        fail(source,
+             "locked joint 'root_joint' is the free-flyer root, which cannot be locked "
+             "(build with a fixed root instead)");
+      fail(source, "locked joint '" + name + "' is not a joint of this URDF");
+    }
+    if (type->second == "fixed")
+      fail(source, "locked joint '" + name + "' is a fixed joint: there is nothing to lock");
+    checkRange(name, angle, 0.0, "");
+    angles[name] = angle;
+  }
+  // Mimics follow their leaders; an explicitly locked mimic must agree with a locked leader.
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (const MimicJoint& m : info.mimics) {
+      double leader_angle = 0.0;  // a fixed leader stays at 0
+      if (info.joint_type.at(m.leader) != "fixed") {
+        const auto it = angles.find(m.leader);
+        if (it == angles.end()) continue;
+        leader_angle = it->second;
+      }
+      const double angle = m.multiplier * leader_angle + m.offset;
+      const std::string why = " (it mimics '" + m.leader + "' locked at " + num(leader_angle) +
+                              ": multiplier " + num(m.multiplier) + ", offset " + num(m.offset) +
+                              ")";
+      const auto own = angles.find(m.name);
+      if (own != angles.end()) {
+        if (std::abs(own->second - angle) > 1e-9 * std::max(1.0, std::abs(angle)))
+          fail(source, "joint '" + m.name + "' is locked at " + num(own->second) +
+                           " but must be at " + num(angle) + why);
+        continue;
+      }
+      checkRange(m.name, angle, 1e-9, why);
+      angles[m.name] = angle;
+      changed = true;
+    }
+  }
+  std::string free_mimics, leaders;
+  std::set<std::string> listed;
+  for (const MimicJoint& m : info.mimics) {
+    if (angles.count(m.name)) continue;
+    free_mimics += std::string(free_mimics.empty() ? "" : "; ") + "joint '" + m.name +
+                   "' mimics '" + m.leader + "' (multiplier " + num(m.multiplier) + ", offset " +
+                   num(m.offset) + ")";
+    if (listed.insert(m.leader).second) leaders += (leaders.empty() ? "'" : ", '") + m.leader + "'";
+  }
+  if (!free_mimics.empty())
+    fail(source, free_mimics + ": Stride has no coupled joints; lock " + leaders +
+                     " (locked_joints) and " + (listed.size() > 1 ? "their" : "its") +
+                     " mimics follow, or lock the mimic joints themselves");
+  return angles;
 }
 
 // Collects urdfdom's console messages while it parses, to put them in our error.
@@ -177,6 +294,7 @@ Inertia linkInertia(const urdf::Link& link) {
 struct Builder {
   Model& model;
   const std::string& source;
+  const std::map<std::string, double>& locked;  // joint -> angle, mimics included
 
   // Adds `link` carried by joint `joint`, whose frame is at `placement` in that joint's frame.
   void addLink(const urdf::Link& link, int joint, int parent_frame, const SE3& placement) {
@@ -190,8 +308,19 @@ struct Builder {
     const int body_frame = model.addFrame(body);
     for (const auto& uj : link.child_joints) {  // urdfdom lists them sorted by name
       const urdf::Link& child = *urdf_model->getLink(uj->child_link_name);
-      const SE3 at = placement * toSE3(uj->parent_to_joint_origin_transform);
-      if (uj->type == urdf::Joint::FIXED) {
+      SE3 at = placement * toSE3(uj->parent_to_joint_origin_transform);
+      const Eigen::Vector3d axis(uj->axis.x, uj->axis.y, uj->axis.z);
+      const bool fixed = uj->type == urdf::Joint::FIXED;
+      if (!fixed && axis.norm() < 1e-9) fail(source, "joint '" + uj->name + "' has a zero <axis>");
+      const auto lock = locked.find(uj->name);
+      if (!fixed && lock != locked.end()) {  // a fixed joint at the joint's motion for that angle
+        const Eigen::Vector3d u = axis.normalized();
+        at = at * (uj->type == urdf::Joint::PRISMATIC
+                       ? SE3(Eigen::Matrix3d::Identity(), lock->second * u)
+                       : SE3(Eigen::AngleAxisd(lock->second, u).toRotationMatrix(),
+                             Eigen::Vector3d::Zero()));
+      }
+      if (fixed || lock != locked.end()) {
         Frame fj;
         fj.name = uj->name;
         fj.type = FrameType::FixedJoint;
@@ -203,8 +332,6 @@ struct Builder {
       }
       const JointType type =
           uj->type == urdf::Joint::PRISMATIC ? JointType::Prismatic : JointType::Revolute;
-      const Eigen::Vector3d axis(uj->axis.x, uj->axis.y, uj->axis.z);
-      if (axis.norm() < 1e-9) fail(source, "joint '" + uj->name + "' has a zero <axis>");
       const int id = model.addJoint(joint, type, at, uj->name, axis);
       const int jf = model.getFrameId(uj->name, FrameType::Joint);
       model.frames[jf].parentFrame = body_frame;
@@ -224,17 +351,21 @@ struct Builder {
 
 }  // namespace
 
-Model buildModelFromUrdfString(const std::string& xml, RootJoint root, const std::string& source) {
-  validateStructure(xml, source);
+Model buildModelFromUrdfString(const std::string& xml, RootJoint root,
+                               const std::map<std::string, double>& locked_joints,
+                               const std::string& source) {
+  const UrdfInfo info = validateStructure(xml, source);
   urdf::ModelInterfaceSharedPtr urdf_model;
   {
     CaptureLog capture;
     urdf_model = urdf::parseURDF(xml);
     if (!urdf_model) fail(source, "urdfdom could not parse it: " + capture.messages);
   }
+  const std::map<std::string, double> locked =
+      lockedAngles(*urdf_model, info, root, locked_joints, source);
   Model model;
   model.name = urdf_model->getName();
-  Builder builder{model, source};
+  Builder builder{model, source, locked};
   builder.urdf_model = urdf_model.get();
   const urdf::Link& root_link = *urdf_model->getRoot();
   try {
@@ -250,12 +381,36 @@ Model buildModelFromUrdfString(const std::string& xml, RootJoint root, const std
   return model;
 }
 
-Model buildModelFromUrdf(const std::string& path, RootJoint root) {
+Model buildModelFromUrdfString(const std::string& xml, RootJoint root, const std::string& source) {
+  return buildModelFromUrdfString(xml, root, {}, source);
+}
+
+namespace {
+std::string readUrdf(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw UrdfError("URDF '" + path + "': file does not exist or cannot be read");
   std::stringstream buffer;
   buffer << in.rdbuf();
-  return buildModelFromUrdfString(buffer.str(), root, path);
+  return buffer.str();
+}
+}  // namespace
+
+Model buildModelFromUrdf(const std::string& path, RootJoint root,
+                         const std::map<std::string, double>& locked_joints) {
+  return buildModelFromUrdfString(readUrdf(path), root, locked_joints, path);
+}
+
+Model buildModelFromUrdf(const std::string& path, RootJoint root) {
+  return buildModelFromUrdf(path, root, {});
+}
+
+std::vector<MimicJoint> urdfMimicJointsFromString(const std::string& xml,
+                                                  const std::string& source) {
+  return validateStructure(xml, source).mimics;
+}
+
+std::vector<MimicJoint> urdfMimicJoints(const std::string& path) {
+  return urdfMimicJointsFromString(readUrdf(path), path);
 }
 
 }  // namespace stride

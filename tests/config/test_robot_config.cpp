@@ -465,6 +465,37 @@ TEST(RobotConfig, ACentreOfMassOutsideTheFeetIsSaid) {
   EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
 }
 
+// Full TALOS: 12 gripper joints <mimic> the two gripper joints. Unlocked, refused with what to
+// lock; locked, the grippers are no motors and the rest is talos_reduced's legs and arms.
+TEST(RobotConfig, LockedJointsAndMimicJoints) {
+  ASSERT_FALSE(kPackages.empty()) << "no ../shared/robots/SOURCES.md: no package view";
+  std::string full = readFile(robotYaml("talos_reduced"));
+  full = replaced(full, "talos_reduced.urdf", "talos_full_v2.urdf");
+  full = replaced(full, "name: talos_reduced", "name: talos_full");
+  const std::string what = loadError(full, {kPackages});
+  for (const char* part :
+       {"mimics 'gripper_left_joint'", "lock 'gripper_left_joint'", "locked_joints"})
+    EXPECT_NE(what.find(part), std::string::npos) << what;
+  const std::string locked =
+      full + "locked_joints: {gripper_left_joint: 0.0, gripper_right_joint: 0.0}\n";
+  const Robot talos = loadRobot(writeFile(testDir() + "/talos_full.yaml", locked), {kPackages});
+  EXPECT_EQ(talos.model.nv, 36);
+  EXPECT_FALSE(talos.model.existJoint("gripper_left_joint"));
+  EXPECT_FALSE(talos.model.existJoint("gripper_left_inner_double_joint"));
+  expectStandsOnTheGround(talos);
+  EXPECT_NE(loadError(full + "locked_joints: {gripper_left_joint: 0.0, no_such_joint: 0.0}\n",
+                      {kPackages})
+                .find("no_such_joint"),
+            std::string::npos);
+  expectConfigError(quadText() + "locked_joints: [FL_HAA]\n", "locked_joints must be a map");
+  // A quadruped with a leg's abduction locked: one motor fewer.
+  const Robot quad =
+      loadRobot(writeFile(testDir() + "/locked_quad.yaml",
+                          replaced(replaced(quadText(), "FL_HAA: 0.0, ", ""), "FL_HAA: 2.7, ", "") +
+                              "locked_joints: {FL_HAA: 0.0}\n"));
+  EXPECT_EQ(quad.model.nv, 17);
+}
+
 // A misspelt key would otherwise silently leave its default in place.
 TEST(RobotConfig, UnknownKeysAtEveryLevel) {
   const std::string good = quadText();

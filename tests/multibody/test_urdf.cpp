@@ -5,9 +5,13 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
+#include <map>
 #include <random>
+#include <tuple>
 
 #include "solver/multibody/aba.hpp"
+#include "solver/multibody/frames.hpp"
 #include "solver/multibody/lie_group.hpp"
 #include "solver/multibody/rnea.hpp"
 #include "solver/multibody/srdf.hpp"
@@ -51,9 +55,11 @@ std::string replace(std::string s, const std::string& from, const std::string& t
   return s.replace(pos, from.size(), to);
 }
 
-void expectError(const std::string& xml, const std::string& fragment) {
+void expectError(const std::string& xml, const std::string& fragment,
+                 const std::map<std::string, double>& locked = {},
+                 RootJoint root = RootJoint::Fixed) {
   try {
-    buildModelFromUrdfString(xml, RootJoint::Fixed, "broken.urdf");
+    buildModelFromUrdfString(xml, root, locked, "broken.urdf");
     ADD_FAILURE() << "no error; expected one mentioning '" << fragment << "'";
   } catch (const UrdfError& e) {
     const std::string msg = e.what();
@@ -167,6 +173,230 @@ TEST(Urdf, BadInputNamesFileAndElement) {
       "PRISMATIC without limits");
 }
 
+// The frames of `locked` (a model with joints locked) at q_locked are where the same frames of
+// `full` are at q_full: compared by name, every frame of the locked model.
+void expectSameFramePlacements(const Model& full, const Eigen::VectorXd& q_full,
+                               const Model& locked, const Eigen::VectorXd& q_locked) {
+  Data df(full), dl(locked);
+  framesForwardKinematics(full, df, q_full);
+  framesForwardKinematics(locked, dl, q_locked);
+  ASSERT_EQ(full.frames.size(), locked.frames.size());
+  for (std::size_t f = 1; f < locked.frames.size(); ++f) {
+    const std::string& name = locked.frames[f].name;
+    const SE3& a = dl.oMf[f];
+    const SE3& b = df.oMf[full.getFrameId(name)];
+    EXPECT_LT((a.R - b.R).norm() + (a.p - b.p).norm(), 1e-12) << name;
+  }
+}
+
+// The configuration of `full` whose joints are those of `locked` at q_locked, the others at `at`.
+Eigen::VectorXd fullConfiguration(const Model& full, const Model& locked,
+                                  const Eigen::VectorXd& q_locked,
+                                  const std::map<std::string, double>& at) {
+  Eigen::VectorXd q = neutral(full);
+  for (int i = 1; i < locked.njoints(); ++i) {
+    const Joint& jl = locked.joints[i];
+    const Joint& jf = full.joints[full.getJointId(jl.name)];
+    q.segment(jf.idx_q, jf.nq) = q_locked.segment(jl.idx_q, jl.nq);
+  }
+  for (const auto& [name, angle] : at) q[full.joints[full.getJointId(name)].idx_q] = angle;
+  return q;
+}
+
+TEST(Urdf, LockedJointIsAFixedJointAtItsAngle) {
+  const Model full = buildModelFromUrdfString(kArm, RootJoint::FreeFlyer);
+  std::mt19937 rng(34);
+  // Revolute about a non-aligned axis, prismatic, continuous; then two at once.
+  const std::vector<std::map<std::string, double>> cases = {{{"b_joint", 0.7}},
+                                                            {{"a_joint", 0.06}},
+                                                            {{"shoulder", -2.5}},
+                                                            {{"b_joint", -0.4}, {"a_joint", 0.02}}};
+  for (const auto& lock : cases) {
+    const Model locked = buildModelFromUrdfString(kArm, RootJoint::FreeFlyer, lock);
+    const int n = static_cast<int>(lock.size());
+    EXPECT_EQ(locked.nq, full.nq - n);
+    EXPECT_EQ(locked.nv, full.nv - n);
+    EXPECT_EQ(locked.njoints(), full.njoints() - n);
+    EXPECT_NEAR(locked.totalMass(), full.totalMass(), 1e-14);
+    for (const auto& [name, angle] : lock) {
+      EXPECT_FALSE(locked.existJoint(name)) << name;
+      // Its frame stays, as a fixed joint's: it owns no coordinate.
+      EXPECT_EQ(locked.frames[locked.getFrameId(name)].type, FrameType::FixedJoint) << name;
+    }
+    for (int trial = 0; trial < 5; ++trial) {
+      const Eigen::VectorXd q = trial == 0 ? neutral(locked) : randomConfiguration(locked, rng);
+      expectSameFramePlacements(full, fullConfiguration(full, locked, q, lock), locked, q);
+    }
+  }
+  // The elbow's child bodies merge into the shoulder's body, as a fixed joint's would.
+  const Model no_elbow = buildModelFromUrdfString(kArm, RootJoint::Fixed, {{"b_joint", 0.7}});
+  EXPECT_EQ(no_elbow.frames[no_elbow.getFrameId("lower")].parentJoint,
+            no_elbow.getJointId("shoulder"));
+  EXPECT_NEAR(no_elbow.inertias[no_elbow.getJointId("shoulder")].m, 1.0 + 0.5 + 0.7, 1e-14);
+  // Nothing locked: the same model as the two-argument builder's.
+  EXPECT_EQ(buildModelFromUrdfString(kArm, RootJoint::Fixed, std::map<std::string, double>{}).nv,
+            3);
+}
+
+TEST(Urdf, BadLockedJointsAreRefused) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  expectError(kArm, "locked joint 'elbow' is not a joint of this URDF", {{"elbow", 0.0}});
+  expectError(kArm, "locked joint 'upper' is not a joint", {{"upper", 0.0}});  // a link
+  expectError(kArm, "locked joint 'sensor_mount' is a fixed joint", {{"sensor_mount", 0.0}});
+  expectError(kArm, "locked joint 'root_joint' is the free-flyer root", {{"root_joint", 0.0}},
+              RootJoint::FreeFlyer);
+  expectError(kArm, "joint 'b_joint' locked at 2 rad, outside its limits [-1, 1.5] rad",
+              {{"b_joint", 2.0}});
+  expectError(kArm, "joint 'b_joint' locked at -1.25 rad, outside its limits [-1, 1.5] rad",
+              {{"b_joint", -1.25}});
+  expectError(kArm, "joint 'a_joint' locked at 0.2 m, outside its limits [0, 0.1] m",
+              {{"a_joint", 0.2}});
+  expectError(kArm, "joint 'shoulder' locked at nan: not a finite number", {{"shoulder", nan}});
+  expectError(kArm, "not a finite number", {{"shoulder", std::numeric_limits<double>::infinity()}});
+  // The limits themselves are allowed; a continuous joint has none.
+  EXPECT_EQ(buildModelFromUrdfString(kArm, RootJoint::Fixed, {{"b_joint", 1.5}, {"a_joint", 0}}).nv,
+            1);
+  EXPECT_EQ(buildModelFromUrdfString(kArm, RootJoint::Fixed, {{"shoulder", 40.0}}).nv, 2);
+}
+
+// kArm with a gripper on the elbow's link: a motor and two mimic fingers, the second mimicking the
+// first (a chain), and a fixed joint whose mimic tag couples nothing.
+std::string armWithGripper() {
+  return replace(kArm, "</robot>", R"(
+  <link name="palm"/>
+  <link name="finger_a"><inertial><mass value="0.1"/>
+    <inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="finger_b"><inertial><origin xyz="0 0.02 0"/><mass value="0.1"/>
+    <inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="pad"/>
+  <joint name="gripper" type="prismatic"><parent link="lower"/><child link="palm"/>
+    <origin xyz="0 0 0.3"/><axis xyz="0 0 1"/>
+    <limit lower="0" upper="0.04" effort="10" velocity="0.1"/></joint>
+  <joint name="finger_a_joint" type="revolute"><parent link="palm"/><child link="finger_a"/>
+    <origin xyz="0 0.03 0" rpy="0.2 0 0"/><axis xyz="1 0 0"/>
+    <limit lower="-1" upper="1" effort="10" velocity="1"/>
+    <mimic joint="gripper" multiplier="-30" offset="0.1"/></joint>
+  <joint name="finger_b_joint" type="revolute"><parent link="palm"/><child link="finger_b"/>
+    <origin xyz="0 -0.03 0"/><axis xyz="0 1 1"/>
+    <limit lower="-1" upper="1" effort="10" velocity="1"/>
+    <mimic joint="finger_a_joint" multiplier="0.5"/></joint>
+  <joint name="pad_joint" type="fixed"><parent link="finger_b"/><child link="pad"/>
+    <origin xyz="0 0 0.05"/><mimic joint="gripper"/></joint>
+</robot>)");
+}
+
+TEST(Urdf, MimicJointsFollowTheirLockedLeader) {
+  const std::string xml = armWithGripper();
+  // Listed, moving ones only, in file order, multiplier 1 and offset 0 by default.
+  const std::vector<MimicJoint> mimics = urdfMimicJointsFromString(xml);
+  ASSERT_EQ(mimics.size(), 2u);
+  EXPECT_EQ(mimics[0].name, "finger_a_joint");
+  EXPECT_EQ(mimics[0].leader, "gripper");
+  EXPECT_DOUBLE_EQ(mimics[0].multiplier, -30);
+  EXPECT_DOUBLE_EQ(mimics[0].offset, 0.1);
+  EXPECT_EQ(mimics[1].name, "finger_b_joint");
+  EXPECT_EQ(mimics[1].leader, "finger_a_joint");
+  EXPECT_DOUBLE_EQ(mimics[1].multiplier, 0.5);
+  EXPECT_DOUBLE_EQ(mimics[1].offset, 0.0);
+  EXPECT_TRUE(urdfMimicJointsFromString(kArm).empty());
+
+  // Not locked: refused, every free mimic joint named, and what to do.
+  expectError(xml,
+              "joint 'finger_a_joint' mimics 'gripper' (multiplier -30, offset 0.1); joint "
+              "'finger_b_joint' mimics 'finger_a_joint' (multiplier 0.5, offset 0): Stride has no "
+              "coupled joints; lock 'gripper', 'finger_a_joint' (locked_joints) and their mimics "
+              "follow");
+  // The leader locked: both fingers follow (the second through the first).
+  const double g = 0.015, a = -30 * g + 0.1, b = 0.5 * a;
+  const Model locked = buildModelFromUrdfString(xml, RootJoint::FreeFlyer, {{"gripper", g}});
+  EXPECT_EQ(locked.nv, 6 + 3);
+  for (const char* name : {"gripper", "finger_a_joint", "finger_b_joint"}) {
+    EXPECT_FALSE(locked.existJoint(name)) << name;
+    EXPECT_EQ(locked.frames[locked.getFrameId(name)].type, FrameType::FixedJoint) << name;
+  }
+  // Same frames as a model without the mimic tags at those angles.
+  std::string uncoupled = xml;
+  for (const char* tag :
+       {R"(<mimic joint="gripper" multiplier="-30" offset="0.1"/>)",
+        R"(<mimic joint="finger_a_joint" multiplier="0.5"/>)", R"(<mimic joint="gripper"/>)"})
+    uncoupled = replace(uncoupled, tag, "");
+  const Model full = buildModelFromUrdfString(uncoupled, RootJoint::FreeFlyer);
+  EXPECT_EQ(full.nv, 6 + 6);
+  EXPECT_NEAR(locked.totalMass(), full.totalMass(), 1e-14);
+  std::mt19937 rng(7);
+  const std::map<std::string, double> at = {
+      {"gripper", g}, {"finger_a_joint", a}, {"finger_b_joint", b}};
+  for (int trial = 0; trial < 3; ++trial) {
+    const Eigen::VectorXd q = randomConfiguration(locked, rng);
+    expectSameFramePlacements(full, fullConfiguration(full, locked, q, at), locked, q);
+  }
+  // Locking the first finger itself is enough for the second; its own leader stays a motor.
+  const Model fingers = buildModelFromUrdfString(xml, RootJoint::Fixed, {{"finger_a_joint", 0.3}});
+  EXPECT_EQ(fingers.nv, 4);
+  EXPECT_TRUE(fingers.existJoint("gripper"));
+  // A mimic locked explicitly must agree with its locked leader.
+  EXPECT_EQ(
+      buildModelFromUrdfString(xml, RootJoint::Fixed, {{"gripper", g}, {"finger_b_joint", b}}).nv,
+      3);
+  expectError(xml, "joint 'finger_b_joint' is locked at 0.5 but must be at -0.175",
+              {{"gripper", g}, {"finger_b_joint", 0.5}});
+  // A follower pushed out of its limits by its leader's angle.
+  expectError(xml,
+              "joint 'finger_a_joint' locked at -1.1 rad (it mimics 'gripper' locked at 0.04: "
+              "multiplier -30, offset 0.1), outside its limits [-1, 1] rad",
+              {{"gripper", 0.04}});
+  // Bad tags.
+  expectError(replace(xml, R"(<mimic joint="gripper" multiplier="-30")",
+                      R"(<mimic joint="grip" multiplier="-30")"),
+              "joint 'finger_a_joint' mimics 'grip', which is not a joint (line");
+  expectError(replace(xml, R"(multiplier="0.5")", R"(multiplier="half")"),
+              "joint 'finger_b_joint' <mimic> has multiplier='half', not a finite number");
+}
+
+TEST(Urdf, FullTalosNeedsItsGrippersLocked) {
+  const std::string path = STRIDE_SHARED_DIR "/robots/talos/talos_full_v2.urdf";
+  // 12 mimic finger joints, six per gripper.
+  const std::vector<MimicJoint> mimics = urdfMimicJoints(path);
+  ASSERT_EQ(mimics.size(), 12u);
+  for (const MimicJoint& m : mimics) {
+    const bool left = m.name.rfind("gripper_left_", 0) == 0;
+    EXPECT_EQ(m.leader, left ? "gripper_left_joint" : "gripper_right_joint") << m.name;
+    EXPECT_TRUE(m.multiplier == 1.0 || m.multiplier == -1.0) << m.name;
+    EXPECT_EQ(m.offset, 0.0) << m.name;
+  }
+  try {
+    buildModelFromUrdf(path, RootJoint::FreeFlyer);
+    ADD_FAILURE() << "the full Talos loaded with its mimic joints as motors";
+  } catch (const UrdfError& e) {
+    const std::string msg = e.what();
+    for (const char* fragment :
+         {"talos_full_v2.urdf",
+          "joint 'gripper_left_inner_double_joint' mimics "
+          "'gripper_left_joint' (multiplier 1, offset 0)",
+          "gripper_right_fingertip_3_joint", "Stride has no coupled joints",
+          "lock 'gripper_left_joint', 'gripper_right_joint' (locked_joints)"})
+      EXPECT_NE(msg.find(fragment), std::string::npos) << fragment << "\n" << msg;
+  }
+  // Grippers locked (closed, and half open): their 12 fingers follow. 44 revolute joints - 14.
+  for (const double angle : {0.0, -0.5}) {
+    const Model talos =
+        buildModelFromUrdf(path, RootJoint::FreeFlyer,
+                           {{"gripper_left_joint", angle}, {"gripper_right_joint", angle}});
+    EXPECT_EQ(talos.nv, 6 + 30);
+    EXPECT_EQ(talos.nq, 7 + 30);
+    for (const MimicJoint& m : mimics) EXPECT_FALSE(talos.existJoint(m.name)) << m.name;
+  }
+  // The head locked as well.
+  const Model still_head = buildModelFromUrdf(path, RootJoint::FreeFlyer,
+                                              {{"gripper_left_joint", 0},
+                                               {"gripper_right_joint", 0},
+                                               {"head_1_joint", 0.1},
+                                               {"head_2_joint", -0.2}});
+  EXPECT_EQ(still_head.nv, 6 + 28);
+  // The reduced Talos has its mimic tags on fixed joints: nothing to lock, it loads as before.
+  EXPECT_TRUE(urdfMimicJoints(STRIDE_SHARED_DIR "/robots/talos/talos_reduced.urdf").empty());
+}
+
 TEST(Urdf, WrongSizesAreCaughtAtTheBoundary) {
   const Model model = buildModelFromUrdfString(kArm, RootJoint::FreeFlyer);
   Data data(model);
@@ -184,15 +414,21 @@ TEST(Urdf, WrongSizesAreCaughtAtTheBoundary) {
 
 TEST(Urdf, EverySharedRobotLoads) {
   // nv with a free-flyer root, as the files describe them (fixed joints merged).
-  const std::vector<std::pair<std::string, int>> robots = {
-      {"anymal/anymal.urdf", 18},       {"anymal_c/anymal.urdf", 18},
-      {"bolt/bolt.urdf", 12},           {"hyq/hyq_no_sensors.urdf", 18},
-      {"panda/panda.urdf", 15},         {"solo12/solo.urdf", 14},
-      {"solo12/solo12.urdf", 18},       {"talos/talos_full_v2.urdf", 50},
-      {"talos/talos_reduced.urdf", 38}, {"ur5/ur5_robot.urdf", 12}};
-  for (const auto& [file, nv] : robots) {
+  // Robots with mimic joints load with their leaders locked (the mimics follow).
+  const std::vector<std::tuple<std::string, int, std::map<std::string, double>>> robots = {
+      {"anymal/anymal.urdf", 18, {}},
+      {"anymal_c/anymal.urdf", 18, {}},
+      {"bolt/bolt.urdf", 12, {}},
+      {"hyq/hyq_no_sensors.urdf", 18, {}},
+      {"panda/panda.urdf", 13, {{"panda_finger_joint1", 0.02}}},
+      {"solo12/solo.urdf", 14, {}},
+      {"solo12/solo12.urdf", 18, {}},
+      {"talos/talos_full_v2.urdf", 36, {{"gripper_left_joint", 0}, {"gripper_right_joint", 0}}},
+      {"talos/talos_reduced.urdf", 38, {}},
+      {"ur5/ur5_robot.urdf", 12, {}}};
+  for (const auto& [file, nv, locked] : robots) {
     const Model model =
-        buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/" + file, RootJoint::FreeFlyer);
+        buildModelFromUrdf(STRIDE_SHARED_DIR "/robots/" + file, RootJoint::FreeFlyer, locked);
     EXPECT_EQ(model.nv, nv) << file;
     EXPECT_GT(model.totalMass(), 0.5) << file;
   }
