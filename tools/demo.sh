@@ -24,7 +24,8 @@
 #   --config FILE     drive any controller configuration (stride-mpc --config FILE): its paths
 #                     (robot:, gait.plan_file, lcm.key_file) are relative to FILE's folder; only
 #                     read, never written. Its name in the output is FILE's without .yaml; the
-#                     default command script is the in-house robot's of its kind
+#                     default command script is NAME_commands.yaml beside a NAME_controller.yaml
+#                     (stride-init's files), else the in-house robot's of its kind
 #                     (config/commands/stride_quad.yaml for a robot that trots, else
 #                     stride_humanoid.yaml; terrain_... with --terrain)
 #   --no-setup        skip the set-up (tools/install-deps.sh: apt-get; tools/build.sh: cmake and
@@ -224,6 +225,11 @@ commands_and_duration() {
 }
 script_robot=$robot
 defer_commands=0
+# stride-init writes NAME_controller.yaml and NAME_commands.yaml side by side: the robot's own.
+if [ -n "$user_config" ] && [ "$teleop" = 0 ] && [ -z "$commands" ] && [ -z "$terrain" ] &&
+  [[ "$user_config" == *_controller.yaml ]] && [ -f "${user_config%_controller.yaml}_commands.yaml" ]; then
+  commands="${user_config%_controller.yaml}_commands.yaml"
+fi
 if [ -n "$user_config" ] && [ "$teleop" = 0 ] && [ -z "$commands" ]; then
   defer_commands=1
 else

@@ -45,7 +45,7 @@ excluded=(
   "realtime|real time against the wall clock: the sanitizers make the work 8-20x slower, so its deadlines are missed by design"
   "package|installs Stride and builds a consumer project against it: a build-system test, not about memory (and the consumer is not built with the sanitizers)"
   "openmp_alloc|counts allocations with 2 OpenMP threads: clang's libomp allocates in every parallel region, gcc's libgomp does not (tests/README.md)"
-  "sanitize_slow|long runs of a path another test runs shorter here (ten controller kills, one kill in ControllerLoss.*AKill*; the astronaut with its legs alone, the mirrored legs in Astronaut.Mirrored*; the terrain walks TerrainWithMap.*, TerrainBlind.*, whose paths BlindGroundOffset.* and TerrainMap.* run; the robustness cards' drives robustness_*, whose sensing, actuator and mismatch paths test_sensing, test_sim_node and ClosedLoop.QuadrupedTrotsWithNoiseDelayAndDrops run): several to over 10 minutes each under the sanitizers"
+  "sanitize_slow|long runs of a path another test runs shorter here (ten controller kills, one kill in ControllerLoss.*AKill*; the astronaut with its legs alone, the mirrored legs in Astronaut.Mirrored*; the terrain walks TerrainWithMap.*, TerrainBlind.*, whose paths BlindGroundOffset.* and TerrainMap.* run; the robustness cards' drives robustness_*, whose sensing, actuator and mismatch paths test_sensing, test_sim_node and ClosedLoop.QuadrupedTrotsWithNoiseDelayAndDrops run; stride-init's six drives init_robots_drives, whose set-up init_robots runs with --no-drive): several to over 10 minutes each under the sanitizers"
 )
 labels=()
 for e in "${excluded[@]}"; do
