@@ -96,7 +96,8 @@
 #                     the robot keeps the first while it speaks; messages/README.md, "Signing")
 #   --rival           also run a second stride-mpc on the robot's channels with another plan (its
 #                     commands from STRIDE_RIVAL_COMMAND, where nobody sends: it stands while the
-#                     robot walks; on the side core at nice 10): the robot must follow the first
+#                     robot walks; on the side core at nice 10, from 3 s after the robot's
+#                     controller): the robot must follow the first
 #                     controller, refuse the rival's policies and say so, and both controllers
 #                     must report the other (issue 19); its output in DIR/mpc-rival.txt.
 #                     tools/faults.sh --rival runs it
@@ -456,42 +457,20 @@ if [ "$rival" = 1 ]; then
   # folder) and the command channel moved where nobody sends.
   rival_dir=$(mktemp -d)
   rival_yaml="$rival_dir/rival.yaml"
-  python3 - "$config" "$rival_dir/absolute.yaml" <<'PY'
-import json, os, re, sys
-src, dst = sys.argv[1], sys.argv[2]
-base = os.path.dirname(os.path.abspath(src))
-def scalar(text):  # a scalar's text: quoted, or plain up to a comment
-    text = text.strip()
-    if text[:1] == '"':
-        m = re.match(r'"((?:[^"\\]|\\.)*)"', text)
-        return json.loads('"%s"' % m.group(1)) if m else None
-    if text[:1] == "'":
-        m = re.match(r"'((?:[^']|'')*)'", text)
-        return m.group(1).replace("''", "'") if m else None
-    return re.split(r'\s+#', text)[0].strip()
-out = []
-for line in open(src).read().splitlines():
-    m = re.match(r'^(\s*)(robot|plan_file|key_file):(.*)$', line)
-    if m and (m.group(2) == 'robot') == (m.group(1) == ''):
-        v = scalar(m.group(3))
-        if v and not v.startswith('/') and not v.startswith('package://'):
-            line = '%s%s: %s' % (m.group(1), m.group(2),
-                                 json.dumps(os.path.normpath(os.path.join(base, v))))
-    out.append(line)
-with open(dst, 'w') as f:
-    f.write('\n'.join(out) + '\n')
-PY
+  python3 "$root/tools/drive/config_copy.py" "$config" "$rival_dir/absolute.yaml"
   sed -e '/^  command: /d' -e '/^lcm:/a\  command: STRIDE_RIVAL_COMMAND' "$rival_dir/absolute.yaml" \
     > "$rival_yaml"
   grep -q '^lcm:' "$rival_yaml" || printf 'lcm:\n  command: STRIDE_RIVAL_COMMAND\n' >> "$rival_yaml"
   rival_args=(--config "$rival_yaml" "${dirs_args[@]}" --summary "$out/mpc-rival.json")
   [ "$rival_key" = 1 ] && rival_args+=("${key_args[@]}")
   [ "$mode" = lockstep ] && rival_args+=(--lockstep)
-  timeout -k 10 "$limit" nice -n 10 "${side[@]}" "$build/controller/stride-mpc" "${rival_args[@]}" \
-    > "$out/mpc-rival.txt" 2>&1 &
+  # It starts 3 s after the robot's controller: a controller that comes up while the robot is
+  # driven. Started together, the two start-up solves race for the robot's first policy, and the
+  # rival, without commands, would win it now and then (a robot follows the first controller).
+  ( sleep 3; exec timeout -k 10 "$limit" nice -n 10 "${side[@]}" "$build/controller/stride-mpc" \
+    "${rival_args[@]}" ) > "$out/mpc-rival.txt" 2>&1 &
   rival_pid=$!
   pids+=($rival_pid)
-  started "$out/mpc-rival.txt" "^stride-mpc: .* mode" "$rival_pid" "stride-mpc (rival)"
 fi
 if [ -n "$kill_controller" ]; then
   # The controller killed (no chance to say goodbye) while the robot walks, a new one started a

@@ -83,45 +83,7 @@ trap 'rm -rf "$work"' EXIT
 # absolute, relative to the input's folder as stride-mpc resolves them (robot: at the top level,
 # plan_file: and key_file: in their blocks), and the command limits lifted.
 config="$work/config.yaml"
-python3 - "$input" "$config" <<'PY'
-import json, os, re, sys
-src, dst = sys.argv[1], sys.argv[2]
-base = os.path.dirname(os.path.abspath(src))
-
-def scalar(text):  # a scalar's text: quoted, or plain up to a comment
-    text = text.strip()
-    if text[:1] == '"':
-        m = re.match(r'"((?:[^"\\]|\\.)*)"', text)
-        return json.loads('"%s"' % m.group(1)) if m else None
-    if text[:1] == "'":
-        m = re.match(r"'((?:[^']|'')*)'", text)
-        return m.group(1).replace("''", "'") if m else None
-    return re.split(r'\s+#', text)[0].strip()
-
-out, lifted, command_at = [], False, None
-for line in open(src).read().splitlines():
-    m = re.match(r'^(\s*)(robot|plan_file|key_file):(.*)$', line)
-    if m and (m.group(2) == 'robot') == (m.group(1) == ''):
-        v = scalar(m.group(3))
-        if v and not v.startswith('/') and not v.startswith('package://'):
-            line = '%s%s: %s' % (m.group(1), m.group(2),
-                                 json.dumps(os.path.normpath(os.path.join(base, v))))
-    m = re.match(r'^(\s+)max_velocity:', line)
-    if m:
-        line, lifted = m.group(1) + 'max_velocity: [5.0, 2.0, 3.0]', True
-    if re.match(r'^command:', line):
-        command_at = len(out)
-    out.append(line)
-if not lifted:
-    if command_at is None:
-        out.append('command: {max_velocity: [5.0, 2.0, 3.0]}')
-    elif re.match(r'^command:\s*(#.*)?$', out[command_at]):
-        out.insert(command_at + 1, '  max_velocity: [5.0, 2.0, 3.0]')
-    else:
-        sys.exit("sweep.sh: cannot lift the command limits of '%s' (a flow-style command:)" % src)
-with open(dst, 'w') as f:
-    f.write('\n'.join(out) + '\n')
-PY
+python3 "$root/tools/drive/config_copy.py" "$input" "$config" --lift-command-limits
 gait=walk
 if ! "$build/controller/stride-mpc" --config "$config" "${dirs[@]}" --print-model > "$work/model.txt" 2>&1; then
   cat "$work/model.txt" >&2
