@@ -514,6 +514,14 @@ void writeFiles(const InitInput& in, Setup& s) {
             pyFloat(std::round(contacts["swing_height"].as<double>() * s.ratio * s.ratio * 1000.0) /
                     1000.0);
     }
+    // Weights by mass: the control and friction-cone terms are squares of torques and forces,
+    // which grow with the robot's mass; divided by the mass ratio squared, they weigh against the
+    // state terms (squares of positions and velocities) as on the template robot.
+    if (YAML::Node weights = c["weights"]) {
+      for (const char* key : {"control", "friction"})
+        if (weights[key])
+          weights[key] = pyFloat(weights[key].as<double>() / (s.mass_ratio * s.mass_ratio));
+    }
     if (YAML::Node safety = c["safety"]) {
       for (const char* key : {"hold_kp", "hold_kd"})
         if (safety[key])
@@ -547,7 +555,7 @@ void writeFiles(const InitInput& in, Setup& s) {
       << " m / template's) = " << fmt(s.ratio)
       << ", swing height and max body height by its square,\n"
       << "# min_normal_force and the hold gains by the mass ratio " << fmt(s.mass_ratio)
-      << "; weights kept.\n"
+      << ", the control and friction weights by its inverse square.\n"
       << out.c_str() << "\n";
     if (!f) throw InitError("cannot write '" + files[1] + "'");
   }
