@@ -175,12 +175,13 @@ Setup analyse(const InitInput& in) {
     // A <mimic> joint follows its leader: lock the first leader of each chain not locked already
     // (full TALOS: the two gripper joints, and their 12 mimics follow).
     s.locked = in.locked;
-    for (const MimicJoint& m : urdfMimicJoints(s.urdf_path)) {
+    const std::vector<MimicJoint> mimics = urdfMimicJoints(s.urdf_path);
+    for (const MimicJoint& m : mimics) {
       if (s.locked.count(m.name)) continue;
       std::string leader = m.leader;
       for (bool more = true; more;) {
         more = false;
-        for (const MimicJoint& n : urdfMimicJoints(s.urdf_path))
+        for (const MimicJoint& n : mimics)
           if (n.name == leader && !s.locked.count(leader)) {
             leader = n.leader;
             more = true;
