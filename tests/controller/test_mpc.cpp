@@ -381,8 +381,12 @@ TEST(Mpc, AControllerStoppedLongerThanItsHorizonDrivesAgain) {
     mpc.prepare(start + period + period / 2);
     return sent;
   };
-  for (int i = 0; i < 200; ++i) tickRealTime(5000);
-  ASSERT_EQ(mpc.policy().status, kPolicySolved);
+  // Driving before the pause: most of the last 50 ticks solved (one tick of a loaded host may
+  // re-send the previous policy: its answer was due 1.5 ms after it started).
+  int solved_before = 0;
+  for (int i = 0; i < 200; ++i)
+    solved_before += tickRealTime(5000) && i >= 150 && mpc.policy().status == kPolicySolved;
+  ASSERT_GE(solved_before, 40) << "of the 50 ticks before the pause";
   const std::int64_t fallbacks = mpc.counters().fallbacks;
   // 1.5 s without a tick, then the ticks go on.
   int solved_after = -1;
