@@ -67,7 +67,7 @@ struct ControllerConfig {
   // is usually accepted. Each rejected rollout costs a rollout's time in the tick's latency.
   double min_regularization = 1e-9;
   // Not from the YAML: stride-mpc --emulate-slow-host F (tests of the overload handling) makes
-  // every solver phase take F times its duration (SolverOptions::emulated_slowdown).
+  // every piece of the solver's work take F times its duration (controller/slow_host.hpp).
   double emulated_slowdown = 1.0;
   int threads = 1;
 

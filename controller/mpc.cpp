@@ -174,7 +174,10 @@ void Mpc::start(std::int64_t utime) {
   timeline.reset(have_plan_ ? timeline.addPattern(plan_) : gait_pattern_[0], 0.0);
   SolverOptions options;
   options.line_search_steps = config_.line_search_steps;
-  options.emulated_slowdown = config_.emulated_slowdown;
+  if (config_.emulated_slowdown > 1.0) {
+    slow_host_ = std::make_unique<SlowHost>(config_.emulated_slowdown);
+    options.work_hook = slow_host_.get();
+  }
   solver_ = std::make_unique<Solver>(loco_->problem(), config_.solver, options);
   if (config_.solver == SolverKind::BoxFddp)
     solver_->setControlBounds(loco_->controlLower(), loco_->controlUpper());

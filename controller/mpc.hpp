@@ -31,6 +31,7 @@
 #include <memory>
 
 #include "controller/controller_config.hpp"
+#include "controller/slow_host.hpp"
 #include "messages/validate.hpp"
 #include "solver/ddp/solver.hpp"
 #include "solver/ocp/locomotion.hpp"
@@ -217,6 +218,7 @@ class Mpc {
   std::vector<int> gait_pattern_;  // timeline pattern of each gait
   BodyCommand command_;
   int gait_ = 0;
+  std::unique_ptr<SlowHost> slow_host_;  // --emulate-slow-host: the solver's work hook
   std::unique_ptr<Solver> solver_;
   std::vector<Eigen::VectorXd> xs_warm_, us_warm_;  // warm start on the references (restarts)
   double t_warm_ = 0.0;                             // plan time of the warm start's knot 0

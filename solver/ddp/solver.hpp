@@ -70,9 +70,18 @@ struct SolverOptions {
   // Use the Euler structure of Fx, Fu where knots provide it (action.hpp); off only to compare
   // with the dense products in tests.
   bool exploit_structure = true;
-  // For tests of overload handling: every phase (derivatives, backward pass, rollout) takes this
-  // many times its own duration, busy, as on a host this much slower. 1: off.
-  double emulated_slowdown = 1.0;
+  // Told of each piece of work as it ends (not owned; null: none).
+  class WorkHook* work_hook = nullptr;
+};
+
+// Told of each piece of an iteration's work as it ends, with the time it started: a chunk of
+// derivatives or of the backward pass (kDeadlineKnots knots per thread), the gaps, a rollout. The
+// overload tests stretch the pieces with it to play a slower host (controller/slow_host.hpp):
+// the solver itself only reports.
+class WorkHook {
+ public:
+  virtual ~WorkHook() = default;
+  virtual void pieceDone(std::chrono::steady_clock::time_point started) = 0;
 };
 
 class Solver {
@@ -228,13 +237,14 @@ class Solver {
   bool feasible_ = false;
   bool prepared_ = false;  // derivatives and backward pass done for the next iteration
   bool data_at_solution_ = false;
-  // Busy for (emulated_slowdown - 1) times the time since `since`: the work since then as on a
-  // host that many times slower.
-  void emulateSlowHost(Clock::time_point since) const;
-  struct SlowHostGuard {  // emulateSlowHost at the end of the scope
+  // options.work_hook told of a piece of work that started at `started`.
+  void pieceDone(Clock::time_point started) const {
+    if (options.work_hook) options.work_hook->pieceDone(started);
+  }
+  struct PieceGuard {  // pieceDone at the end of the scope
     const Solver& solver;
     Clock::time_point start = Clock::now();
-    ~SlowHostGuard() { solver.emulateSlowHost(start); }
+    ~PieceGuard() { solver.pieceDone(start); }
   };
   double prepare_ms_ = 0.0;
   double cost_ = 0.0, gap_ = 0.0, d1_ = 0.0, d2_ = 0.0, reg_ = 0.0;

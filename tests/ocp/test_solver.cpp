@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 
+#include "controller/slow_host.hpp"
 #include "ocp/lq_action.hpp"
 #include "solver/ddp/solver.hpp"
 #include "solver/multibody/lie_group.hpp"
@@ -408,7 +409,8 @@ TEST(Solver, PreparationCutByItsDeadlineResumesExactly) {
   Solver whole(*a.problem), cut(*b.problem);
   SolveStatus status = SolveStatus::MaxIterations;
   ASSERT_TRUE(whole.prepare(Solver::Clock::time_point::max(), status));
-  cut.options.emulated_slowdown = 1000.0;
+  SlowHost slow_host(1000.0);
+  cut.options.work_hook = &slow_host;
   int calls = 0;
   bool done = false;
   while (!done && calls < 100) {
@@ -429,7 +431,7 @@ TEST(Solver, PreparationCutByItsDeadlineResumesExactly) {
     EXPECT_EQ(cut.k()[k], whole.k()[k]) << "knot " << k;
   }
   // A discarded one starts again from its first knot.
-  cut.options.emulated_slowdown = 1.0;
+  cut.options.work_hook = nullptr;
   ASSERT_FALSE(cut.prepare(Solver::Clock::now(), status));  // the deadline passed: nothing done
   EXPECT_TRUE(cut.preparing());
   cut.discardPreparation();
