@@ -58,9 +58,7 @@ Solver::Solver(ShootingProblem& problem, SolverKind kind, const SolverOptions& o
   Qxu_ = VFu_ = Eigen::MatrixXd::Zero(n, m);
   Quu_ = Quu_inv_ = Eigen::MatrixXd::Zero(m, m);
   VB_ = Eigen::MatrixXd::Zero(n, n / 2);
-  BtY_ = EtY_ = Eigen::MatrixXd::Zero(n / 2, std::max(n, m));
-  colwork_ = Eigen::Matrix<double, Eigen::Dynamic, 6>::Zero(n, 6);
-  rowwork_ = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, std::max(n, m));
+  BtY_ = Eigen::MatrixXd::Zero(n / 2, std::max(n, m));
   W_ = Wf_ = Eigen::MatrixXd::Zero(m, n);
   Qu_ = Eigen::VectorXd::Zero(m);
   w_ = Eigen::VectorXd::Zero(m);

@@ -218,9 +218,7 @@ class Solver {
   Eigen::VectorXd Qx_, Qu_;
   Eigen::MatrixXd Qxx_, Qxu_, Quu_, Quu_inv_, VFx_, VFu_, W_, Wf_;
   Eigen::VectorXd w_;
-  Eigen::MatrixXd VB_, BtY_, EtY_;  // Euler-structure products
-  Eigen::Matrix<double, Eigen::Dynamic, 6> colwork_;
-  Eigen::Matrix<double, 6, Eigen::Dynamic> rowwork_;
+  Eigen::MatrixXd VB_, BtY_;  // Euler-structure products
   // Linearized rollout.
   Eigen::VectorXd dx_, dx_next_, du_, tmp_x_;
   BoxQP box_;  // one workspace: the backward pass is serial
