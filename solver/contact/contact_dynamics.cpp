@@ -212,35 +212,6 @@ void rotateForces(const Model& model, const Data& data, const ContactSet& contac
   }
 }
 
-// K^-1 into cd.Kinv from the Cholesky factor in K's lower triangle: L^-1 by forward substitution,
-// then K^-1 = L^-T L^-1. Plain loops: for a dozen rows, Eigen's blocked triangular solves spend
-// more time in their setup than in the arithmetic.
-void invertSchur(ContactData& cd) {
-  const int nc = cd.nc;
-  const Eigen::MatrixXd& L = cd.K;
-  Eigen::MatrixXd& X = cd.Kinv;  // L^-1 in the lower triangle first, then K^-1
-  // The reciprocal pivots first (X's diagonal): a division inside the loop below would sit on its
-  // dependency chain.
-  for (int j = 0; j < nc; ++j) X(j, j) = 1.0 / L(j, j);
-  for (int j = 0; j < nc; ++j) {
-    for (int i = j + 1; i < nc; ++i) {
-      double s = 0.0;
-      for (int k = j; k < i; ++k) s -= L(i, k) * X(k, j);
-      X(i, j) = s * X(i, i);
-    }
-  }
-  // (L^-T L^-1)(i, j) = Σ_{k >= max(i, j)} X(k, i) X(k, j); upper triangle first, so that the
-  // lower triangle still holds L^-1 while it is read.
-  for (int j = 0; j < nc; ++j)
-    for (int i = 0; i <= j; ++i) {
-      double s = 0.0;
-      for (int k = j; k < nc; ++k) s += X(k, i) * X(k, j);
-      X(i, j) = s;
-    }
-  for (int j = 0; j < nc; ++j)
-    for (int i = j + 1; i < nc; ++i) X(i, j) = X(j, i);
-}
-
 // row += Σ_r jc[r] d_r for Dim rows d_r of length n (stride ld): the rows of Jc^T ∂λ/∂x a contact
 // adds to, one pass over each output row with the Dim coefficients in registers.
 template <int Dim>
@@ -276,7 +247,7 @@ void kktDerivatives(const Model& model, Data& data, const ContactSet& contacts, 
   const int nc = cd.nc, nv = model.nv;
   // K^-1 explicitly: it is at most a few dozen rows, and one small product is cheaper than a
   // triangular solve.
-  invertSchur(cd);
+  inverseFromCholesky(cd.K, nc, cd.Kinv);  // from the factor in K's lower triangle
   const auto Kinv = cd.Kinv.topLeftCorner(nc, nc);
   // The requested blocks side by side, [q | v | τ columns tau_first..nv-1], in cd.work (for ∂λ)
   // and cd.rhs3 (for ∂v̇): ∂λ then takes one product with K^-1 and the Jc^T update one pass over

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "solver/multibody/cholesky.hpp"
+
 namespace stride {
 
 namespace {
@@ -13,32 +15,6 @@ namespace {
 // Again with the fused products below (issue 35, min of 9 interleaved runs): solo 0.487 ms
 // structured against 0.441 dense, hyq 0.760 structured (0.792 before the fusion).
 constexpr int kStructureMinNv = 16;
-
-// A^-1 (n x n, top-left of X) from the Cholesky factor L of A in the lower triangle of the top-left
-// n x n of L: L^-1 by forward substitution, then A^-1 = L^-T L^-1. Plain loops: at a dozen rows
-// Eigen's blocked triangular solves spend more time in their setup than in the arithmetic (two
-// solves were 5% of solo's backward pass).
-void invertFromCholesky(const Eigen::MatrixXd& L, int n, Eigen::MatrixXd& X) {
-  // The reciprocal pivots first (X's diagonal): a division inside the loop would sit on its
-  // dependency chain.
-  for (int j = 0; j < n; ++j) X(j, j) = 1.0 / L(j, j);
-  for (int j = 0; j < n; ++j)
-    for (int i = j + 1; i < n; ++i) {
-      double s = 0.0;
-      for (int k = j; k < i; ++k) s -= L(i, k) * X(k, j);
-      X(i, j) = s * X(i, i);
-    }
-  // (L^-T L^-1)(i, j) = Σ_{k >= max(i, j)} X(k, i) X(k, j); the upper triangle first, so that the
-  // lower one still holds L^-1 while it is read.
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i <= j; ++i) {
-      double s = 0.0;
-      for (int k = j; k < n; ++k) s += X(k, i) * X(k, j);
-      X(i, j) = s;
-    }
-  for (int j = 0; j < n; ++j)
-    for (int i = j + 1; i < n; ++i) X(i, j) = X(j, i);
-}
 
 // Copies a square matrix's lower triangle to its upper one.
 void mirrorLower(Eigen::MatrixXd& A) {
@@ -191,7 +167,7 @@ bool Solver::backward(Clock::time_point deadline) {
         // ~7% of the quadruped's backward pass, mostly setup.
         const int nf = qp.nfree();
         const Eigen::VectorXi& F = qp.freeIndices();
-        invertFromCholesky(qp.freeFactor(), nf, Quu_inv_);
+        inverseFromCholesky(qp.freeFactor(), nf, Quu_inv_);
         const auto Hinv = Quu_inv_.topLeftCorner(nf, nf);
         if (nf == nu) {
           KK.noalias() = Hinv * Qxu.transpose();  // F is 0..nu-1 in order
@@ -215,7 +191,7 @@ bool Solver::backward(Clock::time_point deadline) {
         // Quu^-1 explicitly (nu columns through the factor), then k and K by products: the
         // triangular solves on the ndx + 1 right-hand sides cost more than the products at these
         // sizes.
-        invertFromCholesky(Quu_, nu, Quu_inv_);
+        inverseFromCholesky(Quu_, nu, Quu_inv_);
         const auto Quu_inv = Quu_inv_.topLeftCorner(nu, nu);
         // Negated after the products, as in the box branch (no heap temporary when nu = 1).
         kk.noalias() = Quu_inv * Qu;

@@ -22,6 +22,28 @@ bool factorizeMassMatrix(const Model& model, Data& data) {
   return true;
 }
 
+void inverseFromCholesky(const Eigen::MatrixXd& L, int n, Eigen::MatrixXd& X) {
+  // The reciprocal pivots first (X's diagonal): a division inside the loop would sit on its
+  // dependency chain.
+  for (int j = 0; j < n; ++j) X(j, j) = 1.0 / L(j, j);
+  for (int j = 0; j < n; ++j)
+    for (int i = j + 1; i < n; ++i) {
+      double s = 0.0;
+      for (int k = j; k < i; ++k) s -= L(i, k) * X(k, j);
+      X(i, j) = s * X(i, i);
+    }
+  // (L^-T L^-1)(i, j) = Σ_{k >= max(i, j)} X(k, i) X(k, j); the upper triangle first, so that the
+  // lower one still holds L^-1 while it is read.
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i <= j; ++i) {
+      double s = 0.0;
+      for (int k = j; k < n; ++k) s += X(k, i) * X(k, j);
+      X(i, j) = s;
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = j + 1; i < n; ++i) X(i, j) = X(j, i);
+}
+
 namespace {
 // Eight, four and two doubles as one value (vector registers): GCC and Clang keep a few of these in
 // registers across a loop, where a plain double[W] accumulator is kept on the stack and stored and

@@ -18,4 +18,11 @@ void solveMassMatrix(const Model& model, const Data& data, Eigen::Ref<Eigen::Vec
 // contiguous in memory, so many right-hand sides vectorize together. The fast path for matrices.
 void solveMassMatrixRows(const Model& model, const Data& data, Eigen::Ref<RowMatrixXd> B);
 
+// A^-1 (n x n, the top-left of X) of a small dense SPD matrix A from its Cholesky factor L (lower
+// triangle of the top-left n x n of L): L^-1 by forward substitution, then A^-1 = L^-T L^-1. Plain
+// loops: at a dozen rows Eigen's blocked triangular solves spend more time in their setup than in
+// the arithmetic. For the contact Schur complement (contact_dynamics.cpp) and the Riccati pass's
+// Quu (solver/ddp/backward_pass.cpp), whose products with the inverse beat solves at these sizes.
+void inverseFromCholesky(const Eigen::MatrixXd& L, int n, Eigen::MatrixXd& X);
+
 }  // namespace stride
