@@ -23,9 +23,11 @@ const char* toString(SolverKind kind) {
 
 std::string describeHorizon(const LocomotionOptions& h) {
   char buf[64];
+  // The integrator only when it is not the default, so that Euler's line reads as it always has.
+  const std::string rk4 = h.integrator == Integrator::Rk4 ? ", rk4" : "";
   if (h.grid.empty()) {
     std::snprintf(buf, sizeof buf, "%d knots of %.0f ms", h.knots, h.dt * 1e3);
-    return buf;
+    return buf + rk4;
   }
   std::string parts;
   double span = 0.0;
@@ -36,7 +38,7 @@ std::string describeHorizon(const LocomotionOptions& h) {
     span += s.knots * s.dt;
   }
   std::snprintf(buf, sizeof buf, "%d knots, %.2f s: ", h.knots, span);
-  return buf + parts;
+  return buf + parts + rk4;
 }
 
 namespace {
@@ -115,10 +117,14 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
 
   LocomotionOptions& lo = c.locomotion;
   const YAML::Node horizon = root["horizon"];
-  r.onlyKeys(horizon, "horizon", {"knots", "dt", "grid"});
+  r.onlyKeys(horizon, "horizon", {"knots", "dt", "grid", "integrator"});
   if (horizon) {
     r.get(horizon, "knots", "horizon", lo.knots);
     r.get(horizon, "dt", "horizon", lo.dt);
+    std::string integrator = toString(lo.integrator);
+    r.get(horizon, "integrator", "horizon", integrator);
+    if (!parseIntegrator(integrator, lo.integrator))
+      r.fail("horizon.integrator", "'" + integrator + "' is not one of euler, rk4");
   }
   // A non-uniform grid: segments {knots, dt} from now on (LocomotionOptions::grid).
   if (horizon && horizon["grid"]) {

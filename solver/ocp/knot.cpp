@@ -1,6 +1,7 @@
 #include "solver/ocp/knot.hpp"
 
 #include <limits>
+#include <stdexcept>
 
 #include <omp.h>
 
@@ -17,8 +18,25 @@ KnotStatus knotStatus(ContactStatus s) {
 }
 }  // namespace
 
-KnotWorkspace::KnotWorkspace(const Model& model, const ContactSet& contacts, const CostModel& costs)
-    : data(model), knot(model, contacts), costs(costs.createData()) {}
+const char* toString(Integrator integrator) {
+  return integrator == Integrator::Rk4 ? "rk4" : "euler";
+}
+
+bool parseIntegrator(const std::string& name, Integrator& out) {
+  if (name == "euler")
+    out = Integrator::Euler;
+  else if (name == "rk4")
+    out = Integrator::Rk4;
+  else
+    return false;
+  return true;
+}
+
+KnotWorkspace::KnotWorkspace(const Model& model, const ContactSet& contacts, const CostModel& costs,
+                             Integrator integrator)
+    : data(model), knot(model, contacts), costs(costs.createData()) {
+  if (integrator == Integrator::Rk4) rk4 = std::make_unique<Rk4Data>(model, contacts);
+}
 
 KeptSolve::KeptSolve(const Model& model, const ContactSet& contacts) {
   // The buffers as the workspace's start: they take turns in it.
@@ -44,12 +62,13 @@ void KeptSolve::trade(Data& data, ContactData& cd) {
 }
 
 KnotActionData::KnotActionData(const Model& model, const ContactSet& contacts,
-                               const CostModel& costs, int slot)
+                               const CostModel& costs, int slot, Integrator integrator)
     : ActionData(model.nq + model.nv, 2 * model.nv, actuatedDimension(model)),
       forces_(Eigen::VectorXd::Zero(contacts.maxNc())),
       kept_(model, contacts),
-      slot_(slot) {
-  if (slot < 0) own_ = std::make_unique<KnotWorkspace>(model, contacts, costs);
+      slot_(slot),
+      integrator_(integrator) {
+  if (slot < 0) own_ = std::make_unique<KnotWorkspace>(model, contacts, costs, integrator);
 }
 
 SharedWorkspace::SharedWorkspace(const Model& model, int threads)
@@ -68,19 +87,24 @@ std::vector<std::pair<const std::type_info*, int>> termSignature(const CostModel
 }
 }  // namespace
 
-int SharedWorkspace::reserve(const ContactSet& contacts, const CostModel& costs) {
+int SharedWorkspace::reserve(const ContactSet& contacts, const CostModel& costs,
+                             Integrator integrator) {
   const auto terms = termSignature(costs);
   for (size_t s = 0; s < slots_.size(); ++s) {
     const Slot& slot = slots_[s];
-    if (slot.max_nc != contacts.maxNc() || slot.terms.size() != terms.size()) continue;
+    // Exact match on the integrator: an Rk4 slot could serve Euler knots too, but then which slot
+    // an Euler knot gets would depend on the order of setup.
+    if (slot.max_nc != contacts.maxNc() || slot.integrator != integrator ||
+        slot.terms.size() != terms.size())
+      continue;
     bool same = true;
     for (size_t i = 0; i < terms.size() && same; ++i)
       same = *slot.terms[i].first == *terms[i].first && slot.terms[i].second == terms[i].second;
     if (same) return static_cast<int>(s);
   }
-  Slot slot{contacts.maxNc(), terms, {}};
+  Slot slot{contacts.maxNc(), integrator, terms, {}};
   for (int t = 0; t < threads_; ++t)
-    slot.scratch.push_back(std::make_unique<KnotWorkspace>(model_, contacts, costs));
+    slot.scratch.push_back(std::make_unique<KnotWorkspace>(model_, contacts, costs, integrator));
   slots_.push_back(std::move(slot));
   return static_cast<int>(slots_.size()) - 1;
 }
@@ -99,18 +123,29 @@ int KnotModel::maxThreads() const {
 }
 
 KnotWorkspace& KnotModel::workspace(KnotActionData& d) const {
+  // A setup error, not a numerical one: the data's slot has no RK4 stages (or has them for
+  // nothing), and a knot must not silently integrate otherwise than it was set up for.
+  if (d.integrator_ != integrator_)
+    throw std::logic_error(std::string("KnotModel: data made for the ") + toString(d.integrator_) +
+                           " integrator, the knot integrates by " + toString(integrator_) +
+                           " (setIntegrator after createData)");
   // The problem never runs more threads than the shared workspace serves (maxThreads).
   if (d.slot_ < 0) return *d.own_;
   return workspace_->scratch(d.slot_, omp_get_thread_num());
 }
 
 std::unique_ptr<ActionData> KnotModel::createData() const {
-  const int slot = workspace_ ? workspace_->reserve(contacts_, costs_) : -1;
-  return std::make_unique<KnotActionData>(model_, contacts_, costs_, slot);
+  const int slot = workspace_ ? workspace_->reserve(contacts_, costs_, integrator_) : -1;
+  return std::make_unique<KnotActionData>(model_, contacts_, costs_, slot, integrator_);
 }
 
 KnotContext KnotModel::context(KnotActionData& d, KnotWorkspace& w) const {
-  return KnotContext{model_, w.data, &contacts_, &d.forces_, &w.knot.Gx, &w.knot.Gu};
+  // An RK4 contact knot's forces are its stage 1's, λ at x: their Jacobians are in the Rk4Data.
+  // (The kinematics are stage 1's in w.data with either integrator.)
+  const bool rk4 = mode_ == KnotMode::Contact && integrator_ == Integrator::Rk4;
+  const Eigen::MatrixXd& Gx = rk4 ? w.rk4->Gx : w.knot.Gx;
+  const Eigen::MatrixXd& Gu = rk4 ? w.rk4->Gu : w.knot.Gu;
+  return KnotContext{model_, w.data, &contacts_, &d.forces_, &Gx, &Gu};
 }
 
 // The dynamics of the knot's mode; false (with the status set, the state held and the cost
@@ -125,7 +160,30 @@ bool KnotModel::dynamics(KnotActionData& d, KnotWorkspace& w,
   KnotData& kd = w.knot;
   ContactData& cd = kd.contact;
   ContactStatus s;
-  if (mode_ == KnotMode::Contact) {
+  if (mode_ == KnotMode::Contact && integrator_ == Integrator::Rk4) {
+    // calcDiff runs the four stages again rather than reusing calc's: a kept solve would have to
+    // hold the four stages' kinematics and factors (stages 2-4 live in one shared Data), and the
+    // solves are a smaller share of an RK4 calcDiff than of an Euler one (each stage's
+    // derivatives follow its solve).
+    d.solve_reused = false;
+    Rk4Data& rd = *w.rk4;
+    s = derivatives ? knotDynamicsRk4Derivatives(model_, data, contacts_, rd, q, v, u, dt_, damping)
+                    : knotDynamicsRk4(model_, data, contacts_, rd, q, v, u, dt_, damping);
+    if (s == ContactStatus::Ok) {
+      d.x_next.head(nq) = rd.q_next;
+      d.x_next.tail(nv) = rd.v_next;
+      if (derivatives) {
+        // Swapped as with Euler: knotDynamicsRk4Derivatives rewrites every entry of rd.Fx, rd.Fu.
+        d.Fx.swap(rd.Fx);
+        d.Fu.swap(rd.Fu);
+        // Fx's velocity rows are not [dt a_q, I + dt a_v] here: the solvers must not take the
+        // Euler-structured products (action.hpp, EulerStructure).
+        d.euler.valid = false;
+      }
+    }
+    d.forces_ = rd.contact.lambda;
+    d.nc_ = rd.contact.nc;
+  } else if (mode_ == KnotMode::Contact) {
     d.solve_reused = derivatives && keptSolveMatches(d, x, u);
     if (d.solve_reused) {
       // calc's solve at this point (x⁺ and λ are still in d): only the Jacobians. keepSolve
@@ -187,7 +245,7 @@ bool KnotModel::dynamics(KnotActionData& d, KnotWorkspace& w,
     }
     d.forces_ = cd.impulses;
   }
-  d.nc_ = cd.nc;
+  if (mode_ == KnotMode::Impulse || integrator_ == Integrator::Euler) d.nc_ = cd.nc;
   d.contact_status = s;
   if (s != ContactStatus::Ok) {
     d.status = knotStatus(s);
@@ -216,7 +274,9 @@ void KnotModel::keepSolve(KnotActionData& d, KnotWorkspace& w,
                           const Eigen::Ref<const Eigen::VectorXd>& x,
                           const Eigen::Ref<const Eigen::VectorXd>& u) const {
   KeptSolve& k = d.kept_;
-  k.valid = mode_ == KnotMode::Contact && d.contact_status == ContactStatus::Ok;
+  // Euler contact knots only: an RK4 calcDiff solves its four stages again (dynamics()).
+  k.valid = mode_ == KnotMode::Contact && integrator_ == Integrator::Euler &&
+            d.contact_status == ContactStatus::Ok;
   if (!k.valid) return;
   k.trade(w.data, w.knot.contact);
   k.knot = this;

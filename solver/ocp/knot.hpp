@@ -6,13 +6,18 @@
 //   - an impulse knot: the touch-down of new contacts, x⁺ = (q, v⁺) with the impulse Λ as its
 //     forces; u has no effect there (Fu = 0);
 //   - a terminal knot: a cost on the final state.
+// A contact knot integrates by semi-implicit Euler (knot_dynamics.hpp) or, chosen per knot at
+// setup (setIntegrator), by Runge-Kutta-Munthe-Kaas 4 (knot_rk4.hpp). An impulse is
+// instantaneous: it has nothing to integrate, and is the same under both.
 // Contact and impulse are two modes of one knot, switched in place: the receding horizon moves a
 // touch-down from one knot to the previous one every tick, so a knot must change mode without
 // being rebuilt.
 
+#include <string>
 #include <typeinfo>
 
 #include "solver/contact/knot_dynamics.hpp"
+#include "solver/contact/knot_rk4.hpp"
 #include "solver/ocp/action.hpp"
 #include "solver/ocp/cost.hpp"
 
@@ -20,15 +25,28 @@ namespace stride {
 
 enum class KnotMode : std::uint8_t { Contact, Impulse };
 
+// How a contact knot integrates its dynamics over dt. Euler: one KKT solve per knot, first order,
+// and the structure of Fx the solvers exploit (action.hpp, EulerStructure). Rk4: four solves per
+// knot, fourth order (a free-floating body's momentum is conserved to O(dt⁴) per knot, not
+// O(dt)), Fx without that structure.
+enum class Integrator : std::uint8_t { Euler, Rk4 };
+const char* toString(Integrator integrator);  // "euler", "rk4"
+// "euler" or "rk4" (exactly, lower case); false for anything else, out untouched.
+bool parseIntegrator(const std::string& name, Integrator& out);
+
 // The scratch of one knot's calc / calcDiff: the multibody workspace, the contact dynamics
 // workspaces (KKT factors, ∂v̇, ∂λ, Gx, Gu, the Euler step's Jacobians) and the cost's residual
 // workspaces. None of it is read after the call: what later stages need (x⁺, Fx, Fu, the cost
 // derivatives, λ) is copied into the knot's KnotActionData.
 struct KnotWorkspace {
-  KnotWorkspace(const Model& model, const ContactSet& contacts, const CostModel& costs);
+  KnotWorkspace(const Model& model, const ContactSet& contacts, const CostModel& costs,
+                Integrator integrator = Integrator::Euler);
   Data data;
-  KnotData knot;
+  KnotData knot;  // the Euler step, and the impulse of either integrator
   CostData costs;
+  // Rk4 only (null for Euler: stages 2-4 need a second Data, ~100 KB on a humanoid): the RK4
+  // stages. Stage 1 runs in `data` and rk4->contact, so the costs read the kinematics and λ at x.
+  std::unique_ptr<Rk4Data> rk4;
 };
 
 // Knot workspaces shared by the knots of a problem, one per thread. Every byte a knot touches in
@@ -47,13 +65,16 @@ class SharedWorkspace {
   int threads() const { return threads_; }
   // The multibody workspace of a thread (shared by all slots).
   Data& forThread(int thread) { return *data_[thread]; }
-  // Setup: the slot serving a knot with these contacts and costs, created when none fits.
-  int reserve(const ContactSet& contacts, const CostModel& costs);
+  // Setup: the slot serving a knot with these contacts, costs and integrator, created when none
+  // fits (an Rk4 knot needs a workspace with the RK4 stages).
+  int reserve(const ContactSet& contacts, const CostModel& costs,
+              Integrator integrator = Integrator::Euler);
   KnotWorkspace& scratch(int slot, int thread) { return *slots_[slot].scratch[thread]; }
 
  private:
   struct Slot {
     int max_nc;
+    Integrator integrator;
     std::vector<std::pair<const std::type_info*, int>> terms;  // residual type and dimension
     std::vector<std::unique_ptr<KnotWorkspace>> scratch;       // one per thread
   };
@@ -94,7 +115,8 @@ struct KeptSolve {
 // the contact solve and the solve itself (KeptSolve). (The scratch lives in a KnotWorkspace: the
 // problem's shared one, or `own` for a knot built without one.)
 struct KnotActionData : ActionData {
-  KnotActionData(const Model& model, const ContactSet& contacts, const CostModel& costs, int slot);
+  KnotActionData(const Model& model, const ContactSet& contacts, const CostModel& costs, int slot,
+                 Integrator integrator = Integrator::Euler);
   // The contact forces of the last calc / calcDiff, each contact's in its force frame, the active
   // contacts stacked in the set's order (top nc() entries): λ in contact mode, the impulses Λ in
   // impulse mode.
@@ -102,15 +124,18 @@ struct KnotActionData : ActionData {
   int nc() const { return nc_; }
   ContactStatus contact_status = ContactStatus::Ok;
   // Whether the last calcDiff took the contact solve kept from calc (KeptSolve) instead of
-  // solving again.
+  // solving again (never with Rk4: its calcDiff runs the four stages again, see knot.cpp).
   bool solve_reused = false;
+  // The integrator the data (and its workspace slot) was made for.
+  Integrator integrator() const { return integrator_; }
 
  private:
   friend class KnotModel;
   Eigen::VectorXd forces_;  // maxNc
   int nc_ = 0;
   KeptSolve kept_;
-  int slot_;                            // of the shared workspace, -1 without one
+  int slot_;  // of the shared workspace, -1 without one
+  Integrator integrator_;
   std::unique_ptr<KnotWorkspace> own_;  // without a shared workspace only
 };
 
@@ -125,6 +150,10 @@ class KnotModel : public ActionModel {
   void setMode(KnotMode mode) { mode_ = mode; }
   double dt() const { return dt_; }
   void setDt(double dt) { dt_ = dt; }
+  // Setup only, before createData: the data and its workspace slot are made for the integrator
+  // (calc / calcDiff on data made for another one throw std::logic_error).
+  Integrator integrator() const { return integrator_; }
+  void setIntegrator(Integrator integrator) { integrator_ = integrator; }
   ContactSet& contacts() { return contacts_; }
   const ContactSet& contacts() const { return contacts_; }
   CostModel& costs() { return costs_; }
@@ -159,6 +188,7 @@ class KnotModel : public ActionModel {
   CostModel costs_;
   double dt_;
   KnotMode mode_ = KnotMode::Contact;
+  Integrator integrator_ = Integrator::Euler;
   std::shared_ptr<SharedWorkspace> workspace_;
 };
 

@@ -133,6 +133,7 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   auto workspace = std::make_shared<SharedWorkspace>(model, std::max(omp_get_max_threads(), 2));
   for (int k = 0; k < options_.knots; ++k) {
     auto knot = std::make_unique<KnotModel>(model, contacts_, options_.dt, workspace);
+    knot->setIntegrator(options_.integrator);
     CostModel& costs = knot->costs();
     state_term_ = costs.add("state", std::make_unique<StateResidual>(model, nu, x_nominal),
                             Activation::weightedQuadratic(w_state));

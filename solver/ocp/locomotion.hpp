@@ -85,6 +85,9 @@ struct LocomotionOptions {
   double min_normal_force = 0.0;
   LocomotionWeights weights;
   bool impulses = true;  // impulse knots at touch-downs (else contact knots throughout)
+  // How every contact knot integrates (knot.hpp): Euler, or Rk4 (4th order, four KKT solves per
+  // knot). Impulse knots are instantaneous, the same under both.
+  Integrator integrator = Integrator::Euler;
   // Surface (6D) contacts: the centre of pressure stays in this rectangle around the contact
   // frame (half extents along its x and y; zero: no such term). Use the sole's, shrunk by a margin.
   Eigen::Vector2d sole_half_extents = Eigen::Vector2d::Zero();

@@ -8,7 +8,6 @@
 #include "allocation_counter.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -461,41 +460,6 @@ TEST(KnotRk4, DoesNotAllocate) {
 }
 
 // ---- Cost (printed, not asserted: the machine is shared) ----
-
-TEST(KnotRk4, CostOfTheDerivativesAgainstEuler) {
-  for (const int index : {3, 6}) {  // solo12 4 points, talos 2 soles
-    Case c = cases()[index];
-    std::mt19937 rng(8);
-    const State s = randomState(c.model, rng);
-    Data data(c.model);
-    KnotData kd(c.model, c.contacts);
-    Rk4Data rd(c.model, c.contacts);
-    auto median = [](auto&& f) {
-      std::vector<double> t;
-      for (int r = 0; r < 15; ++r) {
-        const auto t0 = std::chrono::steady_clock::now();
-        for (int k = 0; k < 200; ++k) f();
-        t.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0)
-                        .count() /
-                    200);
-      }
-      std::nth_element(t.begin(), t.begin() + 7, t.end());
-      return t[7];
-    };
-    const double euler = median(
-        [&] { knotDynamicsDerivatives(c.model, data, c.contacts, kd, s.q, s.v, s.u, 0.01); });
-    const double rk4 = median(
-        [&] { knotDynamicsRk4Derivatives(c.model, data, c.contacts, rd, s.q, s.v, s.u, 0.01); });
-    const double euler_calc =
-        median([&] { knotDynamics(c.model, data, c.contacts, kd, s.q, s.v, s.u, 0.01); });
-    const double rk4_calc =
-        median([&] { knotDynamicsRk4(c.model, data, c.contacts, rd, s.q, s.v, s.u, 0.01); });
-    std::printf(
-        "  %-28s derivatives: Euler %.2f us, RK4 %.2f us (x%.2f); values: Euler %.2f us, RK4 "
-        "%.2f us (x%.2f)\n",
-        c.name.c_str(), euler, rk4, rk4 / euler, euler_calc, rk4_calc, rk4_calc / euler_calc);
-  }
-}
 
 }  // namespace
 }  // namespace stride

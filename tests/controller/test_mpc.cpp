@@ -70,6 +70,37 @@ TEST(ControllerConfig, ErrorsNameTheFileAndTheKey) {
   }
 }
 
+// horizon.integrator: euler (the default) or rk4 for every contact knot of the horizon; anything
+// else is refused naming the file, the key and the choices.
+TEST(ControllerConfig, IntegratorKey) {
+  const std::string robot =
+      "robot: " + std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml\n";
+  const std::string path = ::testing::TempDir() + "/stride_integrator_config.yaml";
+  auto load = [&](const std::string& yaml) {
+    std::ofstream(path) << robot << yaml;
+    return loadControllerConfig(path);
+  };
+  EXPECT_EQ(load("").locomotion.integrator, Integrator::Euler);
+  EXPECT_EQ(load("horizon: {knots: 50, dt: 0.01, integrator: euler}\n").locomotion.integrator,
+            Integrator::Euler);
+  const ControllerConfig rk4 = load("horizon: {knots: 50, dt: 0.01, integrator: rk4}\n");
+  EXPECT_EQ(rk4.locomotion.integrator, Integrator::Rk4);
+  EXPECT_NE(describeHorizon(rk4.locomotion).find("rk4"), std::string::npos);
+  EXPECT_EQ(describeHorizon(load("").locomotion).find("rk4"), std::string::npos);
+  // With a grid too.
+  EXPECT_EQ(load("horizon: {grid: [{knots: 10, dt: 0.01}, {knots: 20, dt: 0.03}], "
+                 "integrator: rk4}\n")
+                .locomotion.integrator,
+            Integrator::Rk4);
+  for (const char* bad : {"rk5", "RK4", "[euler]"}) {
+    const std::string e = configError(robot + "horizon: {integrator: " + bad + "}\n");
+    EXPECT_NE(e.find("horizon.integrator"), std::string::npos) << e;
+    EXPECT_NE(e.find("stride_bad_config.yaml"), std::string::npos) << e;
+  }
+  const std::string e = configError(robot + "horizon: {integrator: rk5}\n");
+  EXPECT_NE(e.find("'rk5' is not one of euler, rk4"), std::string::npos) << e;
+}
+
 // The gaits' cyclic patterns: every one starts with all feet down (where the timeline switches),
 // trot and pace lift pairs, walk one foot at a time; a biped walks, and cannot trot.
 // Policies that need more than one UDP datagram are warned about at start, with the knots that fit
@@ -304,6 +335,24 @@ TEST(Mpc, StandingTicks) {
     EXPECT_EQ(mpc.status().iterations, 1);
   }
   EXPECT_NEAR(mpc.status().plan_time, 0.1, 1e-12);
+  EXPECT_EQ(mpc.counters().fallbacks, 0);
+}
+
+// horizon.integrator: rk4 end to end: the controller's horizon integrates by RK4, and its ticks
+// solve and publish as with Euler.
+TEST(Mpc, StandingTicksWithRk4Knots) {
+  ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  config.locomotion.integrator = Integrator::Rk4;
+  Mpc mpc(config);
+  robot_state_t s = standingState(mpc.robot(), 1000000);
+  ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+  EXPECT_EQ(mpc.policy().status, kPolicySolved);
+  EXPECT_EQ(msg::checkPolicy(mpc.policy(), true), msg::Reject::None);
+  for (int i = 1; i <= 5; ++i) {
+    s.utime += 5000;
+    ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
+    EXPECT_EQ(mpc.policy().status, kPolicySolved);
+  }
   EXPECT_EQ(mpc.counters().fallbacks, 0);
 }
 

@@ -437,14 +437,18 @@ struct SolveCase {
   // Standing still from the holding torques is already optimal (x_nominal is an equilibrium and
   // every cost is zero there): the standing cases start with a push instead.
   double push;  // base speed [m/s] of the push (0: none)
+  Integrator integrator = Integrator::Euler;
 };
 
 class LocomotionSolve : public ::testing::TestWithParam<SolveCase> {};
 
 TEST_P(LocomotionSolve, FddpConvergesToAFeasibleGait) {
   const SolveCase sc = GetParam();
-  Case c = loco_cases::make(sc.problem, kShared);
+  Case c = loco_cases::make(sc.problem, kShared,
+                            [&sc](LocomotionOptions& o) { o.integrator = sc.integrator; });
   LocomotionProblem& loco = *c.loco;
+  for (int k = 0; k < loco.problem().horizon(); ++k)
+    ASSERT_EQ(static_cast<const KnotModel&>(loco.problem().knot(k)).integrator(), sc.integrator);
   Solver solver(loco.problem(), SolverKind::Fddp);
   if (std::getenv("STRIDE_DEBUG")) solver.callback = Solver::printIterationTable;
   const bool pushed = sc.push > 0.0;
@@ -465,12 +469,12 @@ TEST_P(LocomotionSolve, FddpConvergesToAFeasibleGait) {
   const Model& model = c.robot->model;
   const double weight_impulse = model.totalMass() * 9.81 * loco.options().dt;
   std::printf(
-      "[ %s ] %d iterations, cost %.9g (standing start %.6g), gap %.2e, min cone margin "
+      "[ %s %s ] %d iterations, cost %.9g (standing start %.6g), gap %.2e, min cone margin "
       "%.4g N, min normal %.4g N, min impulse cone margin %.3g N s (weight x dt %.3g N s), "
       "swings %d, lowest apex %.4f m, worst landing %.2e m\n",
-      loco_cases::name(sc.problem), solver.iterations(), solver.cost(), cost0, solver.gap(),
-      m.min_cone_margin, m.min_normal, m.min_impulse_margin, weight_impulse, m.swings,
-      m.lowest_apex, m.max_landing);
+      loco_cases::name(sc.problem), toString(sc.integrator), solver.iterations(), solver.cost(),
+      cost0, solver.gap(), m.min_cone_margin, m.min_normal, m.min_impulse_margin, weight_impulse,
+      m.swings, m.lowest_apex, m.max_landing);
   EXPECT_GE(m.min_cone_margin, 0.0);
   EXPECT_GT(m.min_normal, 0.0);
   // A soft landing has near-zero impulses, so the cone on them is met up to rounding-sized
@@ -490,6 +494,15 @@ INSTANTIATE_TEST_SUITE_P(Problems, LocomotionSolve,
                                            SolveCase{Problem::SoloTrot, 150, 0.0},
                                            SolveCase{Problem::TalosStand, 50, 0.2},
                                            SolveCase{Problem::TalosStep, 100, 0.0}),
+                         [](const auto& info) {
+                           return std::string(loco_cases::name(info.param.problem));
+                         });
+
+// The same with every contact knot by RK4 (the trot's impulse knots unchanged): standing after a
+// push and the trot converge as with Euler.
+INSTANTIATE_TEST_SUITE_P(Rk4, LocomotionSolve,
+                         ::testing::Values(SolveCase{Problem::SoloStand, 50, 0.05, Integrator::Rk4},
+                                           SolveCase{Problem::SoloTrot, 150, 0.0, Integrator::Rk4}),
                          [](const auto& info) {
                            return std::string(loco_cases::name(info.param.problem));
                          });

@@ -35,9 +35,13 @@ TEST(SolverNoAllocation, CounterSeesAllocations) {
 }
 
 struct Trot {
-  loco_cases::Case c = loco_cases::make(loco_cases::Problem::SoloTrot, STRIDE_SHARED_DIR);
+  loco_cases::Case c;
   std::vector<Eigen::VectorXd> xs, us;
-  Trot() { c.warmStart(xs, us); }
+  explicit Trot(Integrator integrator = Integrator::Euler)
+      : c(loco_cases::make(loco_cases::Problem::SoloTrot, STRIDE_SHARED_DIR,
+                           [integrator](LocomotionOptions& o) { o.integrator = integrator; })) {
+    c.warmStart(xs, us);
+  }
 };
 
 // A few iterations of each solver from the standing warm start (the warm start's copy included).
@@ -52,8 +56,8 @@ long warmSolveAllocations(Solver& solver, const Trot& trot, int iterations) {
   });
 }
 
-void solveNoAllocation(int threads) {
-  Trot trot;
+void solveNoAllocation(int threads, Integrator integrator = Integrator::Euler) {
+  Trot trot(integrator);
   trot.c.loco->problem().setThreads(threads);
   for (SolverKind kind : {SolverKind::Fddp, SolverKind::BoxFddp}) {
     Solver solver(trot.c.loco->problem(), kind);
@@ -73,11 +77,21 @@ TEST(SolverNoAllocation, Solve) {
   solveNoAllocation(1);
 }
 
+// Every contact knot by RK4 (the trot's impulse knots as they are): the stages' workspaces are
+// made at setup, and the solver takes the general (not Euler-structured) Riccati products.
+TEST(SolverNoAllocation, SolveWithRk4Knots) {
+  solveNoAllocation(1, Integrator::Rk4);
+}
+
 // With OpenMP's threads: gcc's libgomp allocates nothing once its pool exists, clang's libomp
 // allocates in every parallel region (140 blocks in these solves): label openmp_alloc
 // (tests/CMakeLists.txt), left out of tools/test.sh --sanitize (tests/README.md, "Sanitizers").
 TEST(SolverNoAllocationOpenMP, SolveWithTwoThreads) {
   solveNoAllocation(2);
+}
+
+TEST(SolverNoAllocationOpenMP, SolveWithTwoThreadsRk4Knots) {
+  solveNoAllocation(2, Integrator::Rk4);
 }
 
 // Box-FDDP with a single free control per knot (every other one pinned at a bound): the feedback

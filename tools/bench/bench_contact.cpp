@@ -6,6 +6,7 @@
 #include <functional>
 
 #include "solver/contact/knot_dynamics.hpp"
+#include "solver/contact/knot_rk4.hpp"
 #include "solver/multibody/aba_derivatives.hpp"
 #include "solver/multibody/rnea_derivatives.hpp"
 #include "tools/bench/robots.hpp"
@@ -73,6 +74,28 @@ void registerKernel(const std::string& algorithm, const Kernel& kernel, bool use
   }
 }
 
+// The same knots by Runge-Kutta-Munthe-Kaas 4 (knot_rk4.hpp): four KKT solves per knot, and their
+// derivatives chained through the stages.
+void registerRk4Knot(const std::string& algorithm, bool derivatives) {
+  for (const ContactRobot& cr : contactRobots())
+    benchmark::RegisterBenchmark((algorithm + "/" + cr.name).c_str(), [&cr, derivatives](
+                                                                          benchmark::State& state) {
+      const BenchRobot& r = *cr.robot;
+      Data data(r.model);
+      Rk4Data rd(r.model, cr.contacts);
+      int k = 0;
+      for (auto _ : state) {
+        const auto u = r.tau[k].tail(rd.nu);
+        if (derivatives)
+          knotDynamicsRk4Derivatives(r.model, data, cr.contacts, rd, r.q[k], r.v[k], u, cr.dt);
+        else
+          knotDynamicsRk4(r.model, data, cr.contacts, rd, r.q[k], r.v[k], u, cr.dt);
+        benchmark::ClobberMemory();
+        k = (k + 1) % kBatch;
+      }
+    })->Unit(benchmark::kMicrosecond);
+}
+
 }  // namespace
 
 void registerContactBenchmarks() {
@@ -115,6 +138,8 @@ void registerContactBenchmarks() {
     const BenchRobot& r = *c.robot;
     knotDynamics(r.model, d, c.contacts, kd, r.q[k], r.v[k], r.tau[k].tail(kd.nu), c.dt);
   });
+  registerRk4Knot("knot_rk4", true);
+  registerRk4Knot("knot_rk4_calc", false);
 }
 
 }  // namespace stride::bench

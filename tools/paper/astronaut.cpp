@@ -162,6 +162,7 @@ AstronautProblem::AstronautProblem(const Robot& robot, const AstronautOptions& o
   std::vector<std::unique_ptr<ActionModel>> running;
   for (int k = 0; k < T; ++k) {
     auto knot = std::make_unique<KnotModel>(model, none, options.dt, workspace);
+    knot->setIntegrator(options.integrator);
     CostModel& costs = knot->costs();
     const int wp = waypointAt(k0 + k);
     costs.add("posture", std::make_unique<StateResidual>(model, nu, x0_),
@@ -369,8 +370,9 @@ AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::Vecto
 
 FineCheck checkWithFinerSteps(const Model& model, const std::vector<Eigen::VectorXd>& xs,
                               const std::vector<Eigen::VectorXd>& us, double dt, int substeps,
-                              const std::string& base_frame) {
-  const KnotModel knot(model, ContactSet(), dt / substeps);
+                              const std::string& base_frame, Integrator integrator) {
+  KnotModel knot(model, ContactSet(), dt / substeps);
+  knot.setIntegrator(integrator);
   auto kd = knot.createData();
   Data data(model);
   const int base = model.getFrameId(base_frame);

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "solver/ddp/solver.hpp"
+#include "solver/ocp/knot.hpp"
 #include "solver/ocp/problem.hpp"
 #include "tools/paper/locked_model.hpp"
 
@@ -54,6 +55,9 @@ struct AstronautOptions {
   // +90° into -150°). The true motion keeps h_g = 0, so penalizing h_g at every knot keeps the plan
   // where the discretization is faithful; it changes nothing for the continuous-time dynamics.
   double w_momentum = 100.0;
+  // The knots' integrator: Euler (the paper's), or Rk4, whose step conserves the momentum of the
+  // free-floating body to O(dt⁴) per knot (knot_rk4.hpp) at four KKT solves per knot.
+  Integrator integrator = Integrator::Euler;
   // Left/right mirror symmetry (MirrorResidual in astronaut.cpp): weights on q_L - q_R, on the
   // rates and on the torques of the `mirror` pairs. Off by default (all weights 0): with it the
   // motion is planar (no roll, no yaw) but turns about half as fast, and DDP does not find the
@@ -175,10 +179,12 @@ AstronautMotion analyzeMotion(const Model& model, const std::vector<Eigen::Vecto
                               const std::string& base_frame = "base_link");
 
 // The plan checked against a finer integrator, knot by knot: each knot's torque applied from the
-// planned state xs[k] over dt in `substeps` semi-implicit Euler steps. An open-loop replay of the
-// whole horizon is not a fair check over tens of seconds (the free-floating chain is unstable
-// without feedback, and any integrator difference grows); the knot-wise one measures what the
-// discretization adds per knot: the pitch it would accumulate and the momentum it creates.
+// planned state xs[k] over dt in `substeps` steps of `integrator` (semi-implicit Euler by default;
+// an RK4 plan is checked with RK4 substeps, which Euler's O(dt / substeps) error would swamp). An
+// open-loop replay of the whole horizon is not a fair check over tens of seconds (the free-floating
+// chain is unstable without feedback, and any integrator difference grows); the knot-wise one
+// measures what the discretization adds per knot: the pitch it would accumulate and the momentum it
+// creates.
 struct FineCheck {
   double pitch = 0.0;        // Σ pitch increments of the fine steps, rad
   double pitch_axis = 0.0;   // Σ forward-axis angle changes (AstronautMotion::pitch_axis), rad
@@ -187,6 +193,7 @@ struct FineCheck {
 };
 FineCheck checkWithFinerSteps(const Model& model, const std::vector<Eigen::VectorXd>& xs,
                               const std::vector<Eigen::VectorXd>& us, double dt, int substeps,
-                              const std::string& base_frame = "base_link");
+                              const std::string& base_frame = "base_link",
+                              Integrator integrator = Integrator::Euler);
 
 }  // namespace stride

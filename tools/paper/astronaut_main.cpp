@@ -60,6 +60,7 @@ int main(int argc, char** argv) {
       std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml";
   std::string out, log_path;
   std::string solver_name = "ddp";
+  std::string integrator_name = "euler";
   int substeps = 10;
   bool verbose = false;
   app.add_option("--robot", robot_yaml, "robot YAML")->check(CLI::ExistingFile);
@@ -86,11 +87,17 @@ int main(int argc, char** argv) {
                  "DDP iterations on the last window (the one that reaches the end)")
       ->check(CLI::PositiveNumber);
   app.add_option("--solver", solver_name, "ddp or fddp")->check(CLI::IsMember({"ddp", "fddp"}));
+  app.add_option("--integrator", integrator_name,
+                 "the knots' integrator: euler (semi-implicit, the paper's) or rk4 "
+                 "(Runge-Kutta-Munthe-Kaas 4: conserves the momentum to 4th order, four KKT solves "
+                 "per knot)")
+      ->check(CLI::IsMember({"euler", "rk4"}));
   app.add_option("--replay-substeps", substeps, "substeps of the re-integration")
       ->check(CLI::PositiveNumber);
   app.add_option("--w-orientation", o.w_orientation, "waypoint weight");
   app.add_option("--w-posture", o.w_posture, "joint posture weight");
-  app.add_option("--w-control", o.w_control, "torque weight");
+  CLI::Option* w_control_option = app.add_option(
+      "--w-control", o.w_control, "torque weight (default 1e-4; 1e-2 with --integrator rk4)");
   app.add_option("--w-momentum", o.w_momentum, "centroidal momentum weight (0: off)");
   app.add_option("--margin", o.limit_margin, "fraction of the joint ranges allowed");
   app.add_option("--w-mirror", o.w_mirror,
@@ -101,10 +108,17 @@ int main(int argc, char** argv) {
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
   o.solver = solver_name == "ddp" ? SolverKind::Ddp : SolverKind::Fddp;
+  parseIntegrator(integrator_name, o.integrator);  // checked by CLI11 above
+  // RK4 knots conserve the momentum of fast leg cycles too, so the momentum term no longer keeps
+  // the torques down as it does on Euler knots: at 1e-4 DDP found 580-650 N m cycles (joint rates
+  // at 92 % of their limits) that turned the body the wrong way round to its goals (-240° for
+  // +120°), and the plan ended at 8°. At 1e-2 its torques peak where Euler's do (27 N m) and it
+  // turns 359° (README.md, "Integrator").
+  if (o.integrator == Integrator::Rk4 && w_control_option->count() == 0) o.w_control = 1e-2;
   const Robot robot = loadRobot(robot_yaml);
   std::printf(
-      "astronaut reorientation (paper §V-B): %d knots x %.3f s, %d waypoints, goal %.0f deg\n",
-      o.knots, o.dt, o.waypoints, o.turn_deg);
+      "astronaut reorientation (paper §V-B): %d knots x %.3f s (%s), %d waypoints, goal %.0f deg\n",
+      o.knots, o.dt, toString(o.integrator), o.waypoints, o.turn_deg);
   // Zero warm start (paper): the first window starts from zero torques; each later one from the
   // previous one's torques and zeros on its new segment (astronaut.hpp).
   std::printf("  %-7s %9s %6s %10s %11s %6s %7s\n", "window", "waypoints", "knots", "goal,deg",
@@ -130,7 +144,8 @@ int main(int argc, char** argv) {
   const std::vector<Eigen::VectorXd>& us = sol.us;
 
   const AstronautMotion m = analyzeMotion(model, xs, o.dt, o.base_frame);
-  const FineCheck fine = checkWithFinerSteps(model, xs, us, o.dt, substeps, o.base_frame);
+  const FineCheck fine =
+      checkWithFinerSteps(model, xs, us, o.dt, substeps, o.base_frame, o.integrator);
   // Distance of the final base orientation from the last goal (identity for 360°).
   const double final_err =
       log3(Eigen::AngleAxisd(astro.waypoints().back().second, Eigen::Vector3d::UnitY())
@@ -175,6 +190,8 @@ int main(int argc, char** argv) {
   std::printf("  %-44s %12d\n", "DDP iterations (all windows)", sol.iterations);
   std::printf("  %-44s %12zu\n", "windows", sol.windows.size());
   std::printf("  %-44s %12.2f\n", "solve time (all windows), s", solve_s);
+  std::printf("  %-44s %12.2f\n", "solve time per iteration, ms",
+              sol.iterations > 0 ? 1e3 * solve_s / sol.iterations : 0.0);
   std::printf("  %-44s %12.2f\n", "wall time (building the windows too), s", sol.wall_s);
   std::printf("  %-44s %12s\n", "last window", toString(sol.windows.back().status));
   std::printf("  %-44s %12.3e\n", "cost of the plan (full problem)", sol.cost);
@@ -285,6 +302,9 @@ int main(int argc, char** argv) {
   sum["max_leg_angular_momentum_norm"] = m.max_h_leg;
   sum["iterations"] = sol.iterations;
   sum["solve_time_s"] = solve_s;
+  sum["time_per_iteration_ms"] = sol.iterations > 0 ? 1e3 * solve_s / sol.iterations : 0.0;
+  sum["integrator"] = toString(o.integrator);
+  sum["w_control"] = o.w_control;
   sum["wall_time_s"] = sol.wall_s;
   sum["window_segments"] = o.window;
   sum["window_iterations"] = o.window_iterations;

@@ -5,7 +5,9 @@
 # the table, writes the trajectories (CSV / JSON), the IK and DDP motions as LCM logs
 # (stride_XXX/{ik,ddp}.lcmlog) and the plots (PNG) into --out DIR; the snapshot figures are frames
 # of stride-viz in headless Chromium, or stick figures when there is no browser (the script says
-# why). Other options go to the program (stride-paper-large-stride --help), e.g. --lengths 0.8 1.0.
+# why). Other options go to the program (stride-paper-large-stride --help), e.g. --lengths 0.8 1.0;
+# --integrator euler|rk4 picks the contact knots' integrator (default euler; README.md,
+# "Integrator").
 #   tools/paper/large-stride.sh --out build/paper/large_stride
 set -euo pipefail
 source "$(dirname "$0")/run_experiment.sh"

@@ -141,6 +141,9 @@ void StrideProblem::build(int first, int knots, const Eigen::VectorXd* x_termina
       const bool is_impulse = pass == 0;
       auto knot = std::make_unique<KnotModel>(model, contacts, plan.options.dt, workspace);
       knot->setMode(is_impulse ? KnotMode::Impulse : KnotMode::Contact);
+      // These knots never change mode: an impulse knot has nothing to integrate, and keeps the
+      // lighter Euler workspace.
+      if (!is_impulse) knot->setIntegrator(o.integrator);
       for (int c = 0; c < 2; ++c) {
         knot->contacts().setActive(c, plan.closed[k][c]);
         knot->contacts().setReference(c, SE3(Eigen::Matrix3d::Identity(), plan.foot[k][c]));

@@ -30,6 +30,7 @@
 #include "config/robot_config.hpp"
 #include "sim/disturbances.hpp"
 #include "solver/ddp/solver.hpp"
+#include "solver/ocp/knot.hpp"
 #include "solver/ocp/problem.hpp"
 #include "tools/paper/centroidal_planner.hpp"
 #include "tools/paper/ik.hpp"
@@ -56,6 +57,8 @@ struct StrideDdpOptions {
   double contact_kd = 0.0;
   double contact_kp = 200.0;  // with kd = 25 (40 ms knots): damping ratio kd / (2 √kp) ≈ 0.9
   bool torque_limits = true;
+  // The contact knots' integrator (knot.hpp; impulse knots are instantaneous under both).
+  Integrator integrator = Integrator::Euler;
 };
 
 // The cost groups of the breakdown (Fig. 2), in this order.
@@ -195,7 +198,8 @@ struct StrideSimOptions {
   double lqr_tail_s = 1.0;
   int stop_iterations = 50;  // box-FDDP iterations of the stop (the standing after the walk)
   // The policy's velocity reference at the knots' middles (semi-implicit Euler knots; see
-  // fillPolicy in large_stride.cpp) instead of at the knots.
+  // fillPolicy in large_stride.cpp) instead of at the knots. Not with Rk4 knots, whose v_{k+1}
+  // is the velocity at t_{k+1} (stride-paper-large-stride turns it off for them).
   bool midpoint = true;
   // Lock-step: estimates per second of sim time, and the knots of each answer (from the policy
   // knot at or before the estimate's time; they must cover the time to the next estimate).

@@ -89,6 +89,7 @@ int main(int argc, char** argv) {
   StrideDdpOptions dop;
   IkOptions iko;
   int iterations = 100;
+  std::string integrator_name = "euler";
   bool verbose = false, no_sim = false, sim_trace = false, logs = false;
   app.add_option("--robot", robot_yaml, "robot YAML")->check(CLI::ExistingFile);
   CLI::Option* out_option =
@@ -97,6 +98,11 @@ int main(int argc, char** argv) {
                "also write each stride's IK and DDP motions as LCM logs for stride-viz "
                "(stride_XXX/ik.lcmlog, ddp.lcmlog: states, contacts, forces as planned forces)")
       ->needs(out_option);
+  app.add_option("--integrator", integrator_name,
+                 "the contact knots' integrator: euler (semi-implicit) or rk4 "
+                 "(Runge-Kutta-Munthe-Kaas 4; the played policy then takes v at the knots, "
+                 "--no-midpoint)")
+      ->check(CLI::IsMember({"euler", "rk4"}));
   app.add_option("--lengths", lengths, "stride lengths [m] (foot displacement per step)");
   app.add_option("--strides", po.strides, "full strides (plus a half step at each end)");
   app.add_option("--dt", po.dt, "knot period [s]")->check(CLI::PositiveNumber);
@@ -151,6 +157,10 @@ int main(int argc, char** argv) {
     sim_options.pushes.pushes.push_back(p);
   }
 
+  parseIntegrator(integrator_name, dop.integrator);  // checked by CLI11 above
+  // The midpoint velocity reference is the Euler step's (StrideSimOptions::midpoint): an RK4 knot
+  // ends at the state of t_{k+1}.
+  if (dop.integrator == Integrator::Rk4) sim_options.midpoint = false;
   const Robot robot = loadRobot(robot_yaml);
   const Model& model = robot.model;
   const std::array<std::string, 2> feet = {robot.contacts[0].frame, robot.contacts[1].frame};
@@ -160,6 +170,7 @@ int main(int argc, char** argv) {
   summary["robot"] = robot.name;
   summary["dt"] = po.dt;
   summary["iterations"] = iterations;
+  summary["integrator"] = toString(dop.integrator);
   summary["strides"] = json::array();
   struct Row {
     double length;
@@ -167,6 +178,8 @@ int main(int argc, char** argv) {
     StrideSimResult sim;
     bool sim_run;
     double weight;
+    int ddp_iterations;
+    double ddp_solve_s;
   };
   std::vector<Row> rows;
   for (size_t li = 0; li < lengths.size(); ++li) {
@@ -195,7 +208,9 @@ int main(int argc, char** argv) {
             strideMetrics(model, plan, ddp_tau, ddp_force),
             {},
             !no_sim,
-            plan.mass * 9.81};
+            plan.mass * 9.81,
+            solve.iterations,
+            solve.solve_time_s};
     if (!no_sim) {
       StrideSimOptions so = sim_options;
       so.record_steps = sim_trace && !out.empty();
@@ -328,6 +343,10 @@ int main(int argc, char** argv) {
     entry["weight_N"] = r.weight;
     entry["ik"] = metricsJson(r.ik);
     entry["ddp"] = metricsJson(r.ddp);
+    entry["ddp_iterations"] = r.ddp_iterations;
+    entry["ddp_solve_time_s"] = r.ddp_solve_s;
+    entry["ddp_time_per_iteration_ms"] =
+        r.ddp_iterations > 0 ? 1e3 * r.ddp_solve_s / r.ddp_iterations : 0.0;
     if (r.sim_run) {
       json played;
       played["playback"] = sim_options.tvlqr ? "tvlqr" : "offline_gains";
