@@ -59,6 +59,18 @@ double CostModel::calc(CostData& d, const KnotContext& ctx,
   return d.value;
 }
 
+namespace {
+// Zeroes a block in one fill when its columns are contiguous (a whole matrix behind a Ref): through
+// the Ref, Eigen cannot know it and fills column by column, a library call per column (a knot's
+// Lxx alone is 2nv of them).
+void zero(Eigen::Ref<Eigen::MatrixXd> A) {
+  if (A.outerStride() == A.rows())
+    Eigen::Map<Eigen::VectorXd>(A.data(), A.size()).setZero();
+  else
+    A.setZero();
+}
+}  // namespace
+
 double CostModel::calcDiff(CostData& d, const KnotContext& ctx,
                            const Eigen::Ref<const Eigen::VectorXd>& x,
                            const Eigen::Ref<const Eigen::VectorXd>& u,
@@ -67,9 +79,9 @@ double CostModel::calcDiff(CostData& d, const KnotContext& ctx,
                            Eigen::Ref<Eigen::MatrixXd> Luu) const {
   Lx.setZero();
   Lu.setZero();
-  Lxx.setZero();
-  Lxu.setZero();
-  Luu.setZero();
+  zero(Lxx);
+  zero(Lxu);
+  zero(Luu);
   CostDerivatives out{Lx, Lu, Lxx, Lxu, Luu, d.HRx, d.HRu};
   d.value = 0.0;
   for (int i = 0; i < size(); ++i) {
