@@ -3,7 +3,7 @@
 // tests/controller, tests/ocp): after each piece of the solver's work (a chunk of knots, a
 // rollout) it stays busy for (F - 1) times the piece's duration, so every piece takes F times as
 // long, at the solver's own granularity, and the deadline checks between pieces see it. It lives
-// here and not in the solver: the numerical core only reports its pieces (Solver::WorkHook).
+// here and not in the solver: the numerical core only reports its pieces (WorkHook, solver.hpp).
 
 #include "solver/ddp/solver.hpp"
 
