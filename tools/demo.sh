@@ -28,8 +28,9 @@
 #                     (stride-init's files), else the in-house robot's of its kind
 #                     (config/commands/stride_quad.yaml for a robot that trots, else
 #                     stride_humanoid.yaml; terrain_... with --terrain)
-#   --no-setup        skip the set-up (tools/install-deps.sh: apt-get; tools/build.sh: cmake and
-#                     the build) and run on the build as it is; the same as STRIDE_DEMO_NO_SETUP=1
+#   --no-setup        skip the set-up (tools/install-deps.sh --demo: apt-get; tools/build.sh: cmake
+#                     and the build of this run's programs alone) and run on the build as it is;
+#                     the same as STRIDE_DEMO_NO_SETUP=1
 #   --terrain T       the world the robot walks in: a terrain file, or NAME for
 #                     config/terrain/NAME.yaml (stairs_anymal_c, ramp_solo12, rough_stride_quad,
 #                     step_talos_reduced, ...; format in terrain/README.md); default flat ground.
@@ -242,8 +243,19 @@ summary="${summary:-$out/summary.json}"
 # Set-up (skipped inside the namespace: the outer invocation did it; and with --no-setup or
 # STRIDE_DEMO_NO_SETUP=1, as the tests do, which run on a tree already built).
 if [ -z "${STRIDE_DEMO_INSIDE:-}" ] && [ -z "${STRIDE_DEMO_NO_SETUP:-}" ] && [ "$no_setup" = 0 ]; then
-  "$root/tools/install-deps.sh"
-  "$root/tools/build.sh"
+  # Only what this run starts: the tests, benchmarks and paper tools build with tools/test.sh.
+  deps=(--demo) targets=(stride-mpc stride-sim stride-teleop stride-keygen stride-log-summary)
+  [ -n "$flood" ] && targets+=(stride-flood)
+  [ "$viz" = 1 ] && deps+=(--viz) targets+=(stride-viz stride-viz-web)
+  [ "$spy" = 1 ] && deps+=(--spy) targets+=(stride_lcm_jar)
+  "$root/tools/install-deps.sh" "${deps[@]}"
+  configure=()
+  # A first configure leaves the tests and benchmarks out (their packages are test.sh's); a tree
+  # that tools/test.sh configured keeps them.
+  [ -f "$build/CMakeCache.txt" ] || configure=(-DSTRIDE_BUILD_TESTS=OFF -DSTRIDE_BUILD_BENCH=OFF)
+  build_args=()
+  for t in "${targets[@]}"; do build_args+=(--target "$t"); done
+  STRIDE_BUILD_DIR="$build" "$root/tools/build.sh" "${configure[@]}" "${build_args[@]}"
 fi
 mkdir -p "$out"
 

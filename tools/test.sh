@@ -21,7 +21,8 @@ jobs=$(nproc 2>/dev/null || echo 2)
 
 if [ "$sanitize" = 0 ]; then
   "$root/tools/install-deps.sh"
-  "$root/tools/build.sh"
+  # Tests and benchmarks on, whatever an earlier tools/demo.sh configured (it builds without).
+  "$root/tools/build.sh" -DSTRIDE_BUILD_TESTS=ON -DSTRIDE_BUILD_BENCH=ON
   cd "${STRIDE_BUILD_DIR:-$root/build}"
   exec ctest --output-on-failure -j"$jobs" --timeout 600
 fi
@@ -40,7 +41,7 @@ export CCACHE_NOHASHDIR=true
 # compile under the sanitizers, would be built for nothing.
 STRIDE_BUILD_DIR="$build" "$root/tools/build.sh" \
   -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_CXX_FLAGS="$flags" \
-  -DCMAKE_CXX_FLAGS_RELEASE="-O3 -DNDEBUG" -DSTRIDE_FUZZ=ON -DSTRIDE_BUILD_BENCH=OFF
+  -DCMAKE_CXX_FLAGS_RELEASE="-O3 -DNDEBUG" -DSTRIDE_FUZZ=ON -DSTRIDE_BUILD_TESTS=ON -DSTRIDE_BUILD_BENCH=OFF
 
 # Tests whose question a sanitizer changes, excluded by label (tests/CMakeLists.txt).
 excluded=(
