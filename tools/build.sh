@@ -17,5 +17,10 @@ while [ $# -gt 0 ]; do
 done
 # ccache hashes paths relative to the repository: a fresh clone elsewhere reuses the objects.
 export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$root}"
-cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release "${configure[@]}" >/dev/null
+# Ninja for a new build folder: it keeps both cores busy across targets where make's recursion
+# waits target by target, and its log (.ninja_log) times every step (tests/README.md, "CI's time").
+# A folder configured before keeps its generator.
+generator=()
+[ -f "$build/CMakeCache.txt" ] || generator=(-G Ninja)
+cmake -S "$root" -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release "${configure[@]}" >/dev/null
 cmake --build "$build" -j"$jobs" "${targets[@]}"

@@ -11,7 +11,7 @@ set -euo pipefail
 
 # What the demo's programs need to configure, build and run (tools/demo.sh).
 demo=(
-  build-essential cmake ccache pkg-config
+  build-essential cmake ninja-build ccache pkg-config
   libeigen3-dev            # linear algebra (3.4)
   liburdfdom-dev           # URDF parsing
   libtinyxml-dev           # SRDF parsing (urdfdom's own XML library)

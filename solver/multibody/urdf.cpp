@@ -192,7 +192,7 @@ std::string num(double x) {
 std::map<std::string, double> lockedAngles(const urdf::ModelInterface& urdf_model,
                                            const UrdfInfo& info, RootJoint root,
                                            const std::map<std::string, double>& locked_joints,
-                                           const std::string& source) {
+                                           MimicJoints mimic_joints, const std::string& source) {
   // Within its limits (none for continuous joints); `slack` for angles computed from a leader's.
   const auto checkRange = [&](const std::string& name, double angle, double slack,
                               const std::string& why) {
@@ -256,7 +256,7 @@ std::map<std::string, double> lockedAngles(const urdf::ModelInterface& urdf_mode
                    num(m.offset) + ")";
     if (listed.insert(m.leader).second) leaders += (leaders.empty() ? "'" : ", '") + m.leader + "'";
   }
-  if (!free_mimics.empty())
+  if (!free_mimics.empty() && mimic_joints == MimicJoints::FollowLockedLeader)
     fail(source, free_mimics + ": Stride has no coupled joints; lock " + leaders +
                      " (locked_joints) and " + (listed.size() > 1 ? "their" : "its") +
                      " mimics follow, or lock the mimic joints themselves");
@@ -351,9 +351,10 @@ struct Builder {
 
 }  // namespace
 
-Model buildModelFromUrdfString(const std::string& xml, RootJoint root,
-                               const std::map<std::string, double>& locked_joints,
-                               const std::string& source) {
+namespace {
+Model buildModel(const std::string& xml, RootJoint root,
+                 const std::map<std::string, double>& locked_joints, MimicJoints mimic_joints,
+                 const std::string& source) {
   const UrdfInfo info = validateStructure(xml, source);
   urdf::ModelInterfaceSharedPtr urdf_model;
   {
@@ -362,7 +363,7 @@ Model buildModelFromUrdfString(const std::string& xml, RootJoint root,
     if (!urdf_model) fail(source, "urdfdom could not parse it: " + capture.messages);
   }
   const std::map<std::string, double> locked =
-      lockedAngles(*urdf_model, info, root, locked_joints, source);
+      lockedAngles(*urdf_model, info, root, locked_joints, mimic_joints, source);
   Model model;
   model.name = urdf_model->getName();
   Builder builder{model, source, locked};
@@ -380,9 +381,16 @@ Model buildModelFromUrdfString(const std::string& xml, RootJoint root,
   }
   return model;
 }
+}  // namespace
+
+Model buildModelFromUrdfString(const std::string& xml, RootJoint root,
+                               const std::map<std::string, double>& locked_joints,
+                               const std::string& source) {
+  return buildModel(xml, root, locked_joints, MimicJoints::FollowLockedLeader, source);
+}
 
 Model buildModelFromUrdfString(const std::string& xml, RootJoint root, const std::string& source) {
-  return buildModelFromUrdfString(xml, root, {}, source);
+  return buildModel(xml, root, {}, MimicJoints::Independent, source);
 }
 
 namespace {
@@ -401,7 +409,7 @@ Model buildModelFromUrdf(const std::string& path, RootJoint root,
 }
 
 Model buildModelFromUrdf(const std::string& path, RootJoint root) {
-  return buildModelFromUrdf(path, root, {});
+  return buildModelFromUrdfString(readUrdf(path), root, path);
 }
 
 std::vector<MimicJoint> urdfMimicJointsFromString(const std::string& xml,

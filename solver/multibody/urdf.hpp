@@ -9,11 +9,15 @@
 // joint whose placement includes its motion at the given angle (rotation about its axis, or
 // translation along it): its child bodies merge into the parent's inertia, and its frame is a
 // FixedJoint frame (it owns no coordinate). The angle must be finite and within the joint's limits.
-// Mimic joints: Stride has no coupled joints, so a moving joint with a <mimic joint="L"
-// multiplier="m" offset="o"/> tag is locked at m * angle(L) + o when its leader L is locked (a
-// fixed leader counts as locked at 0; chains of mimics follow), and the model is refused (UrdfError
-// listing every such joint) when L is free. A <mimic> tag on a fixed joint owns nothing and is
-// ignored (talos_reduced's gripper fingers).
+// Mimic joints (a moving joint with a <mimic joint="L" multiplier="m" offset="o"/> tag) load one
+// of two ways (MimicJoints). For dynamics alone (the builders without locked joints:
+// stride-check-dynamics, the benchmarks) each is an independent joint with its own coordinate, as
+// the usual URDF parsers load them: the tree as drawn, its coupling not modelled. For control
+// (the builders with locked joints: the robot loader, stride-init) Stride has no coupled joints,
+// so a mimic is locked at m * angle(L) + o when its leader L is locked (a fixed leader counts as
+// locked at 0; chains of mimics follow), and the model is refused (UrdfError listing every such
+// joint) when L is free. A <mimic> tag on a fixed joint owns nothing and is ignored
+// (talos_reduced's gripper fingers).
 
 #include <map>
 #include <stdexcept>
@@ -40,12 +44,19 @@ struct MimicJoint {
   double offset = 0.0;
 };
 
-// The free-flyer root joint is named "root_joint" (as SRDF group_states expect). No joint locked:
-// a URDF with a moving mimic joint is refused.
+// How moving <mimic> joints load (above).
+enum class MimicJoints {
+  Independent,        // each its own joint (dynamics alone)
+  FollowLockedLeader  // locked with its locked leader, refused when the leader is free (control)
+};
+
+// The free-flyer root joint is named "root_joint" (as SRDF group_states expect). No joint locked,
+// and mimic joints as independent joints (MimicJoints::Independent; urdfMimicJoints lists them).
 Model buildModelFromUrdf(const std::string& path, RootJoint root);
 // With the joints of `locked_joints` (name -> angle [rad] or position [m]) locked, and their mimic
-// joints with them. A name that is not a moving joint of the URDF (absent, fixed, the root) or an
-// angle that is not finite or outside the joint's limits is a UrdfError naming it.
+// joints with them (MimicJoints::FollowLockedLeader, even for an empty map: a free mimic is
+// refused). A name that is not a moving joint of the URDF (absent, fixed, the root) or an angle
+// that is not finite or outside the joint's limits is a UrdfError naming it.
 Model buildModelFromUrdf(const std::string& path, RootJoint root,
                          const std::map<std::string, double>& locked_joints);
 // Same from XML text; `source` names it in error messages. (A bare `{}` as third argument is

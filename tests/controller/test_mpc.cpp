@@ -501,11 +501,11 @@ TEST(Mpc, ALongStartUpSolveIsMadeAgainOnTheNewestState) {
       s.utime += 50000;
     }
   };
-  {  // Every solve slowed down 20 times: each start-up solve takes longer than a period, and the
+  {  // Every solve slowed down 100 times: each start-up solve takes longer than a period, and the
      // last one longer than half a policy (issue 33: it would reach the robot past its end): none
      // is sent, and the tick after them, a regular one bounded by its deadline, answers.
     ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
-    config.emulated_slowdown = 20.0;
+    config.emulated_slowdown = 100.0;
     Mpc mpc(config);
     robot_state_t s = standingState(mpc.robot(), 1000000);
     for (int i = 0; i <= Mpc::kMaxStartupResolves; ++i) {

@@ -97,6 +97,22 @@ TEST(Centroidal, MapTimesVelocityIsMomentum) {
   forEachSample(checks::centroidalMapMatchesMomentum);
 }
 
+// The full TALOS (issue 43): its 12 moving <mimic> gripper fingers load as independent joints for
+// dynamics (urdf.hpp, MimicJoints), as the usual URDF parsers load them, and the three algorithms
+// agree on the 50-joint tree.
+TEST(Dynamics, FullTalosWithMimicJointsAsIndependentJointsAgrees) {
+  const std::string path = STRIDE_SHARED_DIR "/robots/talos/talos_full_v2.urdf";
+  const Model talos = buildModelFromUrdf(path, RootJoint::FreeFlyer);
+  EXPECT_EQ(talos.nv, 6 + 44);  // 30 joints of talos_full_v2 + 2 gripper leaders + 12 mimics
+  for (const MimicJoint& m : urdfMimicJoints(path)) EXPECT_TRUE(talos.existJoint(m.name)) << m.name;
+  std::mt19937 rng(43);
+  for (const checks::Sample& s : checks::randomSamples(talos, rng, 3)) {
+    checks::abaMatchesCrbaSolve(talos, s);
+    checks::rneaMatchesMassMatrixAndBias(talos, s);
+    checks::massMatrixIsSpdAndGivesKineticEnergy(talos, s);
+  }
+}
+
 TEST(Dynamics, WrongSizesThrow) {
   const Model& model = cases()[0].model;
   Data data(model);

@@ -353,7 +353,7 @@ TEST(Urdf, MimicJointsFollowTheirLockedLeader) {
               "joint 'finger_b_joint' <mimic> has multiplier='half', not a finite number");
 }
 
-TEST(Urdf, FullTalosNeedsItsGrippersLocked) {
+TEST(Urdf, FullTalosNeedsItsGrippersLockedForControl) {
   const std::string path = STRIDE_SHARED_DIR "/robots/talos/talos_full_v2.urdf";
   // 12 mimic finger joints, six per gripper.
   const std::vector<MimicJoint> mimics = urdfMimicJoints(path);
@@ -364,9 +364,13 @@ TEST(Urdf, FullTalosNeedsItsGrippersLocked) {
     EXPECT_TRUE(m.multiplier == 1.0 || m.multiplier == -1.0) << m.name;
     EXPECT_EQ(m.offset, 0.0) << m.name;
   }
+  // For dynamics alone (no locked joints) the mimics are joints of their own: 44 revolute joints.
+  EXPECT_EQ(buildModelFromUrdf(path, RootJoint::FreeFlyer).nv, 6 + 44);
+  // For control (the robot loader, stride-init: locked joints, even none) they are refused.
+  const std::map<std::string, double> none;
   try {
-    buildModelFromUrdf(path, RootJoint::FreeFlyer);
-    ADD_FAILURE() << "the full Talos loaded with its mimic joints as motors";
+    buildModelFromUrdf(path, RootJoint::FreeFlyer, none);
+    ADD_FAILURE() << "the full Talos loaded for control with its mimic joints as motors";
   } catch (const UrdfError& e) {
     const std::string msg = e.what();
     for (const char* fragment :

@@ -121,13 +121,20 @@ int main(int argc, char** argv) {
   }
 
   Model model;
+  std::vector<MimicJoint> mimics;
   try {
+    // Mimic joints as independent joints, as the reference libraries' URDF parsers load them.
     model = buildModelFromUrdf(urdf.string(),
                                root == "fixed" ? RootJoint::Fixed : RootJoint::FreeFlyer);
+    mimics = urdfMimicJoints(urdf.string());
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;
   }
+  if (!mimics.empty())
+    std::printf("note: %zu <mimic> joints (%s, ...) loaded as independent joints, their coupling "
+                "not modelled\n",
+                mimics.size(), mimics.front().name.c_str());
   if (ref.contains("gravity")) model.gravity = toVector(ref.at("gravity"));
   Data data(model);
   // The reference closes all listed contacts at once, forces in each contact frame (LOCAL).

@@ -5,8 +5,9 @@
 # snapshot figure is frames of stride-viz in headless Chromium, or stick figures when there is no
 # browser (the script says why). Other options go to the program
 # (stride-paper-astronaut --help), e.g. --knots 4500 --waypoints 36. One thread unless
-# OMP_NUM_THREADS says otherwise (the README's timings are on one core). --integrator euler|rk4
-# picks the knots' integrator (default euler; README.md, "Integrator").
+# OMP_NUM_THREADS says otherwise (the README's timings are on one core). --integrator rk4|euler
+# picks the knots' integrator (default rk4, whose knots conserve the momentum the experiment is
+# about; --integrator euler is the paper's semi-implicit Euler: README.md, "Integrator").
 #   tools/paper/astronaut.sh --out build/paper/astronaut
 set -euo pipefail
 source "$(dirname "$0")/run_experiment.sh"
