@@ -21,7 +21,8 @@ constexpr double kDeg = 180.0 / M_PI;
 // The default scheme of tools/paper/astronaut.sh (RK4 knots of 20 ms and its torque weight, 2.5 s
 // segments, windows of 12 segments keeping 4, goals 10° per segment), cut to 90 s of motion (36
 // segments, 150 DDP iterations per window, ~60 s of solve on one core). It reaches ~357° (forward
-// axis) and ~320° (summed increments); the test asks past 180°, as the issue asked of the short run.
+// axis) and ~320° (summed increments); the test asks past 180°, as the issue asked of the short
+// run.
 constexpr double kShortDt = 0.02;
 constexpr int kShortKnots = 4500;
 constexpr int kShortWaypoints = 36;

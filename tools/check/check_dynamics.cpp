@@ -132,9 +132,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (!mimics.empty())
-    std::printf("note: %zu <mimic> joints (%s, ...) loaded as independent joints, their coupling "
-                "not modelled\n",
-                mimics.size(), mimics.front().name.c_str());
+    std::printf(
+        "note: %zu <mimic> joints (%s, ...) loaded as independent joints, their coupling "
+        "not modelled\n",
+        mimics.size(), mimics.front().name.c_str());
   if (ref.contains("gravity")) model.gravity = toVector(ref.at("gravity"));
   Data data(model);
   // The reference closes all listed contacts at once, forces in each contact frame (LOCAL).
