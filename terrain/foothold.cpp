@@ -6,8 +6,8 @@
 namespace stride::terrain {
 
 namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kNoHeight = std::numeric_limits<double>::quiet_NaN();  // nothing under a point
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // Squared distances closer than this are a tie, settled by the scan order (reproducible footholds).
 constexpr double kTie = 1e-12;
 }  // namespace
@@ -29,7 +29,7 @@ const char* toString(FootholdStatus status) {
 Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
                         const FootholdReach& reach) {
   Foothold out;
-  out.position << nominal.x(), nominal.y(), kNaN;
+  out.position << nominal.x(), nominal.y(), kNoHeight;
   int r0 = 0, c0 = 0;
   if (!map.valid() || !nominal.allFinite() || !map.cellOf(nominal.x(), nominal.y(), r0, c0))
     return out;  // Unknown
@@ -51,7 +51,7 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
   const double nominal_edge = nominal_stands ? map.edgeDistanceAt(nominal.x(), nominal.y()) : 0.0;
   const bool nominal_safe =
       nominal_stands && nominal_edge >= map.options().min_edge_distance - 1e-6;
-  const double nominal_cost = nominal_safe ? edge_cost(nominal_edge) : kInf;
+  const double nominal_cost = nominal_safe ? edge_cost(nominal_edge) : kInfinity;
   const auto take_nominal = [&]() {
     // The point, not its cell's centre: no quantisation of footholds where nothing is in the way.
     const Eigen::Vector2d offset = nominal - map.cellCenter(r0, c0);
@@ -68,7 +68,7 @@ Foothold selectFoothold(const Steppability& map, const Eigen::Vector2d& nominal,
   const double max_shift = reach.max_shift >= 0.0 ? reach.max_shift : -1.0;  // NaN: none
   const double max_shift2 = max_shift * max_shift + kTie;
   int best_r = -1, best_c = -1;
-  double best2 = kInf, best_cost = nominal_cost;
+  double best2 = kInfinity, best_cost = nominal_cost;
   bool any_known = false;
   const auto consider = [&](int r, int c, double limit2) {
     const Eigen::Vector2d p = map.cellCenter(r, c);
@@ -157,11 +157,11 @@ bool walkSegment(const ElevationMap& map, const Eigen::Vector2d& from, const Eig
   const int c_end = cell(u0 + t1 * du, map.cols), r_end = cell(v0 + t1 * dv, map.rows);
   // The grid walk (each step crosses the nearer of the next column or row line).
   const int step_c = du > 0.0 ? 1 : -1, step_r = dv > 0.0 ? 1 : -1;
-  const double delta_u = du != 0.0 ? 1.0 / std::abs(du) : kInf;
-  const double delta_v = dv != 0.0 ? 1.0 / std::abs(dv) : kInf;
+  const double delta_u = du != 0.0 ? 1.0 / std::abs(du) : kInfinity;
+  const double delta_v = dv != 0.0 ? 1.0 / std::abs(dv) : kInfinity;
   // Parameter (of the clipped part, from t0) at which the next column / row line is crossed.
-  double next_u = du != 0.0 ? (step_c > 0 ? c + 1 - ua : ua - c) * delta_u : kInf;
-  double next_v = dv != 0.0 ? (step_r > 0 ? r + 1 - va : va - r) * delta_v : kInf;
+  double next_u = du != 0.0 ? (step_c > 0 ? c + 1 - ua : ua - c) * delta_u : kInfinity;
+  double next_v = dv != 0.0 ? (step_r > 0 ? r + 1 - va : va - r) * delta_v : kInfinity;
   const int steps = std::abs(c_end - c) + std::abs(r_end - r);
   double enter = t0;
   for (int i = 0;; ++i) {
@@ -184,12 +184,12 @@ bool walkSegment(const ElevationMap& map, const Eigen::Vector2d& from, const Eig
 
 double maxHeightAlong(const ElevationMap& map, const Eigen::Vector2d& from,
                       const Eigen::Vector2d& to) {
-  double best = -kInf;
+  double best = -kInfinity;
   walkSegment(map, from, to, [&](int r, int c, double, double) {
     const float h = map.at(r, c);
     if (!std::isnan(h)) best = std::max(best, static_cast<double>(h));
   });
-  return best == -kInf ? kNaN : best;
+  return best == -kInfinity ? kNoHeight : best;
 }
 
 double swingLift(const ElevationMap& map, const Eigen::Vector3d& lift_off,

@@ -6,7 +6,8 @@
 namespace stride {
 
 namespace {
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// What a rollout that leaves the dynamics costs: the line search rejects it.
+constexpr double kFailedRolloutCost = std::numeric_limits<double>::infinity();
 }  // namespace
 
 bool Solver::rollout() {
@@ -99,7 +100,7 @@ double Solver::forwardPass(double alpha) {
     if (box) u = u.cwiseMax(u_lower_.head(nu)).cwiseMin(u_upper_.head(nu));
     ActionData& d = problem_.data(k);
     problem_.knot(k).calc(d, xs_try_[k], u);
-    if (d.status != KnotStatus::Ok) return kInfinity;
+    if (d.status != KnotStatus::Ok) return kFailedRolloutCost;
     cost += d.cost;
     if (feasible_) {
       xs_try_[k + 1] = d.x_next;
@@ -110,8 +111,8 @@ double Solver::forwardPass(double alpha) {
   }
   ActionData& dT = problem_.terminalData();
   problem_.terminal().calc(dT, xs_try_[T_], Eigen::VectorXd());
-  if (dT.status != KnotStatus::Ok) return kInfinity;
+  if (dT.status != KnotStatus::Ok) return kFailedRolloutCost;
   cost += dT.cost;
-  return std::isfinite(cost) ? cost : kInfinity;
+  return std::isfinite(cost) ? cost : kFailedRolloutCost;
 }
 }  // namespace stride

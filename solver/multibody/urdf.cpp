@@ -23,7 +23,8 @@ namespace stride {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+// A joint the URDF gives no limit: unbounded.
+constexpr double kUnlimited = std::numeric_limits<double>::infinity();
 
 [[noreturn]] void fail(const std::string& source, const std::string& what) {
   throw UrdfError("URDF '" + source + "': " + what);
@@ -335,7 +336,7 @@ struct Builder {
       const int id = model.addJoint(joint, type, at, uj->name, axis);
       const int jf = model.getFrameId(uj->name, FrameType::Joint);
       model.frames[jf].parentFrame = body_frame;
-      double lo = -kInf, hi = kInf, vel = kInf, eff = kInf;
+      double lo = -kUnlimited, hi = kUnlimited, vel = kUnlimited, eff = kUnlimited;
       if (uj->limits) {
         if (uj->type != urdf::Joint::CONTINUOUS) lo = uj->limits->lower, hi = uj->limits->upper;
         if (uj->limits->velocity > 0) vel = uj->limits->velocity;

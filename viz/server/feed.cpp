@@ -10,6 +10,7 @@
 
 #include "config/model_hash.hpp"
 #include "messages/signing.hpp"
+#include "viz/server/frames.hpp"
 #include "solver/contact/knot_dynamics.hpp"
 #include "stride/command_t.hpp"
 #include "viz/server/frames.hpp"
@@ -27,12 +28,6 @@ constexpr std::int64_t kRestartUtime = 1000000;
 constexpr std::int64_t kHorizonFreshUtime = 1000000;
 
 const char* const kBeforeRobot = "before the robot was known";
-
-std::string hashText(std::int64_t hash) {
-  char text[17];
-  msg::formatHash(hash, text);
-  return text;
-}
 
 }  // namespace
 

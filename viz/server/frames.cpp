@@ -32,12 +32,6 @@ Json numbers(const double* x, int n) {
   return a;
 }
 
-std::string hashText(std::int64_t hash) {
-  char text[17];
-  msg::formatHash(hash, text);
-  return text;
-}
-
 // A configuration from the wire with its base quaternion renormalized: the checks accept 1e-4
 // off unit, forward kinematics wants a rotation.
 void configuration(const Model& model, const std::vector<double>& in, Eigen::VectorXd& q) {
@@ -61,6 +55,12 @@ ContactSet worldAlignedContacts(const Robot& robot) {
 }
 
 }  // namespace
+
+std::string hashText(std::int64_t hash) {
+  char text[17];
+  msg::formatHash(hash, text);
+  return text;
+}
 
 FrameBuilder::FrameBuilder(const Robot& robot)
     : robot_(robot),

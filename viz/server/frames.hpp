@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
+#include <string>
 
 #include "config/robot_config.hpp"
 #include "sim/policy.hpp"
@@ -24,6 +25,9 @@
 namespace stride::viz {
 
 using Json = nlohmann::json;
+
+// A model hash as the programs print it (16 hex digits: msg::formatHash).
+std::string hashText(std::int64_t hash);
 
 // How the state frames' forces went: "forces" is [] unless estimated.
 struct ForceCounts {
