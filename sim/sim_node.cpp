@@ -9,9 +9,9 @@
 
 #include "config/model_hash.hpp"
 #include "sim/ground_contact.hpp"
-#include "solver/contact/knot_dynamics.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/kinematics.hpp"
+#include "solver/multibody/model.hpp"
 
 namespace stride::sim {
 

@@ -79,7 +79,7 @@ Run run(const ControllerConfig& config, const Options& options) {
   std::vector<unsigned char> flood;
   if (options.flood_per_period > 0) {
     policy_t foreign;
-    const int nu = robot.model.nv - (robot.model.hasFreeFlyer() ? 6 : 0);
+    const int nu = actuatedDimension(robot.model);
     msg::shape(foreign, 8, robot.model.nq + 1, robot.model.nv + 1, nu + 1);
     foreign.model_hash = 0x5eed;
     foreign.source_id = 0xf100d;

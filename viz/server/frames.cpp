@@ -8,9 +8,9 @@
 
 #include "config/model_hash.hpp"
 #include "messages/validate.hpp"
-#include "solver/contact/knot_dynamics.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/kinematics.hpp"
+#include "solver/multibody/model.hpp"
 
 namespace stride::viz {
 
@@ -165,7 +165,8 @@ bool FrameBuilder::estimateForces(const robot_state_t& state, std::uint64_t poli
     return false;
   }
   u_ = u_.cwiseMax(-effort_).cwiseMin(effort_);
-  // τ = [0_6; u] for a floating base, u for a fixed one (solver/contact/knot_dynamics.hpp).
+  // τ = [0_6; u] for a floating base, u for a fixed one (actuatedDimension,
+  // solver/multibody/model.hpp).
   tau_.setZero();
   tau_.tail(nu_) = u_;
   for (int c = 0; c < nc; ++c) contacts_.setActive(c, state.contact[c] != 0);
