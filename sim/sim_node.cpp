@@ -289,9 +289,9 @@ bool SimNode::advance(int steps) {
     sense();
     const Eigen::VectorXd& q_hat = qSensed();
     const Eigen::VectorXd& v_hat = vSensed();
-    PolicyStatus status = PolicyStatus::Invalid;
+    msg::PolicyStatus status = msg::PolicyStatus::Invalid;
     if (have_policy_) status = evaluator_.evaluate(policy_, t, q_hat, v_hat, tau_cmd_);
-    if (status == PolicyStatus::Exhausted) {
+    if (status == msg::PolicyStatus::Exhausted) {
       // Past the policy's end (by the grace, 0 by default: sim/README.md) the controller is lost.
       const double end = policy_.t0 + (policy_.knots - 1) * policy_.dt;
       if (!standing_down_ && t - end > options_.stand_down.grace) {
@@ -314,11 +314,11 @@ bool SimNode::advance(int steps) {
       } else {
         ++stats_.exhausted_steps;
       }
-    } else if (status != PolicyStatus::Invalid) {
+    } else if (status != msg::PolicyStatus::Invalid) {
       standing_down_ = false;  // a policy in force again: the controller is back
       ++stats_.policy_steps;
     }
-    if (status == PolicyStatus::Invalid) {
+    if (status == msg::PolicyStatus::Invalid) {
       hold_.torque(robot_.model, q_hat, v_hat, tau_cmd_);
       ++(have_policy_ ? stats_.hold_steps : stats_.waiting_steps);
     }

@@ -18,6 +18,7 @@
 #include <string>
 
 #include "config/robot_config.hpp"
+#include "messages/policy_interpolation.hpp"
 #include "messages/publisher.hpp"
 #include "messages/validate.hpp"
 #include "messages/wire_auth.hpp"
@@ -168,7 +169,7 @@ class SimNode {
   msg::WireAuth auth_;  // options.key: policies checked, states and maps signed
   msg::SigningPublisher signed_out_;
   Publisher& out_;  // signed_out_
-  PolicyEvaluator evaluator_;
+  msg::PolicyEvaluator evaluator_;
   HoldPolicy hold_;
   StandDown stand_down_;
   bool standing_down_ = false;
@@ -180,7 +181,7 @@ class SimNode {
   MessageDropper dropper_;
   int steps_per_state_;
   policy_t incoming_;
-  Policy policy_;
+  msg::Policy policy_;
   bool have_policy_ = false;
   std::int64_t last_answer_ = -1;
   robot_state_t state_msg_;

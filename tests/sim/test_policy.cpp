@@ -1,11 +1,12 @@
-// The policy the mock robot applies (sim/policy.hpp) and its disturbance helpers
-// (sim/disturbances.hpp).
+// The policy the mock robot applies (messages/policy_interpolation.hpp, the wire's interpolation),
+// its hold PD and stand-down (sim/policy.hpp) and its disturbance helpers (sim/disturbances.hpp).
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
+#include "messages/policy_interpolation.hpp"
 #include "sim/disturbances.hpp"
 #include "sim_cases.hpp"
 #include "solver/multibody/lie_group.hpp"
@@ -13,9 +14,9 @@
 namespace stride {
 namespace {
 
-using sim::Policy;
-using sim::PolicyEvaluator;
-using sim::PolicyStatus;
+using msg::Policy;
+using msg::PolicyEvaluator;
+using msg::PolicyStatus;
 using sim_test::robot;
 
 // A 4-knot policy for stride_quad with random references (base poses far apart, so that the

@@ -252,8 +252,8 @@ policy_t gainPolicy(const Robot& robot) {
 }
 
 // The policy above as the evaluator reads it.
-sim::Policy asPolicy(const policy_t& m, const Robot& robot) {
-  sim::Policy p;
+msg::Policy asPolicy(const policy_t& m, const Robot& robot) {
+  msg::Policy p;
   p.resize(m.knots, robot.model.nq, robot.model.nv, robot.model.nv - 6);
   p.t0 = 0.0;
   p.dt = m.dt;
@@ -271,7 +271,7 @@ sim::Policy asPolicy(const policy_t& m, const Robot& robot) {
 TEST(SimNode, NoiseFreeSensingIsTheTruthAndLatencyFeedsBackTheOldState) {
   const Robot& robot = sim_test::robot("stride_quad");
   const policy_t message = gainPolicy(robot);
-  const sim::Policy policy = asPolicy(message, robot);
+  const msg::Policy policy = asPolicy(message, robot);
   for (int latency : {0, 5}) {
     Sink out;
     sim::SimNodeOptions o;
@@ -286,7 +286,7 @@ TEST(SimNode, NoiseFreeSensingIsTheTruthAndLatencyFeedsBackTheOldState) {
 
     sim::Simulator sim(robot, sim::SimOptions{});
     sim.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
-    sim::PolicyEvaluator evaluator(robot.model, 12);
+    msg::PolicyEvaluator evaluator(robot.model, 12);
     std::vector<Eigen::VectorXd> qs{sim.q()}, vs{sim.v()};
     Eigen::VectorXd tau(12);
     for (int k = 0; k < 200; ++k) {
