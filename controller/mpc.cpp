@@ -10,6 +10,14 @@
 
 namespace stride {
 
+// The contact limit is one number (solver/contact/contact_set.hpp): the wire's int32 masks carry it
+// and the locomotion problem's own copy (solver/ocp/locomotion.hpp, to refer to it once that file
+// has moved to locomotion/) agrees.
+static_assert(kMaxContacts <= msg::kContactMaskBits,
+              "policy_t.phase, mpc_status_t.phase, horizon_t.contact_mask: bit c for contact c");
+static_assert(LocomotionProblem::kMaxContacts == kMaxContacts,
+              "LocomotionProblem::kMaxContacts is the contact limit of contact_set.hpp");
+
 namespace {
 // The gait reported while a planner's plan replaces the gaits.
 const std::string kPlanGait = "plan";
