@@ -6,6 +6,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "messages/hold_pd.hpp"
 #include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/crba.hpp"
 #include "solver/multibody/frames.hpp"
@@ -45,7 +46,7 @@ void HoldPolicy::torque(const Model& model, const Eigen::Ref<const Eigen::Vector
     if (jt.type == JointType::FreeFlyer) continue;
     // 1-dof joints: one configuration and one velocity entry.
     const int i = jt.idx_v - first;
-    tau[i] = kp[i] * (q_ref[jt.idx_q] - q[jt.idx_q]) - kd[i] * v[jt.idx_v];
+    tau[i] = msg::jointPd(0.0, kp[i], kd[i], q_ref[jt.idx_q], q[jt.idx_q], v[jt.idx_v]);
   }
 }
 
@@ -134,8 +135,8 @@ void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
     if (in_leg_[i]) continue;
     const double start = q_start_[jt.idx_q];
     const double target = start + s * (hold_.q_ref[jt.idx_q] - start);
-    tau[i] =
-        (1.0 - s) * u_start_[i] + hold_.kp[i] * (target - q[jt.idx_q]) - hold_.kd[i] * v[jt.idx_v];
+    tau[i] = msg::jointPd((1.0 - s) * u_start_[i], hold_.kp[i], hold_.kd[i], target, q[jt.idx_q],
+                          v[jt.idx_v]);
   }
   if (legs_.empty()) return;
 
@@ -239,7 +240,9 @@ void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
     for (int k = 0; k < n; ++k) {
       const int i = leg.joints[k];
       const double dq = A.col(k).dot(y);
-      tau[i] = (1.0 - s) * u_start_[i] + hold_.kp[i] * dq - hold_.kd[i] * v[leg.columns[k]];
+      // The PD on the IK step: q_ref − q = dq.
+      tau[i] = msg::jointPd((1.0 - s) * u_start_[i], hold_.kp[i], hold_.kd[i], dq, 0.0,
+                            v[leg.columns[k]]);
     }
   }
 }

@@ -15,7 +15,9 @@
 namespace stride::sim {
 
 // The fallback policy: a joint PD holding q_ref, τ = Kp (q_ref − q) − Kd v on the actuated joints
-// (the base is not actuated). Gains per actuated joint.
+// (the base is not actuated). Gains per actuated joint. The law is the one of messages/hold_pd.hpp
+// (msg::jointPd), which the controller's hold fallback sends as a policy; the gains are the robot's
+// own (its YAML's joint_pd, else msg::kDefaultHoldKp/Kd), capped for the explicit step below.
 struct HoldPolicy {
   Eigen::VectorXd q_ref;   // nq: only its joint entries are used
   Eigen::VectorXd kp, kd;  // nu

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "config/model_hash.hpp"
+#include "messages/hold_pd.hpp"
 #include "sim/ground_contact.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/kinematics.hpp"
@@ -59,8 +60,9 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
       signed_out_(out, auth_, 1 << 12),
       out_(signed_out_),
       evaluator_(robot.model, actuatedDimension(robot.model)),
-      hold_(robot.model, robot.default_q, holdGain(options.hold_kp, robot.joint_kp, 5.0),
-            holdGain(options.hold_kd, robot.joint_kd, 0.1), sim.dt),
+      hold_(robot.model, robot.default_q,
+            holdGain(options.hold_kp, robot.joint_kp, msg::kDefaultHoldKp),
+            holdGain(options.hold_kd, robot.joint_kd, msg::kDefaultHoldKd), sim.dt),
       stand_down_(robot.model, hold_, standDownContacts(robot), options.stand_down),
       mapper_(sim_.terrain(), options.map, sim.dt),
       sensing_(robot.model, options.sensing, sim.dt, options.seed + 3),

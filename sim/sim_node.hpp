@@ -43,7 +43,7 @@ struct SimNodeOptions {
   std::uint64_t seed = 1;
   PushSchedule pushes;
   // The joint PD before the first policy and when standing down; negative: the robot YAML's
-  // `joint_pd` (kp 5, kd 0.1 without one).
+  // `joint_pd` (kp 5, kd 0.1 without one: msg::kDefaultHoldKp/Kd, messages/hold_pd.hpp).
   double hold_kp = -1.0, hold_kd = -1.0;
   std::string state_channel = "STRIDE_STATE", policy_channel = "STRIDE_POLICY";
   std::int64_t utime_base = 1000000;
