@@ -351,18 +351,15 @@ void SimNode::track() {
   const Eigen::VectorXd& q = sim_.q();
   stats_.z_min = std::min(stats_.z_min, q[2]);
   stats_.z_max = std::max(stats_.z_max, q[2]);
-  // Fallen is low over the ground under the base, not low in the world: a robot on a lower floor
-  // or down a flight of stairs is upright.
+  // Fallen is low over the ground under the base, not low in the world (sim/fall.hpp: the one
+  // criterion, the log summary's too).
   stats_.above = q[2] - baseTerrainHeight(q);
   stats_.above_min = std::min(stats_.above_min, stats_.above);
-  const double qx = q[3], qy = q[4];
-  const double tilt =
-      std::acos(std::clamp(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0)) * 180.0 / M_PI;
-  stats_.max_tilt_deg = std::max(stats_.max_tilt_deg, tilt);
+  const double tilt = baseTilt(q[3], q[4], q[5], q[6]);
+  stats_.max_tilt_deg = std::max(stats_.max_tilt_deg, tilt * 180.0 / M_PI);
   for (int c = 0; c < static_cast<int>(robot_.contacts.size()); ++c)
     stats_.peak_normal_force = std::max(stats_.peak_normal_force, sim_.normalForce(c));
-  if (stats_.above < options_.fall_height * stats_.above0 || tilt > options_.fall_tilt_deg)
-    stats_.fell = true;
+  if (fallen(stats_.above, stats_.above0, tilt, options_.fall)) stats_.fell = true;
 }
 
 void SimNode::writeSummary(const std::string& path) const {

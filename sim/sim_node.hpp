@@ -24,6 +24,7 @@
 #include "messages/wire_auth.hpp"
 #include "sim/actuators.hpp"
 #include "sim/disturbances.hpp"
+#include "sim/fall.hpp"
 #include "sim/plant.hpp"
 #include "sim/policy.hpp"
 #include "sim/sensing.hpp"
@@ -55,8 +56,8 @@ struct SimNodeOptions {
   // When the controller goes silent (sim/README.md, "Controller loss").
   StandDownOptions stand_down;
   // Fallen: the base's height above the terrain under it below this fraction of its height above
-  // the terrain at the start, or tilted more than this.
-  double fall_height = 0.5, fall_tilt_deg = 60.0;
+  // the terrain at the start, or tilted more than this (sim/fall.hpp, the log summary's too).
+  FallLimits fall;
   // The elevation map the robot publishes (its perception's stand-in).
   TerrainMapOptions map;
   // The shared key (stride-sim --key-file): the robot signs its states and maps and takes only

@@ -193,8 +193,7 @@ int main(int argc, char** argv) {
   std::string log_path, summary_path,
       state_channel = "STRIDE_STATE", status_channel = "STRIDE_STATUS",
       command_channel = "STRIDE_COMMAND", terrain_channel = "STRIDE_TERRAIN", sim_summary_path;
-  double fall_height = 0.5, fall_tilt_deg = 60.0, window = 0.0, fault_end = -1.0,
-         fault_end_wall = -1.0;
+  double window = 0.0, fault_end = -1.0, fault_end_wall = -1.0;
   stride::logs::TrackingTolerance tolerance;
   stride::logs::SegmentOptions segment_options;
   bool check_tracking = false;
@@ -218,9 +217,11 @@ int main(int argc, char** argv) {
   app.add_option("--fault-end-wall", fault_end_wall,
                  "the same, as wall-clock seconds (date +%s.%N), placed on the log's clock by the "
                  "time the logger received the states");
-  app.add_option("--fall-height", fall_height,
+  // The mock robot's fall criterion and defaults (sim/fall.hpp).
+  app.add_option("--fall-height", segment_options.fall.height_fraction,
                  "fallen: base below this fraction of its first height");
-  app.add_option("--fall-tilt", fall_tilt_deg, "fallen: base tilted more than this [deg]");
+  app.add_option("--fall-tilt", segment_options.fall.max_tilt_deg,
+                 "fallen: base tilted more than this [deg]");
   app.add_option("--windows", window,
                  "also print the controller's timing and misses per window of this many seconds")
       ->check(CLI::Range(0.0, 3600.0));
@@ -257,7 +258,6 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 3600.0))
       ->capture_default_str();
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
-  segment_options.fall = {fall_height, fall_tilt_deg};
 
   lcm::LogFile log(log_path, "r");
   if (!log.good()) {

@@ -518,7 +518,7 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
   sim::SimOptions so;
   sim::SimNodeOptions no;
   no.state_rate_hz = opt.state_rate_hz;
-  no.fall_tilt_deg = 45.0;
+  no.fall.max_tilt_deg = 45.0;
   no.pushes = opt.pushes;
   sim::SimNode node(robot, so, no, publisher);
   node.subscribe(bus);
