@@ -12,6 +12,7 @@ set(STRIDE_EXPORTED_MODULES
   terrain                     # terrain files, surface and contact queries, elevation grids
   config                      # robot YAML (+ URDF, SRDF) loader
   messages                    # LCM types and their validation
+  policy                      # a received policy interpolated: u_ff + K (x_ref ⊖ x) (messages/)
   signing                     # authenticated messages (libsodium's HMAC, OpenSSL's SHA-256)
   controller                  # stride-mpc's library: the tick, the node, its configuration
   sim sim_node                # the mock robot's physics; its LCM node
@@ -33,7 +34,7 @@ add_library(Stride::solver ALIAS stride_solver)
 # Stride::stride: everything.
 add_library(stride_all INTERFACE)
 target_link_libraries(stride_all INTERFACE stride_solver stride_terrain stride_config stride_messages
-                      stride_signing stride_controller stride_sim stride_sim_node stride_drive)
+                      stride_policy stride_signing stride_controller stride_sim stride_sim_node stride_drive)
 set_target_properties(stride_all PROPERTIES EXPORT_NAME stride)
 add_library(Stride::stride ALIAS stride_all)
 list(APPEND _stride_targets stride_solver stride_all)

@@ -26,7 +26,7 @@ bool prismatic(const Joint& j) {
 std::string describeModel(const Robot& robot) {
   const Model& model = robot.model;
   const bool ff = model.hasFreeFlyer();
-  const int nu = ff ? model.nv - 6 : model.nv;
+  const int nu = actuatedDimension(model);
   std::size_t w = 0;  // name column width
   for (const Joint& j : model.joints) w = std::max(w, j.name.size());
   for (const auto& c : robot.contacts) w = std::max(w, c.frame.size());

@@ -11,6 +11,7 @@
 #include "config/robot_config.hpp"
 #include "controller/command.hpp"
 #include "controller/gait.hpp"
+#include "messages/hold_pd.hpp"
 #include "solver/ddp/solver.hpp"
 #include "solver/ocp/locomotion.hpp"
 #include "terrain/steppability.hpp"
@@ -84,8 +85,10 @@ struct ControllerConfig {
 
   double max_state_age = 0.05;  // s; an older state is stale
   Fallback fallback = Fallback::Previous;
-  double hold_kp = 5.0, hold_kd = 0.2;  // hold policy joint gains [Nm/rad, Nm s/rad]
-  int max_previous_ticks = 20;          // fallback Previous degrades to Hold after this many
+  // Hold policy joint gains [Nm/rad, Nm s/rad]: the law and the defaults the mock robot's too
+  // (messages/hold_pd.hpp; the default damping was 0.2 here, 0.1 there, for no stated reason).
+  double hold_kp = msg::kDefaultHoldKp, hold_kd = msg::kDefaultHoldKd;
+  int max_previous_ticks = 20;  // fallback Previous degrades to Hold after this many
 
   int cpu = -1;           // pin the loop to this CPU (-1: no)
   int fifo_priority = 0;  // SCHED_FIFO priority (0: normal scheduling)

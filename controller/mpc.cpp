@@ -5,10 +5,19 @@
 
 #include "config/model_hash.hpp"
 #include "controller/gait.hpp"
+#include "messages/hold_pd.hpp"
 #include "solver/contact/knot_dynamics.hpp"
 #include "solver/multibody/frames.hpp"
 
 namespace stride {
+
+// The contact limit is one number (solver/contact/contact_set.hpp): the wire's int32 masks carry it
+// and the locomotion problem's own copy (solver/ocp/locomotion.hpp, to refer to it once that file
+// has moved to locomotion/) agrees.
+static_assert(kMaxContacts <= msg::kContactMaskBits,
+              "policy_t.phase, mpc_status_t.phase, horizon_t.contact_mask: bit c for contact c");
+static_assert(LocomotionProblem::kMaxContacts == kMaxContacts,
+              "LocomotionProblem::kMaxContacts is the contact limit of contact_set.hpp");
 
 namespace {
 // The gait reported while a planner's plan replaces the gaits.
@@ -671,11 +680,10 @@ void Mpc::holdPolicy(std::int64_t utime, double t) {
     for (int i = 0; i < nq_; ++i) xr[i] = i < nq_ - nu_ ? x_[i] : robot_.default_q[i];
     for (int i = 0; i < nv_; ++i) xr[nq_ + i] = 0.0;
     std::copy(u_hold.data(), u_hold.data() + nu_, policy_.u_ff[j].begin());
-    std::fill(policy_.K[j].begin(), policy_.K[j].end(), 0.0);
-    for (int r = 0; r < nu_; ++r) {
-      policy_.K[j][r * ndx + base + r] = config_.hold_kp;
-      policy_.K[j][r * ndx + nv_ + base + r] = config_.hold_kd;
-    }
+    // The robot's hold law (messages/hold_pd.hpp), sent as gains on x_ref ⊖ x.
+    for (int r = 0; r < nu_; ++r)
+      msg::writeJointPdRow(policy_.K[j].data() + r * ndx, nv_, base + r, config_.hold_kp,
+                           config_.hold_kd);
   }
 }
 

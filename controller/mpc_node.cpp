@@ -8,11 +8,13 @@
 #include <random>
 
 #include "config/model_hash.hpp"
+#include "solver/contact/contact_set.hpp"
 
 namespace stride {
 
 namespace {
-constexpr int kMaxContactFlags = 16;
+// A state's contact flags: at most the contact limit (solver/contact/contact_set.hpp).
+constexpr int kMaxContactFlags = kMaxContacts;
 constexpr int kMaxPlanPhases = 100000;
 constexpr int kQueueCapacity = 1000;  // > 1 s of a 1 kHz estimator between two drains
 constexpr long kLatencyCapacity = 1L << 20;

@@ -5,6 +5,8 @@
 #include <cstring>
 #include <limits>
 
+#include "messages/wire_reader.hpp"
+
 namespace stride::msg {
 
 const char* describe(Reject reason) {
@@ -37,23 +39,7 @@ namespace {
 
 constexpr int kHash = 8;  // every LCM message starts with its 64-bit type fingerprint
 
-// Big-endian int32 at byte offset `at`, or false when the buffer is too short.
-bool readInt32(const void* buf, int size, long at, std::int32_t& out) {
-  if (at < 0 || at + 4 > size) return false;
-  const auto* b = static_cast<const unsigned char*>(buf) + at;
-  const std::uint32_t u = (std::uint32_t(b[0]) << 24) | (std::uint32_t(b[1]) << 16) |
-                          (std::uint32_t(b[2]) << 8) | std::uint32_t(b[3]);
-  std::memcpy(&out, &u, 4);
-  return true;
-}
-
-bool readInt64(const void* buf, int size, long at, std::int64_t& out) {
-  std::int32_t hi, lo;
-  if (!readInt32(buf, size, at, hi) || !readInt32(buf, size, at + 4, lo)) return false;
-  const std::uint64_t u = (std::uint64_t(std::uint32_t(hi)) << 32) | std::uint32_t(lo);
-  std::memcpy(&out, &u, 8);
-  return true;
-}
+// Big-endian reads at fixed offsets: readInt32, readInt64 (wire_reader.hpp, the one reader).
 
 // Offsets after the type hash: robot_state_t is utime, model_hash, nq, nv, ...; policy_t is utime,
 // model_hash, source_id, knot0_utime, tick, t0, dt, then knots nq nv nu nx ndx nk.

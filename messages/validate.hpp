@@ -106,6 +106,12 @@ long terrainWireSize(int rows, int cols);
 // decoder skips an array whose count is 0, which would leave a reused object's old entries.
 bool decode(const void* buf, int size, robot_state_t& m);
 
+// The wire's contact masks (policy_t.phase, mpc_status_t.phase, horizon_t.contact_mask) are int32
+// with bit c for contact c: at most this many contacts fit (the sign bit left alone). The contact
+// limit (solver/contact/contact_set.hpp, kMaxContacts) must stay within it: static_assert where
+// both meet (controller/mpc.cpp).
+constexpr int kContactMaskBits = 31;
+
 // horizon_t's footholds (issue 31): at most this many per contact (nfootholds <= it times
 // ncontacts), each foothold_source in [0, kFootholdSources) (GaitGenerator's StanceSource:
 // measured, blind, nominal, moved, unreachable, unknown).

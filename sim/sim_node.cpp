@@ -8,10 +8,11 @@
 #include <nlohmann/json.hpp>
 
 #include "config/model_hash.hpp"
+#include "messages/hold_pd.hpp"
 #include "sim/ground_contact.hpp"
-#include "solver/contact/knot_dynamics.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/kinematics.hpp"
+#include "solver/multibody/model.hpp"
 
 namespace stride::sim {
 
@@ -59,8 +60,9 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
       signed_out_(out, auth_, 1 << 12),
       out_(signed_out_),
       evaluator_(robot.model, actuatedDimension(robot.model)),
-      hold_(robot.model, robot.default_q, holdGain(options.hold_kp, robot.joint_kp, 5.0),
-            holdGain(options.hold_kd, robot.joint_kd, 0.1), sim.dt),
+      hold_(robot.model, robot.default_q,
+            holdGain(options.hold_kp, robot.joint_kp, msg::kDefaultHoldKp),
+            holdGain(options.hold_kd, robot.joint_kd, msg::kDefaultHoldKd), sim.dt),
       stand_down_(robot.model, hold_, standDownContacts(robot), options.stand_down),
       mapper_(sim_.terrain(), options.map, sim.dt),
       sensing_(robot.model, options.sensing, sim.dt, options.seed + 3),
@@ -289,9 +291,9 @@ bool SimNode::advance(int steps) {
     sense();
     const Eigen::VectorXd& q_hat = qSensed();
     const Eigen::VectorXd& v_hat = vSensed();
-    PolicyStatus status = PolicyStatus::Invalid;
+    msg::PolicyStatus status = msg::PolicyStatus::Invalid;
     if (have_policy_) status = evaluator_.evaluate(policy_, t, q_hat, v_hat, tau_cmd_);
-    if (status == PolicyStatus::Exhausted) {
+    if (status == msg::PolicyStatus::Exhausted) {
       // Past the policy's end (by the grace, 0 by default: sim/README.md) the controller is lost.
       const double end = policy_.t0 + (policy_.knots - 1) * policy_.dt;
       if (!standing_down_ && t - end > options_.stand_down.grace) {
@@ -314,11 +316,11 @@ bool SimNode::advance(int steps) {
       } else {
         ++stats_.exhausted_steps;
       }
-    } else if (status != PolicyStatus::Invalid) {
+    } else if (status != msg::PolicyStatus::Invalid) {
       standing_down_ = false;  // a policy in force again: the controller is back
       ++stats_.policy_steps;
     }
-    if (status == PolicyStatus::Invalid) {
+    if (status == msg::PolicyStatus::Invalid) {
       hold_.torque(robot_.model, q_hat, v_hat, tau_cmd_);
       ++(have_policy_ ? stats_.hold_steps : stats_.waiting_steps);
     }
@@ -349,18 +351,15 @@ void SimNode::track() {
   const Eigen::VectorXd& q = sim_.q();
   stats_.z_min = std::min(stats_.z_min, q[2]);
   stats_.z_max = std::max(stats_.z_max, q[2]);
-  // Fallen is low over the ground under the base, not low in the world: a robot on a lower floor
-  // or down a flight of stairs is upright.
+  // Fallen is low over the ground under the base, not low in the world (sim/fall.hpp: the one
+  // criterion, the log summary's too).
   stats_.above = q[2] - baseTerrainHeight(q);
   stats_.above_min = std::min(stats_.above_min, stats_.above);
-  const double qx = q[3], qy = q[4];
-  const double tilt =
-      std::acos(std::clamp(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0)) * 180.0 / M_PI;
-  stats_.max_tilt_deg = std::max(stats_.max_tilt_deg, tilt);
+  const double tilt = baseTilt(q[3], q[4], q[5], q[6]);
+  stats_.max_tilt_deg = std::max(stats_.max_tilt_deg, tilt * 180.0 / M_PI);
   for (int c = 0; c < static_cast<int>(robot_.contacts.size()); ++c)
     stats_.peak_normal_force = std::max(stats_.peak_normal_force, sim_.normalForce(c));
-  if (stats_.above < options_.fall_height * stats_.above0 || tilt > options_.fall_tilt_deg)
-    stats_.fell = true;
+  if (fallen(stats_.above, stats_.above0, tilt, options_.fall)) stats_.fell = true;
 }
 
 void SimNode::writeSummary(const std::string& path) const {

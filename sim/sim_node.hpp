@@ -18,11 +18,13 @@
 #include <string>
 
 #include "config/robot_config.hpp"
+#include "messages/policy_interpolation.hpp"
 #include "messages/publisher.hpp"
 #include "messages/validate.hpp"
 #include "messages/wire_auth.hpp"
 #include "sim/actuators.hpp"
 #include "sim/disturbances.hpp"
+#include "sim/fall.hpp"
 #include "sim/plant.hpp"
 #include "sim/policy.hpp"
 #include "sim/sensing.hpp"
@@ -42,7 +44,7 @@ struct SimNodeOptions {
   std::uint64_t seed = 1;
   PushSchedule pushes;
   // The joint PD before the first policy and when standing down; negative: the robot YAML's
-  // `joint_pd` (kp 5, kd 0.1 without one).
+  // `joint_pd` (kp 5, kd 0.1 without one: msg::kDefaultHoldKp/Kd, messages/hold_pd.hpp).
   double hold_kp = -1.0, hold_kd = -1.0;
   std::string state_channel = "STRIDE_STATE", policy_channel = "STRIDE_POLICY";
   std::int64_t utime_base = 1000000;
@@ -54,8 +56,8 @@ struct SimNodeOptions {
   // When the controller goes silent (sim/README.md, "Controller loss").
   StandDownOptions stand_down;
   // Fallen: the base's height above the terrain under it below this fraction of its height above
-  // the terrain at the start, or tilted more than this.
-  double fall_height = 0.5, fall_tilt_deg = 60.0;
+  // the terrain at the start, or tilted more than this (sim/fall.hpp, the log summary's too).
+  FallLimits fall;
   // The elevation map the robot publishes (its perception's stand-in).
   TerrainMapOptions map;
   // The shared key (stride-sim --key-file): the robot signs its states and maps and takes only
@@ -168,7 +170,7 @@ class SimNode {
   msg::WireAuth auth_;  // options.key: policies checked, states and maps signed
   msg::SigningPublisher signed_out_;
   Publisher& out_;  // signed_out_
-  PolicyEvaluator evaluator_;
+  msg::PolicyEvaluator evaluator_;
   HoldPolicy hold_;
   StandDown stand_down_;
   bool standing_down_ = false;
@@ -180,7 +182,7 @@ class SimNode {
   MessageDropper dropper_;
   int steps_per_state_;
   policy_t incoming_;
-  Policy policy_;
+  msg::Policy policy_;
   bool have_policy_ = false;
   std::int64_t last_answer_ = -1;
   robot_state_t state_msg_;

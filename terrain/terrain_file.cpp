@@ -8,8 +8,6 @@
 #include <initializer_list>
 #include <sstream>
 
-#include "config/config_error.hpp"
-
 namespace stride::terrain {
 
 namespace {
@@ -18,7 +16,7 @@ class Reader {
   explicit Reader(std::string source) : source_(std::move(source)) {}
 
   [[noreturn]] void fail(const std::string& key, const std::string& what) const {
-    throw ConfigError("terrain file '" + source_ + "': " + key + ": " + what);
+    throw TerrainFileError("terrain file '" + source_ + "': " + key + ": " + what);
   }
 
   void onlyKeys(const YAML::Node& node, const std::string& where,
@@ -174,7 +172,7 @@ TerrainSpec parseTerrain(const std::string& text, const std::string& source) {
 
 TerrainSpec loadTerrainFile(const std::string& path) {
   std::ifstream f(path);
-  if (!f) throw ConfigError("terrain file '" + path + "': cannot be read");
+  if (!f) throw TerrainFileError("terrain file '" + path + "': cannot be read");
   std::stringstream text;
   text << f.rdbuf();
   return parseTerrain(text.str(), path);
@@ -187,7 +185,7 @@ std::string findTerrainFile(const std::string& name, const std::vector<std::stri
       name.find('/') != std::string::npos || fs::path(name).extension() == ".yaml";
   if (looks_like_path) {
     if (fs::is_regular_file(name, ec)) return name;
-    throw ConfigError("terrain file '" + name + "': no such file");
+    throw TerrainFileError("terrain file '" + name + "': no such file");
   }
   std::string tried;
   for (const std::string& dir : config_dirs) {
@@ -196,7 +194,7 @@ std::string findTerrainFile(const std::string& name, const std::vector<std::stri
     if (fs::is_regular_file(p, ec)) return p.string();
     tried += (tried.empty() ? "" : ", ") + p.string();
   }
-  throw ConfigError("terrain '" + name + "': not found (looked for " + tried + ")");
+  throw TerrainFileError("terrain '" + name + "': not found (looked for " + tried + ")");
 }
 
 std::vector<std::string> terrainConfigDirs() {

@@ -18,6 +18,14 @@
 
 namespace stride {
 
+// The contact limit: the most contacts a robot may have in Stride, one number for every module. A
+// contact is bit c of a phase's mask (the solver's, the gait generator's, the wire's int32 masks:
+// policy_t.phase, mpc_status_t.phase, horizon_t.contact_mask; messages/validate.hpp,
+// kContactMaskBits) and flag c of robot_state_t.contact (the controller and stride-teleop refuse a
+// state with more flags). Here, the lowest floor all of them include: solver/ knows nothing of the
+// messages, and the receivers all link the solver.
+constexpr int kMaxContacts = 8;
+
 struct ContactModel {
   std::string name;
   int frame = -1;

@@ -6,10 +6,6 @@
 
 namespace stride {
 
-int actuatedDimension(const Model& model) {
-  return model.hasFreeFlyer() ? model.nv - 6 : model.nv;
-}
-
 KnotData::KnotData(const Model& model, const ContactSet& contacts)
     : nu(actuatedDimension(model)), contact(model, contacts) {
   const int nv = model.nv, m = contacts.maxNc();

@@ -10,7 +10,7 @@
 
 namespace stride {
 
-int actuatedDimension(const Model& model);
+// actuatedDimension(model), the size of u: solver/multibody/model.hpp.
 
 struct KnotData {
   KnotData(const Model& model, const ContactSet& contacts);

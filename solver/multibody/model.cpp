@@ -44,6 +44,10 @@ const char* toString(FrameType type) {
   return "?";
 }
 
+int actuatedDimension(const Model& model) {
+  return model.hasFreeFlyer() ? model.nv - 6 : model.nv;
+}
+
 void throwSizeError(const char* function, const char* argument, long expected, long got) {
   std::ostringstream s;
   s << function << ": argument '" << argument << "' has size " << got << ", expected " << expected;

@@ -116,6 +116,12 @@ class Model {
   std::map<std::string, int> joint_index_;
 };
 
+// The number of actuated degrees of freedom: the size of a control u and of a policy's torques. A
+// floating base is unactuated, τ = [0_6; u]; a fixed base is fully actuated, τ = u. Every 1-dof
+// joint below the base is actuated (the convention of the knots, the policy on the wire and the
+// mock robot). A property of the model, not of the contact dynamics that first needed it.
+int actuatedDimension(const Model& model);
+
 // Thrown for wrong sizes at an algorithm's boundary: a programming error, never raised on a
 // correctly sized real-time call.
 [[noreturn]] void throwSizeError(const char* function, const char* argument, long expected,

@@ -18,6 +18,7 @@
 #include <stride/solver/contact/contact_dynamics.hpp>
 #include <stride/solver/contact/knot_dynamics.hpp>
 #include <stride/solver/ddp/solver.hpp>
+#include <stride/solver/multibody/model.hpp>
 #include <stride/solver/ocp/knot.hpp>
 #include <stride/solver/ocp/residual_state.hpp>
 

@@ -250,6 +250,23 @@ TEST_F(NodeInput, RejectsAndCountsMalformedStates) {
   EXPECT_EQ(out_.statuses, 1);
 }
 
+// A state's contact flags are bounded by the contact limit (solver/contact/contact_set.hpp), the
+// one number the solver, the wire's masks and the receivers share.
+TEST_F(NodeInput, ContactFlagsUpToTheContactLimit) {
+  static_assert(kMaxContacts <= msg::kContactMaskBits);
+  robot_state_t m = good(1000);
+  m.ncontacts = kMaxContacts;
+  m.contact.assign(kMaxContacts, 1);
+  feed(m);
+  EXPECT_EQ(node_.acceptedStates(), 1);
+  m = good(2000);
+  m.ncontacts = kMaxContacts + 1;
+  m.contact.assign(kMaxContacts + 1, 1);
+  feed(m);
+  EXPECT_EQ(node_.rejected(msg::Reject::WrongSize), 1);
+  EXPECT_EQ(node_.acceptedStates(), 1);
+}
+
 // A standing state of the node's robot stamped `utime`, as LCM hands it over: received at
 // recv_utime (wall clock, µs; 0: unknown, taken as now).
 void feedState(MpcNode& node, std::int64_t utime, std::int64_t recv_utime = 0) {

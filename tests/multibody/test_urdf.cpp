@@ -123,6 +123,10 @@ TEST(Urdf, FreeFlyerRoot) {
   EXPECT_EQ(model.joints[1].name, "root_joint");
   EXPECT_DOUBLE_EQ(model.totalMass(), 4.4);  // the base now moves
   EXPECT_EQ(model.frames[model.getFrameId("base")].parentJoint, 1);
+  // The model's actuated dimension (model.hpp): the free-flyer's 6 are not actuated, every joint
+  // below it is; a fixed base actuates all of its joints.
+  EXPECT_EQ(actuatedDimension(model), 3);
+  EXPECT_EQ(actuatedDimension(buildModelFromUrdfString(kArm, RootJoint::Fixed)), 3);
 }
 
 TEST(Urdf, BadInputNamesFileAndElement) {

@@ -1,11 +1,13 @@
-// The policy the mock robot applies (sim/policy.hpp) and its disturbance helpers
-// (sim/disturbances.hpp).
+// The policy the mock robot applies (messages/policy_interpolation.hpp, the wire's interpolation),
+// its hold PD and stand-down (sim/policy.hpp) and its disturbance helpers (sim/disturbances.hpp).
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
+#include "messages/hold_pd.hpp"
+#include "messages/policy_interpolation.hpp"
 #include "sim/disturbances.hpp"
 #include "sim_cases.hpp"
 #include "solver/multibody/lie_group.hpp"
@@ -13,9 +15,9 @@
 namespace stride {
 namespace {
 
-using sim::Policy;
-using sim::PolicyEvaluator;
-using sim::PolicyStatus;
+using msg::Policy;
+using msg::PolicyEvaluator;
+using msg::PolicyStatus;
 using sim_test::robot;
 
 // A 4-knot policy for stride_quad with random references (base poses far apart, so that the
@@ -191,6 +193,44 @@ TEST(Policy, HoldPolicyIsAJointPd) {
   expected[2] = -1.0;
   expected[3] = -1.0;
   EXPECT_TRUE(tau.isApprox(expected, 1e-12));
+}
+
+// One hold law (messages/hold_pd.hpp): the controller's hold fallback, sent as a policy (x_ref =
+// the measured base and the default joints at rest, K from writeJointPdRow as Mpc::holdPolicy
+// writes it), gives through the robot's policy evaluation the torques the robot's own hold PD
+// gives, at the same gains, plus the feed-forward.
+TEST(Policy, TheControllersHoldPolicyIsTheRobotsHoldPd) {
+  const Model& model = robot("stride_quad").model;
+  const Eigen::VectorXd q_ref = robot("stride_quad").default_q;
+  const int nq = model.nq, nv = model.nv, nu = actuatedDimension(model), ndx = 2 * nv;
+  const double kp = msg::kDefaultHoldKp, kd = msg::kDefaultHoldKd;
+  const sim::HoldPolicy hold(model, q_ref, kp, kd);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd q = q_ref, v(nv), tau_hold(nu), tau_policy(nu);
+  for (int i = 7; i < nq; ++i) q[i] += 0.3 * u(rng);
+  for (int i = 0; i < nv; ++i) v[i] = u(rng);
+  q[0] += 0.2;  // the measured base, which the hold's reference takes as it is
+
+  Policy p;
+  p.resize(1, nq, nv, nu);
+  p.t0 = 0.0;
+  p.dt = 0.01;
+  for (int i = 0; i < nq; ++i) p.xRef(0)[i] = i < nq - nu ? q[i] : q_ref[i];
+  Eigen::Map<Eigen::VectorXd> u_ff(p.uFf(0), nu);
+  for (int r = 0; r < nu; ++r) {
+    u_ff[r] = 0.5 * r;
+    msg::writeJointPdRow(p.gain(0) + r * ndx, nv, 6 + r, kp, kd);
+  }
+  PolicyEvaluator eval(model, nu);
+  ASSERT_EQ(eval.evaluate(p, 0.0, q, v, tau_policy), PolicyStatus::Ok);
+  hold.torque(model, q, v, tau_hold);
+  EXPECT_LT((tau_policy - (tau_hold + u_ff)).norm(), 1e-12) << tau_policy.transpose() << "\n"
+                                                            << tau_hold.transpose();
+  // And on each joint the law itself.
+  for (int j = 0; j < nu; ++j)
+    EXPECT_NEAR(tau_policy[j], msg::jointPd(u_ff[j], kp, kd, q_ref[7 + j], q[7 + j], v[6 + j]),
+                1e-12);
 }
 
 // The stand-down (controller lost), sim/README.md "Controller loss".

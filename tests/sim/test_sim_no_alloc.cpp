@@ -70,7 +70,7 @@ TEST(SimNoAllocation, Step) {
 TEST(SimNoAllocation, PolicyAndDisturbances) {
   const Robot& r = sim_test::robot("stride_quad");
   const Model& model = r.model;
-  sim::Policy p;
+  msg::Policy p;
   p.resize(5, model.nq, model.nv, 12);
   p.dt = 0.01;
   std::mt19937 rng(1);
@@ -78,7 +78,7 @@ TEST(SimNoAllocation, PolicyAndDisturbances) {
     Eigen::Map<Eigen::VectorXd>(p.xRef(k), model.nq) = randomConfiguration(model, rng);
     for (size_t i = 0; i < p.K.size(); ++i) p.K[i] = 0.01 * static_cast<double>(i % 7);
   }
-  sim::PolicyEvaluator eval(model, 12);
+  msg::PolicyEvaluator eval(model, 12);
   const sim::HoldPolicy hold(model, r.default_q, 5.0, 0.1);
   std::vector<sim::StandDownContact> contacts;
   for (const ContactSpec& c : r.contacts) contacts.push_back({model.getFrameId(c.frame), c.dim});

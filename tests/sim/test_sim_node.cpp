@@ -15,6 +15,7 @@
 #include "messages/signing.hpp"
 #include "sim/sim_node.hpp"
 #include "sim_cases.hpp"
+#include "tools/log/segments.hpp"
 
 namespace stride {
 namespace {
@@ -252,8 +253,8 @@ policy_t gainPolicy(const Robot& robot) {
 }
 
 // The policy above as the evaluator reads it.
-sim::Policy asPolicy(const policy_t& m, const Robot& robot) {
-  sim::Policy p;
+msg::Policy asPolicy(const policy_t& m, const Robot& robot) {
+  msg::Policy p;
   p.resize(m.knots, robot.model.nq, robot.model.nv, robot.model.nv - 6);
   p.t0 = 0.0;
   p.dt = m.dt;
@@ -271,7 +272,7 @@ sim::Policy asPolicy(const policy_t& m, const Robot& robot) {
 TEST(SimNode, NoiseFreeSensingIsTheTruthAndLatencyFeedsBackTheOldState) {
   const Robot& robot = sim_test::robot("stride_quad");
   const policy_t message = gainPolicy(robot);
-  const sim::Policy policy = asPolicy(message, robot);
+  const msg::Policy policy = asPolicy(message, robot);
   for (int latency : {0, 5}) {
     Sink out;
     sim::SimNodeOptions o;
@@ -286,7 +287,7 @@ TEST(SimNode, NoiseFreeSensingIsTheTruthAndLatencyFeedsBackTheOldState) {
 
     sim::Simulator sim(robot, sim::SimOptions{});
     sim.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
-    sim::PolicyEvaluator evaluator(robot.model, 12);
+    msg::PolicyEvaluator evaluator(robot.model, 12);
     std::vector<Eigen::VectorXd> qs{sim.q()}, vs{sim.v()};
     Eigen::VectorXd tau(12);
     for (int k = 0; k < 200; ++k) {
@@ -303,6 +304,49 @@ TEST(SimNode, NoiseFreeSensingIsTheTruthAndLatencyFeedsBackTheOldState) {
     EXPECT_EQ(stamp, 1000000 + 1000 * (200 - latency));
     for (int i = 0; i < robot.model.nq; ++i) EXPECT_EQ(out.state.q[i], qs[200 - latency][i]);
   }
+}
+
+// One fall criterion (sim/fall.hpp): a quadruped let go (no hold PD) collapses, and the mock
+// robot's verdict (its summary's `fell`, checked on every physics step) and the log summary's
+// (logs::fallen on each state as a log holds it, above the terrain under the base, from the
+// first state's height) agree at every step: not fallen until the same step, with the same
+// default limits and the same maximum tilt.
+TEST(SimNode, TheRobotAndTheLogSummaryAgreeOnAFall) {
+  const Robot& robot = sim_test::robot("stride_quad");
+  Sink out;
+  sim::SimNodeOptions o;
+  o.hold_kp = 0.0;
+  o.hold_kd = 0.0;
+  sim::SimNode node(robot, sim::SimOptions{}, o, out);
+  node.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
+  const auto sample = [&] {
+    logs::BaseSample b;
+    const Eigen::VectorXd& q = node.simulator().q();
+    for (int i = 0; i < 7; ++i) b.q[i] = q[i];
+    b.ground = node.simulator().terrain().height(q[0], q[1]);
+    return b;
+  };
+  const logs::BaseSample first = sample();
+  const double first_height = first.q[2] - first.ground;
+  EXPECT_EQ(first_height, node.stats().above0);
+  const logs::FallLimits limits = logs::SegmentOptions{}.fall;
+  EXPECT_EQ(limits.height_fraction, o.fall.height_fraction);
+  EXPECT_EQ(limits.max_tilt_deg, o.fall.max_tilt_deg);
+  double max_tilt_deg = 0.0;
+  bool fell = false;
+  int steps = 0;
+  while (!fell && steps < 5000) {
+    const bool going = node.advance(1);
+    ++steps;
+    const logs::BaseSample b = sample();
+    fell = logs::fallen(b, first_height, limits);
+    max_tilt_deg = std::max(max_tilt_deg, logs::tilt(b.q) * 180.0 / M_PI);
+    ASSERT_EQ(fell, node.stats().fell) << "step " << steps;
+    ASSERT_EQ(going, !fell) << "step " << steps;
+  }
+  EXPECT_TRUE(fell) << "no fall in " << steps << " steps";
+  EXPECT_GT(steps, 10);
+  EXPECT_EQ(max_tilt_deg, node.stats().max_tilt_deg);
 }
 
 // The model mismatch moves the robot, not the wire: the states still carry the nominal model's

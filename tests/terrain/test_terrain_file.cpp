@@ -1,6 +1,7 @@
-// Terrain files (terrain/terrain_file.hpp): every kind of entry read, every refusal a ConfigError
-// naming the file and the key, findTerrainFile by name and by path, and every shipped file of
-// config/terrain loads into a Terrain.
+// Terrain files (terrain/terrain_file.hpp): every kind of entry read, every refusal a
+// TerrainFileError (terrain's own type: terrain/ includes nothing of config/) naming the file and
+// the key, findTerrainFile by name and by path, and every shipped file of config/terrain loads into
+// a Terrain.
 
 #include <gtest/gtest.h>
 
@@ -10,10 +11,11 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
-#include "config/config_error.hpp"
 #include "terrain/terrain_file.hpp"
 
 namespace stride::terrain {
@@ -21,14 +23,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The message of the ConfigError that parsing `yaml` throws ("" if none, or another type).
+// The programs catch std::exception (std::runtime_error) and print what(): the terrain's own error
+// type reaches them as config's ConfigError did, with the same message.
+static_assert(std::is_base_of_v<std::runtime_error, TerrainFileError>);
+
+// The message of the TerrainFileError that parsing `yaml` throws ("" if none, or another type).
 std::string refusal(const std::string& yaml, const std::string& source = "course.yaml") {
   try {
     parseTerrain(yaml, source);
-  } catch (const ConfigError& e) {
+  } catch (const TerrainFileError& e) {
     return e.what();
   } catch (const std::exception& e) {
-    return std::string("not a ConfigError: ") + e.what();
+    return std::string("not a TerrainFileError: ") + e.what();
   }
   return "";
 }
@@ -161,7 +167,7 @@ TEST(TerrainFile, Refusals) {
   for (const Case& c : cases) {
     const std::string what = refusal(c.yaml);
     ASSERT_FALSE(what.empty()) << "accepted:\n" << c.yaml;
-    EXPECT_EQ(what.find("not a ConfigError"), std::string::npos) << what;
+    EXPECT_EQ(what.find("not a TerrainFileError"), std::string::npos) << what;
     for (const std::string& s : c.said)
       EXPECT_NE(what.find(s), std::string::npos) << "'" << s << "' not in: " << what;
   }
@@ -181,7 +187,7 @@ TEST(TerrainFile, LoadsAFileAndRefusesAMissingOne) {
   try {
     loadTerrainFile(bad);
     ADD_FAILURE() << "a width of 0 accepted";
-  } catch (const ConfigError& e) {
+  } catch (const TerrainFileError& e) {
     EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("ramps[0].width"), std::string::npos) << e.what();
   }
@@ -189,7 +195,7 @@ TEST(TerrainFile, LoadsAFileAndRefusesAMissingOne) {
   try {
     loadTerrainFile(missing);
     ADD_FAILURE() << "a file that does not exist loaded";
-  } catch (const ConfigError& e) {
+  } catch (const TerrainFileError& e) {
     EXPECT_NE(std::string(e.what()).find(missing), std::string::npos) << e.what();
   }
 }
@@ -211,7 +217,7 @@ TEST(TerrainFile, FindByNameAndByPath) {
   try {
     findTerrainFile("mountain", dirs);
     ADD_FAILURE() << "found a terrain that is not there";
-  } catch (const ConfigError& e) {
+  } catch (const TerrainFileError& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("mountain"), std::string::npos) << what;
     EXPECT_NE(what.find((first.path / "terrain" / "mountain.yaml").string()), std::string::npos)
@@ -223,7 +229,7 @@ TEST(TerrainFile, FindByNameAndByPath) {
   try {
     findTerrainFile(missing, dirs);
     ADD_FAILURE() << "found a path that is not there";
-  } catch (const ConfigError& e) {
+  } catch (const TerrainFileError& e) {
     EXPECT_NE(std::string(e.what()).find(missing), std::string::npos) << e.what();
   }
 }

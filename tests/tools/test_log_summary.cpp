@@ -17,6 +17,7 @@
 #include "stride/command_t.hpp"
 #include "stride/mpc_status_t.hpp"
 #include "stride/robot_state_t.hpp"
+#include "stride/terrain_t.hpp"
 
 namespace {
 
@@ -56,6 +57,7 @@ std::string writeSession(const std::string& name, Robot robot) {
     if (robot == Robot::SlowInSegment1 && segment == 1) vx = 0.3;
     stride::robot_state_t s;
     s.utime = utime;
+    s.model_hash = 0;  // a bare base (the summary holds every state to the first one's model)
     s.nq = 7;
     s.nv = 6;
     const bool down = robot == Robot::FallsInSegment2 && t >= 7.0;
@@ -190,6 +192,7 @@ std::string writeLossySession() {
     if (i < 50 || i >= 60) {
       stride::robot_state_t s;
       s.utime = utime;
+      s.model_hash = 0;
       s.nq = 7;
       s.nv = 6;
       s.q = std::vector<double>{0, 0, 0.3, 0, 0, 0, 1};
@@ -318,4 +321,91 @@ TEST(LogSummary, ASignedSessionReadsAsThePlainOne) {
   EXPECT_EQ(r.json["segments"], plain.json["segments"]);
   EXPECT_EQ(r.json["command_rejects"], plain.json["command_rejects"]);
   EXPECT_EQ(r.json["distance_m"], plain.json["distance_m"]);
+}
+
+namespace {
+// Raw bytes into the log: a malformed message as a broken or hostile publisher would send it.
+void writeBytes(lcm::LogFile& log, const std::string& channel, std::vector<unsigned char> bytes,
+                std::int64_t utime) {
+  lcm::LogEvent e{};
+  e.timestamp = utime;
+  e.channel = channel;
+  e.datalen = static_cast<int32_t>(bytes.size());
+  e.data = bytes.data();
+  log.writeEvent(&e);
+}
+
+template <typename Message>
+std::vector<unsigned char> encoded(const Message& m) {
+  std::vector<unsigned char> b(m.getEncodedSize());
+  m.encode(b.data(), 0, static_cast<int>(b.size()));
+  return b;
+}
+
+stride::robot_state_t standing(std::int64_t utime) {
+  stride::robot_state_t s;
+  s.utime = utime;
+  s.model_hash = 0;
+  s.nq = 7;
+  s.nv = 6;
+  s.q = std::vector<double>{0, 0, 0.3, 0, 0, 0, 1};
+  s.v = std::vector<double>(6, 0.0);
+  s.ncontacts = 0;
+  return s;
+}
+}  // namespace
+
+// A log with malformed messages (issue 43): the summary reads them through the live receivers'
+// checks (messages/validate.hpp), so each is refused and counted by reason, never decoded on
+// trust, and the session reads as the clean one. The first event is a truncated state: the
+// summary learns the model from the first state that passes.
+TEST(LogSummary, MalformedMessagesInALogAreRefusedAndCounted) {
+  const std::string path = testing::TempDir() + "/malformed.lcmlog";
+  {
+    lcm::LogFile log(path, "w");
+    ASSERT_TRUE(log.good());
+    const std::int64_t u0 = 7000000;
+    std::vector<unsigned char> cut = encoded(standing(u0 - 10000));
+    cut.resize(cut.size() - 5);  // truncated
+    writeBytes(log, "STRIDE_STATE", cut, u0 - 10000);
+    for (int i = 0; i < 200; ++i) {
+      const std::int64_t utime = u0 + 10000L * i;
+      write(log, "STRIDE_STATE", standing(utime), utime);
+      if (i == 50) {
+        std::vector<unsigned char> lie = encoded(standing(utime + 1));
+        // ncontacts (after the hash, utime, model_hash, nq, nv, q[7], v[6]) says 2^30 flags
+        const std::size_t at = 8 + 8 + 8 + 4 + 4 + 8 * 13;
+        lie[at] = 0x40;
+        writeBytes(log, "STRIDE_STATE", lie, utime + 1);
+        stride::robot_state_t nan = standing(utime + 2);
+        nan.q[2] = std::numeric_limits<double>::quiet_NaN();
+        write(log, "STRIDE_STATE", nan, utime + 2);
+        stride::robot_state_t tilted = standing(utime + 3);
+        tilted.q[6] = 0.5;  // |quaternion| = 0.5: not a pose
+        write(log, "STRIDE_STATE", tilted, utime + 3);
+        stride::terrain_t map;
+        map.utime = utime;
+        map.origin_x = map.origin_y = 0.0;
+        map.resolution = 0.1;
+        map.rows = map.cols = 2;
+        map.height = {{0.0f, 0.0f}, {0.0f, 0.0f}};
+        std::vector<unsigned char> short_map = encoded(map);
+        short_map.resize(short_map.size() - 3);
+        writeBytes(log, "STRIDE_TERRAIN", short_map, utime);
+      }
+    }
+  }
+  const Summary r = summarize(path, "");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("log: 4 malformed states refused"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("log: 1 malformed elevation maps refused"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.json["refused_states"], 4) << r.json.dump(2);
+  EXPECT_EQ(r.json["refused_terrain_maps"], 1);
+  EXPECT_EQ(r.json["terrain_maps"], 0);
+  // None of them entered the session: upright, at its height, the 200 good states' 1.99 s.
+  EXPECT_EQ(r.json["fell"], false);
+  EXPECT_EQ(r.json["base_height_min_m"], 0.3);
+  EXPECT_EQ(r.json["max_tilt_deg"], 0.0);
+  EXPECT_NEAR(r.json["duration_s"].get<double>(), 1.99, 1e-9);
 }

@@ -1,6 +1,7 @@
 #include "tools/drive/closed_loop.hpp"
 
 #include "messages/wire_auth.hpp"
+#include "sim/fall.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -43,8 +44,7 @@ void drain(lcm::LCM& bus) {
 }  // namespace
 
 double tiltDeg(const Eigen::VectorXd& q) {
-  const double qx = q[3], qy = q[4];
-  return std::acos(std::clamp(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0)) * 180.0 / M_PI;
+  return sim::baseTilt(q[3], q[4], q[5], q[6]) * 180.0 / M_PI;  // the fall test's (sim/fall.hpp)
 }
 
 Run run(const ControllerConfig& config, const Options& options) {
@@ -79,7 +79,7 @@ Run run(const ControllerConfig& config, const Options& options) {
   std::vector<unsigned char> flood;
   if (options.flood_per_period > 0) {
     policy_t foreign;
-    const int nu = robot.model.nv - (robot.model.hasFreeFlyer() ? 6 : 0);
+    const int nu = actuatedDimension(robot.model);
     msg::shape(foreign, 8, robot.model.nq + 1, robot.model.nv + 1, nu + 1);
     foreign.model_hash = 0x5eed;
     foreign.source_id = 0xf100d;

@@ -18,12 +18,14 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "config/command_line.hpp"
 #include "controller/statistics.hpp"
 #include "messages/signing.hpp"
 #include "messages/validate.hpp"
+#include "solver/contact/contact_set.hpp"
 #include "stride/mpc_status_t.hpp"
 #include "stride/robot_state_t.hpp"
 #include "stride/terrain_t.hpp"
@@ -82,6 +84,83 @@ void printWindows(const std::vector<Window>& windows, double width, long long mi
                 us(w.prepare_ms, 0.99), us(w.work_ms, 0.5));
   }
 }
+
+// Messages of the log are read as the live receivers read them (messages/validate.hpp): the counts
+// and the size on the raw bytes (a signature trailer stripped), then the decode, then the content.
+// A malformed message is refused and counted by reason, never decoded on trust: lcm-gen's decoders
+// believe the counts (a count of 2^31 allocates that much).
+struct Refusals {
+  long by_reason[stride::msg::kRejectReasons] = {};
+  long total = 0;
+  void add(stride::msg::Reject why) {
+    ++by_reason[static_cast<int>(why)];
+    ++total;
+  }
+  // "2 (a size that does not match 1, NaN or infinity 1)", or "" for none.
+  std::string said() const {
+    std::string s;
+    for (int r = 0; r < stride::msg::kRejectReasons; ++r)
+      if (by_reason[r] > 0)
+        s += (s.empty() ? "" : ", ") +
+             std::string(stride::msg::describe(static_cast<stride::msg::Reject>(r))) + " " +
+             std::to_string(by_reason[r]);
+    return s;
+  }
+};
+
+// The payload of an event: a signed message's trailer stripped (messages/README.md, "Signing"):
+// the summary reads, it does not verify.
+int payloadSize(const lcm::LogEvent& e) {
+  return static_cast<int>(
+      stride::msg::unsignedPayloadSize(static_cast<const std::uint8_t*>(e.data), e.datalen));
+}
+
+// State estimates, checked as stride-mpc and stride-teleop check them. The summary has no robot:
+// as stride-teleop, it takes the model (hash, nq, nv) of the first state that passes, a floating
+// base (the summary is about where the base went), and holds every later state to it.
+class StateReader {
+ public:
+  // True when the event is a state of the model; then state() holds it.
+  bool read(const lcm::LogEvent& e) {
+    using stride::msg::Reject;
+    const int size = payloadSize(e);
+    Reject why = Reject::None;
+    stride::msg::WireModel model = model_;
+    if (!known_) {
+      stride::msg::WireClaim claim;
+      if (!stride::msg::readStateClaim(e.data, size, claim))
+        why = Reject::Undecodable;
+      else if (claim.nq != claim.nv + 1 || claim.nq < 7 || claim.nv > kMaxDofs)
+        why = Reject::WrongSize;  // not a floating base's state (q: position and quaternion)
+      else
+        model = {claim.hash, claim.nq, claim.nv, 0, "the log's first state"};
+    }
+    if (why == Reject::None)
+      why = stride::msg::checkStateWire(e.data, size, model, stride::kMaxContacts);
+    if (why == Reject::None && !stride::msg::decode(e.data, size, state_))
+      why = Reject::Undecodable;
+    if (why == Reject::None) why = stride::msg::checkState(state_, true);
+    if (why != Reject::None) {
+      refused_.add(why);
+      return false;
+    }
+    model_ = model;
+    known_ = true;
+    return true;
+  }
+  const stride::robot_state_t& state() const { return state_; }
+  const Refusals& refused() const { return refused_; }
+
+ private:
+  static constexpr int kMaxDofs = 1000;  // as stride-teleop's
+  stride::msg::WireModel model_;
+  bool known_ = false;
+  stride::robot_state_t state_;
+  Refusals refused_;
+};
+
+// Elevation maps, checked as stride-viz checks them (its bound on the cells: viz/server/feed.hpp).
+constexpr int kMaxTerrainCells = 512 * 512;
 
 // A command from the log, accepted as the controller would accept it: sizes on the wire, then the
 // decoded content, then a stamp newer than the last accepted one. Rejects are counted, not fatal.
@@ -193,8 +272,7 @@ int main(int argc, char** argv) {
   std::string log_path, summary_path,
       state_channel = "STRIDE_STATE", status_channel = "STRIDE_STATUS",
       command_channel = "STRIDE_COMMAND", terrain_channel = "STRIDE_TERRAIN", sim_summary_path;
-  double fall_height = 0.5, fall_tilt_deg = 60.0, window = 0.0, fault_end = -1.0,
-         fault_end_wall = -1.0;
+  double window = 0.0, fault_end = -1.0, fault_end_wall = -1.0;
   stride::logs::TrackingTolerance tolerance;
   stride::logs::SegmentOptions segment_options;
   bool check_tracking = false;
@@ -218,9 +296,11 @@ int main(int argc, char** argv) {
   app.add_option("--fault-end-wall", fault_end_wall,
                  "the same, as wall-clock seconds (date +%s.%N), placed on the log's clock by the "
                  "time the logger received the states");
-  app.add_option("--fall-height", fall_height,
+  // The mock robot's fall criterion and defaults (sim/fall.hpp).
+  app.add_option("--fall-height", segment_options.fall.height_fraction,
                  "fallen: base below this fraction of its first height");
-  app.add_option("--fall-tilt", fall_tilt_deg, "fallen: base tilted more than this [deg]");
+  app.add_option("--fall-tilt", segment_options.fall.max_tilt_deg,
+                 "fallen: base tilted more than this [deg]");
   app.add_option("--windows", window,
                  "also print the controller's timing and misses per window of this many seconds")
       ->check(CLI::Range(0.0, 3600.0));
@@ -257,14 +337,15 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 3600.0))
       ->capture_default_str();
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
-  segment_options.fall = {fall_height, fall_tilt_deg};
 
   lcm::LogFile log(log_path, "r");
   if (!log.good()) {
     std::fprintf(stderr, "stride-log-summary: cannot read '%s'\n", log_path.c_str());
     return 1;
   }
-  long states = 0, statuses = 0, bad = 0;
+  long states = 0, statuses = 0;
+  StateReader state_reader;
+  Refusals refused_statuses, refused_maps;
   bool fell = false, policy_seen = false;
   double x0 = 0, y0 = 0, x1 = 0, y1 = 0, z1 = 0, z_first = 0, z_min = INFINITY, z_max = -INFINITY;
   double max_tilt = 0.0, t_first = 0.0, t_last = 0.0;
@@ -290,12 +371,8 @@ int main(int argc, char** argv) {
   std::vector<std::int64_t> state_gaps_us;
   for (const lcm::LogEvent* e = log.readNextEvent(); e != nullptr; e = log.readNextEvent()) {
     if (e->channel == state_channel) {
-      stride::robot_state_t s;
-      if (s.decode(e->data, 0, static_cast<int>(e->datalen)) < 0 || s.nq < 7 ||
-          static_cast<int>(s.q.size()) != s.nq) {
-        ++bad;
-        continue;
-      }
+      if (!state_reader.read(*e)) continue;
+      const stride::robot_state_t& s = state_reader.state();
       if (last_state_utime >= 0 && s.utime > last_state_utime)
         state_gaps_us.push_back(s.utime - last_state_utime);
       last_state_utime = s.utime;
@@ -320,11 +397,9 @@ int main(int argc, char** argv) {
       b.t = static_cast<double>(s.utime - state_utime0) / 1e6;
       std::copy(s.q.begin(), s.q.begin() + 7, b.q.begin());
       b.ground = ground_last;
-      // Velocities feed the segments' averages: one NaN would spoil a whole segment.
-      if (s.nv >= 6 && stride::msg::checkState(s, true) == stride::msg::Reject::None) {
-        std::copy(s.v.begin(), s.v.begin() + 6, b.v.begin());
-        base_samples.push_back(b);
-      }
+      // Finite velocities (checkState): they feed the segments' averages.
+      std::copy(s.v.begin(), s.v.begin() + 6, b.v.begin());
+      base_samples.push_back(b);
       x1 = s.q[0];
       y1 = s.q[1];
       z1 = s.q[2];
@@ -337,10 +412,13 @@ int main(int argc, char** argv) {
       ++states;
     } else if (e->channel == terrain_channel) {
       stride::terrain_t m;
-      if (m.decode(e->data, 0, static_cast<int>(e->datalen)) < 0 || m.rows < 1 || m.cols < 1 ||
-          static_cast<int>(m.height.size()) != m.rows || !(m.resolution > 0.0) ||
-          !std::isfinite(m.resolution) || !std::isfinite(m.origin_x) ||
-          !std::isfinite(m.origin_y)) {
+      const int size = payloadSize(*e);
+      stride::msg::Reject why = stride::msg::checkTerrainWire(e->data, size, kMaxTerrainCells);
+      if (why == stride::msg::Reject::None && m.decode(e->data, 0, size) != size)
+        why = stride::msg::Reject::Undecodable;
+      if (why == stride::msg::Reject::None) why = stride::msg::checkTerrain(m);
+      if (why != stride::msg::Reject::None) {
+        refused_maps.add(why);
         ++bad_maps;
         continue;
       }
@@ -368,11 +446,12 @@ int main(int argc, char** argv) {
       stride::mpc_status_t st;
       // The string lengths on the bytes first (a corrupt one would make the decoder read past the
       // event).
-      const int size = static_cast<int>(stride::msg::unsignedPayloadSize(
-          static_cast<const std::uint8_t*>(e->data), static_cast<int>(e->datalen)));
-      if (stride::msg::checkStatusWire(e->data, size) != stride::msg::Reject::None ||
-          st.decode(e->data, 0, size) < 0) {
-        ++bad;
+      const int size = payloadSize(*e);
+      stride::msg::Reject why = stride::msg::checkStatusWire(e->data, size);
+      if (why == stride::msg::Reject::None && st.decode(e->data, 0, size) < 0)
+        why = stride::msg::Reject::Undecodable;
+      if (why != stride::msg::Reject::None) {
+        refused_statuses.add(why);
         continue;
       }
       ++statuses;
@@ -520,7 +599,15 @@ int main(int argc, char** argv) {
       pct(short_steps), pct(no_steps));
   if (!windows.empty())
     printWindows(windows, window, last_status.deadline_misses, last_status.late_ticks);
-  if (bad > 0) std::printf("log: %ld undecodable events skipped\n", bad);
+  // Refused as the live receivers refuse them (messages/validate.hpp), counted by reason.
+  const std::pair<const char*, const Refusals*> refusals[] = {
+      {"states", &state_reader.refused()},
+      {"status messages", &refused_statuses},
+      {"elevation maps", &refused_maps}};
+  for (const auto& [what, refused] : refusals)
+    if (refused->total > 0)
+      std::printf("log: %ld malformed %s refused (%s)\n", refused->total, what,
+                  refused->said().c_str());
   const std::string terrain_name =
       sim_summary.contains("terrain") && sim_summary["terrain"].is_string()
           ? sim_summary["terrain"].get<std::string>()
@@ -601,6 +688,10 @@ int main(int argc, char** argv) {
          {"footholds", "edge_footholds", "min_edge_distance_m", "sole_flat_fraction", "why"})
       j[key] = sim_summary.contains(key) ? sim_summary[key] : json(nullptr);
     j["terrain_maps"] = maps;
+    // Malformed messages the log holds, refused as the live receivers refuse them.
+    j["refused_states"] = state_reader.refused().total;
+    j["refused_statuses"] = refused_statuses.total;
+    j["refused_terrain_maps"] = refused_maps.total;
     j["terrain_map_top_m"] = std::isfinite(map_top) ? json(map_top) : json(nullptr);
     j["tick_latency"] = timingJson(latency);
     j["solve_time"] = timingJson(solve);

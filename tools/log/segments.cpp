@@ -37,7 +37,7 @@ double yaw(const std::array<double, 7>& q) {
 }
 
 double tilt(const std::array<double, 7>& q) {
-  return std::acos(std::clamp(rotation(q)[2][2], -1.0, 1.0));
+  return sim::baseTilt(q[3], q[4], q[5], q[6]);
 }
 
 std::array<double, 3> headingVelocity(const BaseSample& s) {
@@ -50,8 +50,7 @@ std::array<double, 3> headingVelocity(const BaseSample& s) {
 }
 
 bool fallen(const BaseSample& s, double first_height, const FallLimits& limits) {
-  return s.q[2] - s.ground < limits.height_fraction * first_height ||
-         tilt(s.q) * 180.0 / M_PI > limits.max_tilt_deg;
+  return sim::fallen(s.q[2] - s.ground, first_height, tilt(s.q), limits);
 }
 
 std::vector<Segment> segmentCommands(const std::vector<CommandSample>& commands,

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "sim/fall.hpp"
+
 namespace stride::logs {
 
 // One base state: t [s] on the session's clock, q = [x y z, qx qy qz qw] (world), v = [base linear,
@@ -43,13 +45,10 @@ std::array<double, 3> headingVelocity(const BaseSample& s);
 double yaw(const std::array<double, 7>& q);
 double tilt(const std::array<double, 7>& q);
 
-// The fall criterion, the mock robot's (sim/README.md): the base's height above the terrain under
-// it below height_fraction of the first sample's, or tilted more than max_tilt_deg. first_height:
-// the first sample's q[2] - ground.
-struct FallLimits {
-  double height_fraction = 0.5;
-  double max_tilt_deg = 60.0;
-};
+// The fall criterion, the mock robot's (sim/fall.hpp: one test, one set of defaults): the base's
+// height above the terrain under it below height_fraction of the first sample's, or tilted more
+// than max_tilt_deg. first_height: the first sample's q[2] - ground.
+using FallLimits = sim::FallLimits;
 bool fallen(const BaseSample& s, double first_height, const FallLimits& limits);
 
 struct Segment {

@@ -8,9 +8,9 @@
 #include <limits>
 #include <stdexcept>
 
+#include "messages/policy_interpolation.hpp"
 #include "messages/publisher.hpp"
 #include "messages/validate.hpp"
-#include "sim/policy.hpp"
 #include "sim/sim_node.hpp"
 #include "sim/simulator.hpp"
 #include "solver/multibody/frames.hpp"
@@ -37,7 +37,7 @@ enum Group { kCom = 0, kFeet, kForces, kTorque, kPosture, kContact, kGroups };
 void fillPolicy(const Model& model, const std::vector<const Eigen::VectorXd*>& x,
                 const std::vector<const Eigen::VectorXd*>& u,
                 const std::vector<const Eigen::MatrixXd*>& K, double t0, double dt, bool midpoint,
-                sim::Policy& policy) {
+                msg::Policy& policy) {
   const int P = static_cast<int>(x.size()), nq = model.nq, nv = model.nv;
   const int nu = static_cast<int>(u[0]->size());
   const int knots = midpoint ? 2 * P - 1 : P;
@@ -367,13 +367,13 @@ const std::vector<std::string>& StrideSimResult::stepColumns() {
 namespace {
 // The playback's reference, feed-forward and gains per contact sample, the policy of the whole
 // run (the walk, then standing) on the plan's clock.
-sim::Policy playbackPolicy(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,
+msg::Policy playbackPolicy(const Robot& robot, StrideProblem& sp, const StrideSolve& solve,
                            const StrideSimOptions& opt, StrideSimResult& res) {
   const Model& model = robot.model;
   const StridePlan& plan = sp.plan();
   const int nv = model.nv, N = plan.N;
   const double dt = plan.options.dt;
-  sim::Policy policy;
+  msg::Policy policy;
   std::vector<const Eigen::VectorXd*> px, pu;
   std::vector<const Eigen::MatrixXd*> pK;
   if (!opt.tvlqr) {  // the offline solve's gains; past the walk the node holds its last knot
@@ -454,7 +454,7 @@ sim::Policy playbackPolicy(const Robot& robot, StrideProblem& sp, const StrideSo
 // playback policy from the one at or before the estimate's time (robot clock: utime_base + t).
 class PlaybackAnswerer {
  public:
-  PlaybackAnswerer(const sim::Policy& policy, int knots, std::int64_t utime_base, Publisher& out,
+  PlaybackAnswerer(const msg::Policy& policy, int knots, std::int64_t utime_base, Publisher& out,
                    const std::string& policy_channel)
       : policy_(policy),
         knots_(std::min(knots, policy.knots)),
@@ -489,7 +489,7 @@ class PlaybackAnswerer {
   }
 
  private:
-  const sim::Policy& policy_;
+  const msg::Policy& policy_;
   int knots_;
   std::int64_t utime_base_;
   Publisher& out_;
@@ -509,7 +509,7 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
   const int nq = model.nq, nv = model.nv, nu = nv - 6, N = plan.N;
   const double dt = plan.options.dt;
   StrideSimResult res;
-  const sim::Policy policy = playbackPolicy(robot, sp, solve, opt, res);
+  const msg::Policy policy = playbackPolicy(robot, sp, solve, opt, res);
 
   // stride-sim's node and the playback on one in-process bus.
   lcm::LCM bus("memq://");
@@ -518,7 +518,7 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
   sim::SimOptions so;
   sim::SimNodeOptions no;
   no.state_rate_hz = opt.state_rate_hz;
-  no.fall_tilt_deg = 45.0;
+  no.fall.max_tilt_deg = 45.0;
   no.pushes = opt.pushes;
   sim::SimNode node(robot, so, no, publisher);
   node.subscribe(bus);
@@ -531,7 +531,7 @@ StrideSimResult simulateStrides(const Robot& robot, StrideProblem& sp, const Str
 
   const sim::Simulator& simulator = node.simulator();
   // What the node computes, for the trace (x_ref ⊖ x, τ before clamping) and the drift.
-  sim::PolicyEvaluator evaluator(model, nu);
+  msg::PolicyEvaluator evaluator(model, nu);
   Eigen::VectorXd tau(nu);
   const int steps_per_knot = static_cast<int>(std::lround(dt / so.dt));
   const int total = static_cast<int>(std::lround((N * dt + opt.hold_s) / so.dt));

@@ -28,6 +28,7 @@
 #include "controller/command_script.hpp"
 #include "messages/validate.hpp"
 #include "messages/wire_auth.hpp"
+#include "solver/contact/contact_set.hpp"
 #include "tools/teleop/keyboard_command.hpp"
 #include "tools/teleop/raw_terminal.hpp"
 #include "tools/teleop/script_player.hpp"
@@ -187,7 +188,7 @@ class ScriptInput {
       ++rejected_;
       return;
     }
-    if (stride::msg::checkStateWire(rbuf->data, size, model_, kMaxContacts) !=
+    if (stride::msg::checkStateWire(rbuf->data, size, model_, kMaxContactFlags) !=
             stride::msg::Reject::None ||
         !stride::msg::decode(rbuf->data, size, state_) ||
         stride::msg::checkState(state_, model_.nq == model_.nv + 1) != stride::msg::Reject::None) {
@@ -199,7 +200,8 @@ class ScriptInput {
   long rejected() const { return rejected_; }
 
  private:
-  static constexpr int kMaxContacts = 64, kMaxDofs = 1000;
+  // A state's contact flags: at most the contact limit (solver/contact/contact_set.hpp).
+  static constexpr int kMaxContactFlags = stride::kMaxContacts, kMaxDofs = 1000;
 
   bool learnModel(const void* buf, int size) {
     stride::msg::WireClaim claim;
@@ -209,7 +211,8 @@ class ScriptInput {
     const bool floating = nq == nv + 1 && nq >= 7;
     if (nv < 1 || nv > kMaxDofs || !(floating || nq == nv)) return false;
     const stride::msg::WireModel model{claim.hash, nq, nv, 0, "the first state's"};
-    if (stride::msg::checkStateWire(buf, size, model, kMaxContacts) != stride::msg::Reject::None)
+    if (stride::msg::checkStateWire(buf, size, model, kMaxContactFlags) !=
+        stride::msg::Reject::None)
       return false;
     model_ = model;
     return true;

@@ -10,8 +10,7 @@
 
 #include "config/model_hash.hpp"
 #include "messages/signing.hpp"
-#include "viz/server/frames.hpp"
-#include "solver/contact/knot_dynamics.hpp"
+#include "solver/multibody/model.hpp"
 #include "stride/command_t.hpp"
 #include "viz/server/frames.hpp"
 #include "viz/server/wire.hpp"

@@ -8,9 +8,9 @@
 
 #include "config/model_hash.hpp"
 #include "messages/validate.hpp"
-#include "solver/contact/knot_dynamics.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/kinematics.hpp"
+#include "solver/multibody/model.hpp"
 
 namespace stride::viz {
 
@@ -123,7 +123,7 @@ std::uint64_t FrameBuilder::setPolicy(const policy_t& p) {
   const Model& model = robot_.model;
   // Overwrites the oldest held policy.
   HeldPolicy& held = policies_[serial_ % kPolicies];
-  sim::Policy& policy = held.policy;
+  msg::Policy& policy = held.policy;
   if (policy.knots != p.knots) policy.resize(p.knots, model.nq, model.nv, nu_);
   // Times relative to knot 0: wall-clock stamps (~1.7e15 us) would cost the interpolation its
   // sub-microsecond resolution in double seconds.
@@ -160,12 +160,13 @@ bool FrameBuilder::estimateForces(const robot_state_t& state, std::uint64_t poli
   // one near -2^63 (undefined behaviour; the same value for every real pair of stamps).
   const double t =
       (static_cast<double>(state.utime) - static_cast<double>(held->knot0_utime)) * 1e-6;
-  if (evaluator_.evaluate(held->policy, t, q_, v_, u_) == sim::PolicyStatus::Invalid) {
+  if (evaluator_.evaluate(held->policy, t, q_, v_, u_) == msg::PolicyStatus::Invalid) {
     ++force_counts_.failed;
     return false;
   }
   u_ = u_.cwiseMax(-effort_).cwiseMin(effort_);
-  // τ = [0_6; u] for a floating base, u for a fixed one (solver/contact/knot_dynamics.hpp).
+  // τ = [0_6; u] for a floating base, u for a fixed one (actuatedDimension,
+  // solver/multibody/model.hpp).
   tau_.setZero();
   tau_.tail(nu_) = u_;
   for (int c = 0; c < nc; ++c) contacts_.setActive(c, state.contact[c] != 0);

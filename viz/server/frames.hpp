@@ -2,9 +2,9 @@
 // LCM messages -> the JSON frames the page draws (viz/README.md, "Frames"), computed with
 // Stride's own libraries: forward kinematics of the contact frames along a predicted trajectory,
 // and the contact forces at a measured state estimated with the KKT contact dynamics (paper eq. 10,
-// solver/contact) under the torque the robot applies there (sim/policy.hpp). Every input is a
-// message that already passed its checks (messages/validate.hpp, viz/server/wire.hpp) for the
-// robot given here.
+// solver/contact) under the torque the robot applies there (messages/policy_interpolation.hpp).
+// Every input is a message that already passed its checks (messages/validate.hpp,
+// viz/server/wire.hpp) for the robot given here.
 
 #include <array>
 #include <cstdint>
@@ -12,7 +12,7 @@
 #include <string>
 
 #include "config/robot_config.hpp"
-#include "sim/policy.hpp"
+#include "messages/policy_interpolation.hpp"
 #include "solver/contact/contact_dynamics.hpp"
 #include "stride/command_t.hpp"
 #include "stride/horizon_t.hpp"
@@ -86,7 +86,7 @@ class FrameBuilder {
 
   // A received policy in the evaluator's form, its times relative to knot 0.
   struct HeldPolicy {
-    sim::Policy policy;
+    msg::Policy policy;
     std::int64_t knot0_utime = 0;
     std::uint64_t serial = 0;  // 0: empty
   };
@@ -96,7 +96,7 @@ class FrameBuilder {
   Data data_;
   ContactSet contacts_;
   ContactData contact_data_;
-  sim::PolicyEvaluator evaluator_;
+  msg::PolicyEvaluator evaluator_;
   std::array<HeldPolicy, kPolicies> policies_;
   std::uint64_t serial_ = 0;
   Eigen::VectorXd q_, v_, u_, tau_, effort_;

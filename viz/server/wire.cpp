@@ -6,54 +6,13 @@
 #include <exception>
 #include <string>
 
+#include "messages/wire_reader.hpp"
+
 namespace stride::viz {
 
 namespace {
 
 constexpr int kTypeHash = 8;  // every LCM message starts with its 64-bit type fingerprint
-
-// Reads an encoded message front to back without trusting it: every read checks the bytes left.
-class ByteWalk {
- public:
-  ByteWalk(const void* buf, int size) : b_(static_cast<const unsigned char*>(buf)), size_(size) {}
-  bool skip(long n) {
-    if (n < 0 || at_ + n > size_) return false;
-    at_ += n;
-    return true;
-  }
-  bool int32(std::int32_t& out) {
-    if (at_ + 4 > size_) return false;
-    const unsigned char* p = b_ + at_;
-    const std::uint32_t u = (std::uint32_t(p[0]) << 24) | (std::uint32_t(p[1]) << 16) |
-                            (std::uint32_t(p[2]) << 8) | std::uint32_t(p[3]);
-    std::memcpy(&out, &u, 4);
-    at_ += 4;
-    return true;
-  }
-  bool int64(std::int64_t& out) {
-    std::int32_t hi, lo;
-    if (!int32(hi) || !int32(lo)) return false;
-    const std::uint64_t u = (std::uint64_t(std::uint32_t(hi)) << 32) | std::uint32_t(lo);
-    std::memcpy(&out, &u, 8);
-    return true;
-  }
-  // A string: its length counts the NUL, which must be there (a length < 1 would make lcm-gen's
-  // decoder construct a string of size_t(-1)).
-  bool string() {
-    std::int32_t len;
-    if (!int32(len) || len < 1 || at_ + len > size_ || b_[at_ + len - 1] != 0) return false;
-    at_ += len;
-    return true;
-  }
-  bool count(std::int32_t& n, long min_bytes_each) {
-    return int32(n) && n >= 0 && static_cast<long>(n) * min_bytes_each <= size_ - at_;
-  }
-  long at() const { return at_; }
-
- private:
-  const unsigned char* b_;
-  long size_, at_ = 0;
-};
 
 bool finite(const std::vector<double>& x) {
   for (double d : x)
@@ -76,7 +35,7 @@ bool decodeExactly(const void* buf, int size, Message& m) {
 }  // namespace
 
 msg::Reject decodeModel(const void* buf, int size, robot_model_t& m) {
-  ByteWalk w(buf, size);
+  msg::WireReader w(buf, size);
   std::int32_t dims[3], njoints, ncontacts;
   if (!w.skip(kTypeHash) || !w.string() || !w.skip(8)) return msg::Reject::Undecodable;
   for (std::int32_t& d : dims)
@@ -108,7 +67,7 @@ msg::Reject decodeModel(const void* buf, int size, robot_model_t& m) {
 msg::Reject decodeHorizon(const void* buf, int size, const msg::WireModel& model, int ncontacts,
                           int max_knots, bool floating_base, horizon_t& m) {
   // utime, model_hash, then the four counts.
-  ByteWalk w(buf, size);
+  msg::WireReader w(buf, size);
   std::int64_t hash;
   std::int32_t knots, nq, nc, nf;
   if (!w.skip(kTypeHash + 8) || !w.int64(hash) || !w.int32(knots) || !w.int32(nq) || !w.int32(nc) ||
