@@ -181,6 +181,19 @@ TEST(LogSummary, AFallIsItsOwnExitStatusWithOrWithoutCheckTracking) {
 }  // namespace
 
 namespace {
+// A free-flying base at rest 0.3 m up, of no robot in particular (model hash 0).
+stride::robot_state_t standing(std::int64_t utime) {
+  stride::robot_state_t s;
+  s.utime = utime;
+  s.model_hash = 0;
+  s.nq = 7;
+  s.nv = 6;
+  s.q = std::vector<double>{0, 0, 0.3, 0, 0, 0, 1};
+  s.v = std::vector<double>(6, 0.0);
+  s.ncontacts = 0;
+  return s;
+}
+
 // 2 s of a 100 Hz estimator and controller, with states 50-59 and status ticks 100-104 missing
 // from the log (as lcm-logger drops them under load).
 std::string writeLossySession() {
@@ -189,17 +202,7 @@ std::string writeLossySession() {
   EXPECT_TRUE(log.good());
   for (int i = 0; i < 200; ++i) {
     const std::int64_t utime = 7000000 + 10000L * i;
-    if (i < 50 || i >= 60) {
-      stride::robot_state_t s;
-      s.utime = utime;
-      s.model_hash = 0;
-      s.nq = 7;
-      s.nv = 6;
-      s.q = std::vector<double>{0, 0, 0.3, 0, 0, 0, 1};
-      s.v = std::vector<double>(6, 0.0);
-      s.ncontacts = 0;
-      write(log, "STRIDE_STATE", s, utime);
-    }
+    if (i < 50 || i >= 60) write(log, "STRIDE_STATE", standing(utime), utime);
     if (i < 100 || i >= 105) {
       stride::mpc_status_t st{};
       st.utime = utime;
@@ -342,17 +345,6 @@ std::vector<unsigned char> encoded(const Message& m) {
   return b;
 }
 
-stride::robot_state_t standing(std::int64_t utime) {
-  stride::robot_state_t s;
-  s.utime = utime;
-  s.model_hash = 0;
-  s.nq = 7;
-  s.nv = 6;
-  s.q = std::vector<double>{0, 0, 0.3, 0, 0, 0, 1};
-  s.v = std::vector<double>(6, 0.0);
-  s.ncontacts = 0;
-  return s;
-}
 }  // namespace
 
 // A log with malformed messages (issue 43): the summary reads them through the live receivers'

@@ -98,8 +98,9 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--w-orientation", o.w_orientation, "waypoint weight");
   app.add_option("--w-posture", o.w_posture, "joint posture weight");
-  CLI::Option* w_control_option = app.add_option(
-      "--w-control", o.w_control, "torque weight (default 1e-2 with rk4, 1e-4 with --integrator euler)");
+  CLI::Option* w_control_option =
+      app.add_option("--w-control", o.w_control,
+                     "torque weight (default 1e-2 with rk4, 1e-4 with --integrator euler)");
   app.add_option("--w-momentum", o.w_momentum, "centroidal momentum weight (0: off)");
   app.add_option("--margin", o.limit_margin, "fraction of the joint ranges allowed");
   app.add_option("--w-mirror", o.w_mirror,
