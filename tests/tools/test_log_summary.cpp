@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "messages/signing.hpp"
@@ -26,6 +27,17 @@ enum class Robot { Tracks, SlowInSegment1, FallsInSegment2 };
 // Signs what write() writes, when set (messages/README.md, "Signing").
 stride::msg::Signer* g_signer = nullptr;
 
+// Raw bytes into the log: a malformed message as a broken or hostile publisher would send it.
+void writeBytes(lcm::LogFile& log, const std::string& channel, std::vector<unsigned char> bytes,
+                std::int64_t utime) {
+  lcm::LogEvent e{};
+  e.timestamp = utime;
+  e.channel = channel;
+  e.datalen = static_cast<int32_t>(bytes.size());
+  e.data = bytes.data();
+  log.writeEvent(&e);
+}
+
 template <typename Message>
 void write(lcm::LogFile& log, const std::string& channel, const Message& m, std::int64_t utime) {
   std::vector<unsigned char> bytes(m.getEncodedSize() + stride::msg::kSignatureSize);
@@ -33,12 +45,7 @@ void write(lcm::LogFile& log, const std::string& channel, const Message& m, std:
   bytes.resize(
       g_signer ? g_signer->sign(channel.c_str(), bytes.data(), n, static_cast<int>(bytes.size()))
                : n);
-  lcm::LogEvent e{};
-  e.timestamp = utime;
-  e.channel = channel;
-  e.datalen = static_cast<int32_t>(bytes.size());
-  e.data = bytes.data();
-  log.writeEvent(&e);
+  writeBytes(log, channel, std::move(bytes), utime);
 }
 
 // 9 s at 100 Hz: stand 3 s, walk forward at 0.5 m/s 3 s, walk and turn at 1 rad/s 3 s, with the
@@ -327,16 +334,6 @@ TEST(LogSummary, ASignedSessionReadsAsThePlainOne) {
 }
 
 namespace {
-// Raw bytes into the log: a malformed message as a broken or hostile publisher would send it.
-void writeBytes(lcm::LogFile& log, const std::string& channel, std::vector<unsigned char> bytes,
-                std::int64_t utime) {
-  lcm::LogEvent e{};
-  e.timestamp = utime;
-  e.channel = channel;
-  e.datalen = static_cast<int32_t>(bytes.size());
-  e.data = bytes.data();
-  log.writeEvent(&e);
-}
 
 template <typename Message>
 std::vector<unsigned char> encoded(const Message& m) {
