@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "config/model_hash.hpp"
-#include "controller/gait.hpp"
+#include "locomotion/gait.hpp"
 #include "solver/contact/knot_dynamics.hpp"
 #include "solver/multibody/frames.hpp"
 

@@ -6,10 +6,10 @@
 #include <filesystem>
 #include <fstream>
 
-#include "controller/gait.hpp"
 #include "controller/mpc.hpp"
 #include "controller/mpc_node.hpp"
 #include "controller_cases.hpp"
+#include "locomotion/gait.hpp"
 #include "sanitizers.hpp"
 
 namespace stride {

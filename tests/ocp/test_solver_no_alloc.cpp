@@ -15,7 +15,7 @@
 #include <cstdlib>
 #include <limits>
 
-#include "ocp/locomotion_cases.hpp"
+#include "locomotion/locomotion_cases.hpp"
 #include "solver/ddp/solver.hpp"
 
 namespace stride {

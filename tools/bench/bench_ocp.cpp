@@ -21,7 +21,7 @@
 #include "solver/ocp/knot.hpp"
 #include "solver/ocp/residual_frame.hpp"
 #include "solver/ocp/residual_state.hpp"
-#include "tests/ocp/locomotion_cases.hpp"
+#include "tests/locomotion/locomotion_cases.hpp"
 
 namespace stride::bench {
 namespace {

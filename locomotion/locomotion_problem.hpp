@@ -37,7 +37,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "solver/ocp/gait_generator.hpp"
+#include "locomotion/gait_generator.hpp"
 #include "solver/ocp/knot.hpp"
 #include "solver/ocp/problem.hpp"
 

@@ -20,9 +20,9 @@
 #include <string>
 
 #include "config/robot_config.hpp"
+#include "locomotion/gait_generator.hpp"
 #include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/frames.hpp"
-#include "solver/ocp/gait_generator.hpp"
 #include "terrain/steppability.hpp"
 
 namespace stride {

@@ -1,4 +1,4 @@
-#include "solver/ocp/gait_generator.hpp"
+#include "locomotion/gait_generator.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
