@@ -11,6 +11,7 @@ set(STRIDE_EXPORTED_MODULES
   multibody contact ocp ddp   # solver/: the numerical core, free of I/O
   terrain                     # terrain files, surface and contact queries, elevation grids
   config                      # robot YAML (+ URDF, SRDF) loader
+  locomotion                  # the planner: gaits, contact timeline, gait generator, problem
   messages                    # LCM types and their validation
   policy                      # a received policy interpolated: u_ff + K (x_ref ⊖ x) (messages/)
   signing                     # authenticated messages (libsodium's HMAC, OpenSSL's SHA-256)
@@ -33,8 +34,9 @@ set_target_properties(stride_solver PROPERTIES EXPORT_NAME solver)
 add_library(Stride::solver ALIAS stride_solver)
 # Stride::stride: everything.
 add_library(stride_all INTERFACE)
-target_link_libraries(stride_all INTERFACE stride_solver stride_terrain stride_config stride_messages
-                      stride_policy stride_signing stride_controller stride_sim stride_sim_node stride_drive)
+target_link_libraries(stride_all INTERFACE stride_solver stride_terrain stride_config
+                      stride_locomotion stride_messages stride_policy stride_signing stride_controller
+                      stride_sim stride_sim_node stride_drive)
 set_target_properties(stride_all PROPERTIES EXPORT_NAME stride)
 add_library(Stride::stride ALIAS stride_all)
 list(APPEND _stride_targets stride_solver stride_all)
@@ -50,8 +52,8 @@ set(STRIDE_INCLUDE_VIEW ${PROJECT_BINARY_DIR}/include)
 set(_stride_public_list ${PROJECT_BINARY_DIR}/stride_public_headers.txt)
 set(_stride_view_headers "")
 set(_stride_public "")
-foreach(_dir solver/multibody solver/contact solver/ocp solver/ddp terrain config messages controller sim
-             tools/log tools/drive)
+foreach(_dir solver/multibody solver/contact solver/ocp solver/ddp terrain config locomotion messages
+             controller sim tools/log tools/drive)
   file(GLOB _headers CONFIGURE_DEPENDS ${STRIDE_ROOT}/${_dir}/*.hpp)
   # The programs' shared options (stride_sim_cli) are not a library a user links.
   list(FILTER _headers EXCLUDE REGEX "sim/command_line.hpp$")

@@ -201,10 +201,10 @@ void putOnTheGround(Robot& robot, const std::string& base_source) {
     std::cerr << w.str();
   }
 }
-// The gaits pair feet by their index (gait.cpp: trot lifts 0 and 3, then 1 and 2; pace 0 and 2):
-// four feet must be listed front-left, front-right, hind-left, hind-right and two left, right. A
-// HyQ listed FL, HL, FR, HR trotted as a bound and was still "tracked" (issue 34). Judged by the
-// feet's positions in the base frame at the default posture.
+// The gaits pair feet by their index (locomotion/gait.cpp: trot lifts 0 and 3, then 1 and 2; pace 0
+// and 2): four feet must be listed front-left, front-right, hind-left, hind-right and two left,
+// right. A HyQ listed FL, HL, FR, HR trotted as a bound and was still "tracked" (issue 34). Judged
+// by the feet's positions in the base frame at the default posture.
 void checkFootOrder(const Robot& robot) {
   const Model& model = robot.model;
   const int n = static_cast<int>(robot.contacts.size());

@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "solver/ocp/gait_generator.hpp"
+#include "locomotion/gait_generator.hpp"
 #include "stride/command_t.hpp"
 
 namespace stride {

@@ -10,16 +10,16 @@
 
 #include "config/robot_config.hpp"
 #include "controller/command.hpp"
-#include "controller/gait.hpp"
+#include "locomotion/gait.hpp"
+#include "locomotion/locomotion_problem.hpp"
 #include "messages/hold_pd.hpp"
 #include "solver/ddp/solver.hpp"
-#include "solver/ocp/locomotion.hpp"
 #include "terrain/steppability.hpp"
 
 namespace stride {
 
-// How the robot steps: the timing of each gait (gait.hpp), or a planner's plan file, and where the
-// feet land (solver/ocp/gait_generator.hpp). Times in s.
+// How the robot steps: the timing of each gait (locomotion/gait.hpp), or a planner's plan file, and
+// where the feet land (locomotion/gait_generator.hpp). Times in s.
 struct GaitConfig {
   std::map<std::string, GaitTiming> timing;  // by gait name: trot, walk, pace
   std::string plan_file;  // a contact plan file instead of the gaits (resolved path)

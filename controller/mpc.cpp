@@ -4,20 +4,17 @@
 #include <cmath>
 
 #include "config/model_hash.hpp"
-#include "controller/gait.hpp"
+#include "locomotion/gait.hpp"
 #include "messages/hold_pd.hpp"
 #include "solver/contact/knot_dynamics.hpp"
 #include "solver/multibody/frames.hpp"
 
 namespace stride {
 
-// The contact limit is one number (solver/contact/contact_set.hpp): the wire's int32 masks carry it
-// and the locomotion problem's own copy (solver/ocp/locomotion.hpp, to refer to it once that file
-// has moved to locomotion/) agrees.
+// The contact limit is one number (solver/contact/contact_set.hpp): the wire's int32 masks carry
+// it.
 static_assert(kMaxContacts <= msg::kContactMaskBits,
               "policy_t.phase, mpc_status_t.phase, horizon_t.contact_mask: bit c for contact c");
-static_assert(LocomotionProblem::kMaxContacts == kMaxContacts,
-              "LocomotionProblem::kMaxContacts is the contact limit of contact_set.hpp");
 
 namespace {
 // The gait reported while a planner's plan replaces the gaits.

@@ -32,9 +32,9 @@
 
 #include "controller/controller_config.hpp"
 #include "controller/slow_host.hpp"
+#include "locomotion/locomotion_problem.hpp"
 #include "messages/validate.hpp"
 #include "solver/ddp/solver.hpp"
-#include "solver/ocp/locomotion.hpp"
 #include "terrain/elevation_map.hpp"
 #include "terrain/steppability.hpp"
 

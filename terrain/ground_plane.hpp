@@ -1,7 +1,7 @@
 #pragma once
 // The ground the feet feel (issue 31, blind mode): a plane z = a + b x + c y through the feet in
 // contact, as legged robots without perception estimate the terrain (the gait generator filters it
-// across plans: solver/ocp/gait_generator.cpp). Fixed-size: no allocation, no throw.
+// across plans: locomotion/gait_generator.cpp). Fixed-size: no allocation, no throw.
 
 #include <Eigen/Core>
 

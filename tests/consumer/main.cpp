@@ -1,6 +1,7 @@
 // Stride as a library: loads a robot with the config loader, runs its contact dynamics once and
-// one FDDP iteration of a short standing problem, and checks the results' sizes and finiteness.
-// Also checks a truncated message against the LCM types' checks (Stride::messages).
+// one FDDP iteration of a short standing problem, and checks the results' sizes and finiteness;
+// plays the robot's trot on the planner's contact timeline (Stride::locomotion). Also checks a
+// truncated message against the LCM types' checks (Stride::messages).
 // Usage: stride-consumer ROBOT.yaml; exit 0 when every check passes. Objects holding Eigen members
 // are made in the library and destroyed here (Robot, ContactData, the knots): with an Eigen
 // alignment that differs between the two, this is where it crashed (issue 17).
@@ -13,6 +14,10 @@
 // Stride's headers as a user includes them: under stride/ (short_include.cpp, which must not
 // compile, tries the in-tree form). The LCM types too (<stride/robot_state_t.hpp>).
 #include <stride/config/robot_config.hpp>
+#include <stride/locomotion/contact_timeline.hpp>
+#include <stride/locomotion/gait.hpp>
+// The planner's whole header chain (the gait generator's, the terrain's included) through the view.
+#include <stride/locomotion/locomotion_problem.hpp>
 #include <stride/messages/validate.hpp>
 #include <stride/robot_state_t.hpp>
 #include <stride/solver/contact/contact_dynamics.hpp>
@@ -85,6 +90,15 @@ int run(const char* yaml) {
   failures += check(finite, "solver: finite");
   failures +=
       check(solver.statsCount() == 1 && solver.stats()[0].step > 0.0, "solver: a step was taken");
+
+  // The planner: the robot's trot (4 feet: the front-left and hind-right pair lifts first) on a
+  // contact timeline.
+  ContactTimeline timeline(contacts);
+  timeline.reset(timeline.addPattern(makeGaitPattern("trot", GaitTiming{0.1, 0.2}, robot.contacts)),
+                 0.0);
+  failures += check(contacts.size() == 4 && timeline.mask(0.05) == 0b1111u &&
+                        timeline.mask(0.15) == 0b0110u && timeline.mask(0.45) == 0b1001u,
+                    "locomotion: a trot's contact timeline");
 
   // The generated LCM types and their checks: four bytes are no command.
   const unsigned char truncated[4] = {1, 2, 3, 4};

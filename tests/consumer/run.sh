@@ -23,6 +23,7 @@ case "$mode" in
     # What the package promises besides the libraries.
     for f in bin/stride-mpc bin/stride-sim bin/stride-drive bin/stride-log-summary \
              include/stride/solver/multibody/rnea.hpp include/stride/config/robot_config.hpp \
+             include/stride/locomotion/locomotion_problem.hpp include/stride/terrain/terrain.hpp \
              include/stride/robot_state_t.hpp lib/cmake/Stride/StrideTargets.cmake \
              share/stride/messages/robot_state_t.lcm \
              share/stride/config/robots/stride_quad/stride_quad.yaml \

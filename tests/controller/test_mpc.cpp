@@ -1,4 +1,4 @@
-// The controller core: configuration, gait plans, ticks, fallbacks.
+// The controller core: configuration, plan files, ticks, fallbacks.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <fstream>
 
-#include "controller/gait.hpp"
 #include "controller/mpc.hpp"
 #include "controller/mpc_node.hpp"
 #include "controller_cases.hpp"
@@ -116,75 +115,20 @@ TEST(MpcNode, PolicyLargerThanADatagramIsWarnedAbout) {
   EXPECT_NE(w.find("policy_knots: 6 fits in one"), std::string::npos) << w;
 }
 
-TEST(Gait, Patterns) {
-  const Robot quad =
-      loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
-  EXPECT_EQ(gaitNames(4), (std::vector<std::string>{"stand", "trot", "walk", "pace"}));
-  EXPECT_EQ(gaitNames(2), (std::vector<std::string>{"stand", "walk"}));
-  EXPECT_EQ(gaitNames(3), (std::vector<std::string>{"stand"}));
-  const GaitTiming timing{0.1, 0.2};
-  auto lifted = [&](const ContactPlan& plan, double t) {
-    std::string up;
-    for (const auto& c : quad.contacts)
-      if (!plan.isClosed(c.frame, t)) up += c.frame.substr(0, 2) + " ";
-    return up;
-  };
-  const ContactPlan trot = makeGaitPattern("trot", timing, quad.contacts);
-  EXPECT_TRUE(trot.cyclic);
-  EXPECT_DOUBLE_EQ(trot.duration(), 0.6);
-  EXPECT_EQ(lifted(trot, 0.05), "");
-  EXPECT_EQ(lifted(trot, 0.15), "FL HR ");
-  EXPECT_EQ(lifted(trot, 0.45), "FR HL ");
-  EXPECT_EQ(lifted(trot, 0.6 + 0.15), "FL HR ");  // repeats
-  const ContactPlan pace = makeGaitPattern("pace", timing, quad.contacts);
-  EXPECT_EQ(lifted(pace, 0.15), "FL HL ");
-  EXPECT_EQ(lifted(pace, 0.45), "FR HR ");
-  const ContactPlan walk = makeGaitPattern("walk", timing, quad.contacts);
-  EXPECT_DOUBLE_EQ(walk.duration(), 1.2);
-  EXPECT_EQ(lifted(walk, 0.15), "HL ");
-  EXPECT_EQ(lifted(walk, 0.45), "FL ");
-  EXPECT_EQ(lifted(walk, 0.75), "HR ");
-  EXPECT_EQ(lifted(walk, 1.05), "FR ");
-  const ContactPlan stand = makeGaitPattern("stand", timing, quad.contacts);
-  EXPECT_EQ(lifted(stand, 12.3), "");
-
-  const Robot biped =
-      loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml");
-  const ContactPlan steps = makeGaitPattern("walk", timing, biped.contacts);
-  EXPECT_TRUE(steps.isClosed("R_sole", 0.15));
-  EXPECT_FALSE(steps.isClosed("L_sole", 0.15));
-  EXPECT_FALSE(steps.isClosed("R_sole", 0.45));
-  EXPECT_THROW(makeGaitPattern("trot", timing, biped.contacts), ConfigError);
-  EXPECT_THROW(makeGaitPattern("gallop", timing, quad.contacts), ConfigError);
-  EXPECT_THROW(makeGaitPattern("trot", GaitTiming{0.0, 0.2}, quad.contacts), ConfigError);
-}
-
-TEST(Gait, PlanFile) {
-  const std::string path = std::string(STRIDE_CONFIG_DIR) + "/plans/quad_trot_then_stand.yaml";
-  const ContactPlan plan = loadContactPlan(path);
-  EXPECT_EQ(plan.phases.size(), 14u);
-  EXPECT_FALSE(plan.isClosed("FL_foot", 1.15));
-  EXPECT_TRUE(plan.isClosed("FL_foot", 10.0));
-  const std::string bad = ::testing::TempDir() + "/stride_bad_plan.yaml";
-  std::ofstream(bad) << "phases:\n  - {duration: -1, contacts: [FL_foot]}\n";
-  EXPECT_THROW(loadContactPlan(bad), ConfigError);
-  std::ofstream(bad) << "phases:\n  - {contacts: [FL_foot]}\n";
-  try {
-    loadContactPlan(bad);
-    FAIL();
-  } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("phase 0"), std::string::npos) << e.what();
-  }
-  EXPECT_THROW(loadContactPlan("/nonexistent/plan.yaml"), ConfigError);
-  // The controller takes it from its YAML, and refuses one that names feet the robot lacks.
+// A plan file in the controller's YAML (the plan files themselves, locomotion/gait.hpp's
+// loadContactPlan: tests/locomotion/test_gait.cpp) replaces the gaits; one that names feet the
+// robot lacks is refused when the controller is made.
+TEST(Mpc, TakesThePlanFileOfItsConfiguration) {
   ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
-  config.gait.plan_file = path;
+  config.gait.plan_file = std::string(STRIDE_CONFIG_DIR) + "/plans/quad_trot_then_stand.yaml";
   Mpc mpc(config);
   robot_state_t s = standingState(mpc.robot(), 0);
   ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
   EXPECT_EQ(mpc.status().gait, "plan");
   const ContactTimeline& timeline = mpc.reference()->timeline();
   EXPECT_EQ(timeline.pattern(timeline.patternAt(0.0)).phases(), 14);
+  // Its own file: test_gait's runs beside it under ctest -j.
+  const std::string bad = ::testing::TempDir() + "/stride_plan_with_other_feet.yaml";
   std::ofstream(bad) << "phases:\n  - {duration: 1, contacts: [L_sole]}\n";
   config.gait.plan_file = bad;
   EXPECT_THROW(Mpc{config}, ConfigError);

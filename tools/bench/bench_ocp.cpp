@@ -5,8 +5,9 @@
 // with zero velocity and zero controls; running cost = placement of an end-effector frame to
 // (identity, (0, 0, 0.4)) with weight 1 plus state and control regularization with weight 1e-4;
 // terminal cost = the same placement.
-// fddp_iteration/<problem>: one full FDDP iteration with its line search on the locomotion problems
-// of the tests.
+// fddp_iteration/solo12_steps/<threads>: one full FDDP iteration with its line search on the
+// solver's own fixture (tests/ocp/shooting_cases.hpp: solo12 stepping, built from solver/ocp types
+// alone); the locomotion problems' are bench_locomotion.cpp's.
 
 #include <benchmark/benchmark.h>
 
@@ -21,7 +22,7 @@
 #include "solver/ocp/knot.hpp"
 #include "solver/ocp/residual_frame.hpp"
 #include "solver/ocp/residual_state.hpp"
-#include "tests/ocp/locomotion_cases.hpp"
+#include "tests/ocp/shooting_cases.hpp"
 
 namespace stride::bench {
 namespace {
@@ -165,21 +166,19 @@ void runPart(benchmark::State& state, const KnotsSpec& spec, Part part) {
   }
 }
 
-// fddp_iteration/<problem>/<threads>: solver.solve(1) from the problem's standing warm start,
+// fddp_iteration/solo12_steps/<threads>: solver.solve(1) from the fixture's standing warm start,
 // restored (trajectory and regularization) outside the timing before every iteration, so each
 // timed iteration does the same work: calcDiff, backward pass, line search.
-void fddpIteration(benchmark::State& state, loco_cases::Problem which) {
+void fddpIteration(benchmark::State& state) {
   const char* env = std::getenv("STRIDE_SHARED_DIR");
   const std::string shared = env ? env : STRIDE_SHARED_DIR;
-  loco_cases::Case c = loco_cases::make(which, shared);
-  c.loco->problem().setThreads(static_cast<int>(state.range(0)));
-  Solver solver(c.loco->problem(), SolverKind::Fddp);
-  std::vector<Eigen::VectorXd> xs, us;
-  c.warmStart(xs, us);
+  auto p = shooting_cases::solo12Steps(shared);
+  p->problem->setThreads(static_cast<int>(state.range(0)));
+  Solver solver(*p->problem, SolverKind::Fddp);
   const double reg = solver.regularization();
   for (auto _ : state) {
     state.PauseTiming();
-    solver.setWarmStart(xs, us);
+    solver.setWarmStart(p->xs, p->us);
     solver.setRegularization(reg);
     state.ResumeTiming();
     solver.solve(1);
@@ -201,13 +200,11 @@ const bool registered = [] {
           ->Arg(2)
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime();
-  for (loco_cases::Problem p : {loco_cases::Problem::SoloTrot, loco_cases::Problem::TalosStep})
-    benchmark::RegisterBenchmark((std::string("fddp_iteration/") + loco_cases::name(p)).c_str(),
-                                 [p](benchmark::State& s) { fddpIteration(s, p); })
-        ->Arg(1)
-        ->Arg(2)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime();
+  benchmark::RegisterBenchmark("fddp_iteration/solo12_steps", fddpIteration)
+      ->Arg(1)
+      ->Arg(2)
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
   return true;
 }();
 

@@ -11,8 +11,8 @@
 #include <benchmark/benchmark.h>
 
 #include "controller/controller_config.hpp"
-#include "controller/gait.hpp"
-#include "solver/ocp/locomotion.hpp"
+#include "locomotion/gait.hpp"
+#include "locomotion/locomotion_problem.hpp"
 #include "tools/bench/controller_source.hpp"
 
 namespace stride::bench {

@@ -22,7 +22,7 @@
 
 #include "config/command_line.hpp"
 #include "controller/command_script.hpp"
-#include "controller/gait.hpp"
+#include "locomotion/gait.hpp"
 #include "sim/command_line.hpp"
 #include "terrain/terrain_file.hpp"
 #include "tools/drive/closed_loop.hpp"

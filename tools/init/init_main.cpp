@@ -17,7 +17,7 @@
 #include "config/command_line.hpp"
 #include "config/robot_config.hpp"
 #include "controller/command_script.hpp"
-#include "controller/gait.hpp"
+#include "locomotion/gait.hpp"
 #include "sim/disturbances.hpp"
 #include "tools/drive/closed_loop.hpp"
 #include "tools/init/robot_setup.hpp"

@@ -31,8 +31,8 @@
 #include <array>
 #include <vector>
 
+#include "locomotion/contact_plan.hpp"
 #include "solver/multibody/model.hpp"
-#include "solver/ocp/contact_plan.hpp"
 
 namespace stride {
 

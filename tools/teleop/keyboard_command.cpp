@@ -4,12 +4,12 @@
 #include <cmath>
 #include <cstdio>
 
-#include "controller/gait.hpp"
+#include "locomotion/gait.hpp"
 
 namespace stride::teleop {
 
 const std::vector<std::string>& gaitNames(GaitSet gaits) {
-  // The controller's own lists (controller/gait.hpp), by number of contacts.
+  // The controller's own lists (locomotion/gait.hpp), by number of contacts.
   static const std::vector<std::string> quadruped = stride::gaitNames(4);
   static const std::vector<std::string> biped = stride::gaitNames(2);
   return gaits == GaitSet::Quadruped ? quadruped : biped;

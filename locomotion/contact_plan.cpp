@@ -1,4 +1,4 @@
-#include "solver/ocp/contact_plan.hpp"
+#include "locomotion/contact_plan.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -9,10 +9,10 @@
 #include <memory>
 #include <string>
 
+#include "locomotion/locomotion_problem.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/srdf.hpp"
 #include "solver/multibody/urdf.hpp"
-#include "solver/ocp/locomotion.hpp"
 
 namespace stride {
 namespace loco_cases {

@@ -2,7 +2,7 @@
 // The references a commanded robot walks by, re-planned every tick from the measured state and a
 // body velocity command: when each foot is down (a ContactTimeline of gait patterns), where each
 // touch-down lands, the swing arcs between footholds, and the base's pose and twist over the
-// horizon. The locomotion problem (locomotion.hpp) reads them knot by knot.
+// horizon. The locomotion problem (locomotion_problem.hpp) reads them knot by knot.
 //
 // Body height: the base is raised (or lowered) by the command's height offset, and the joints'
 // reference follows it: the posture that keeps every foot on its nominal place with the base at
@@ -42,8 +42,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "locomotion/contact_timeline.hpp"
 #include "solver/multibody/data.hpp"
-#include "solver/ocp/contact_timeline.hpp"
 #include "terrain/steppability.hpp"
 
 namespace stride {

@@ -13,7 +13,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "ocp/locomotion_cases.hpp"
+#include "locomotion_cases.hpp"
 #include "solver/contact/contact_dynamics.hpp"
 #include "solver/ddp/solver.hpp"
 #include "solver/ocp/residual_frame.hpp"

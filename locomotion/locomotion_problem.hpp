@@ -37,7 +37,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "solver/ocp/gait_generator.hpp"
+#include "locomotion/gait_generator.hpp"
 #include "solver/ocp/knot.hpp"
 #include "solver/ocp/problem.hpp"
 
@@ -99,13 +99,12 @@ struct LocomotionOptions {
 
 class LocomotionProblem {
  public:
-  // Every contact a gait may close (at most kMaxContacts; forces are expected
-  // LOCAL_WORLD_ALIGNED, for which the flat-ground cone needs no rotation; LOCAL forces get the
-  // cone in the foot's axes). x_nominal: the nominal posture (the joints' references, the holding
-  // torques). Throws std::invalid_argument for an x_nominal of the wrong size or options out of
-  // range (dt ≤ 0, knots < 1, a grid segment without knots or duration, μ ≤ 0, weights of the
-  // wrong size), or too many contacts.
-  static constexpr int kMaxContacts = 8;
+  // Every contact a gait may close (at most stride::kMaxContacts, contact_set.hpp; forces are
+  // expected LOCAL_WORLD_ALIGNED, for which the flat-ground cone needs no rotation; LOCAL forces
+  // get the cone in the foot's axes). x_nominal: the nominal posture (the joints' references, the
+  // holding torques). Throws std::invalid_argument for an x_nominal of the wrong size or options
+  // out of range (dt ≤ 0, knots < 1, a grid segment without knots or duration, μ ≤ 0, weights of
+  // the wrong size), or too many contacts.
   LocomotionProblem(const Model& model, const ContactSet& contacts,
                     const Eigen::VectorXd& x_nominal, const LocomotionOptions& options = {});
 

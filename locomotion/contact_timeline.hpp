@@ -12,7 +12,7 @@
 #include <limits>
 #include <vector>
 
-#include "solver/ocp/contact_plan.hpp"
+#include "locomotion/contact_plan.hpp"
 
 namespace stride {
 

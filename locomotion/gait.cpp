@@ -1,4 +1,4 @@
-#include "controller/gait.hpp"
+#include "locomotion/gait.hpp"
 
 #include <yaml-cpp/yaml.h>
 

@@ -9,7 +9,7 @@
 //                    where they were measured; the Raibert correction of the next touch-down only;
 //                    the leash of the base reference and of the footholds; bad input refused.
 // The allocation-free tick (plan, queries, switches, LocomotionProblem::update) is checked in
-// test_solver_no_alloc.cpp, whose binary counts allocations.
+// test_locomotion_no_alloc.cpp, whose binary counts allocations.
 
 #include <gtest/gtest.h>
 
@@ -20,9 +20,9 @@
 #include <string>
 
 #include "config/robot_config.hpp"
+#include "locomotion/gait_generator.hpp"
 #include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/frames.hpp"
-#include "solver/ocp/gait_generator.hpp"
 #include "terrain/steppability.hpp"
 
 namespace stride {

@@ -1,4 +1,4 @@
-#include "solver/ocp/gait_generator.hpp"
+#include "locomotion/gait_generator.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -36,8 +36,8 @@ const Eigen::Vector2d kNoPlace =
     Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
 // A base reference slower than this [m/s] has no direction of travel for the footholds.
 constexpr double kStill = 0.01;
-// Feet a generator plans for (the ground plane's fit takes them on the stack).
-constexpr int kMaxFeet = 8;
+// Feet a generator plans for: the contact limit (the ground plane's fit takes them on the stack).
+constexpr int kMaxFeet = kMaxContacts;
 
 double yawOf(double qx, double qy, double qz, double qw) {
   return std::atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz));

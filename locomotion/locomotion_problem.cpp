@@ -1,4 +1,4 @@
-#include "solver/ocp/locomotion.hpp"
+#include "locomotion/locomotion_problem.hpp"
 
 #include <omp.h>
 
@@ -129,7 +129,7 @@ LocomotionProblem::LocomotionProblem(const Model& model, const ContactSet& conta
   swing_ = w.swing;
   swing_xy_ = swing_xy;
   std::vector<std::unique_ptr<ActionModel>> running;
-  // One multibody workspace per thread the problem may use (knots.hpp, SharedWorkspace).
+  // One multibody workspace per thread the problem may use (solver/ocp/knot.hpp, SharedWorkspace).
   auto workspace = std::make_shared<SharedWorkspace>(model, std::max(omp_get_max_threads(), 2));
   for (int k = 0; k < options_.knots; ++k) {
     auto knot = std::make_unique<KnotModel>(model, contacts_, options_.dt, workspace);

@@ -1,6 +1,6 @@
 #pragma once
 // The gaits a commanded robot walks with, as cyclic contact patterns for its ContactTimeline
-// (solver/ocp/contact_timeline.hpp). Every pattern starts with a phase where every foot is down,
+// (locomotion/contact_timeline.hpp). Every pattern starts with a phase where every foot is down,
 // so the controller can switch between gaits there.
 //
 //   quadruped (4 contacts, YAML order front-left, front-right, hind-left, hind-right):
@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "config/robot_config.hpp"
-#include "solver/ocp/contact_plan.hpp"
+#include "locomotion/contact_plan.hpp"
 
 namespace stride {
 

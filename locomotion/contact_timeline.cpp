@@ -1,4 +1,4 @@
-#include "solver/ocp/contact_timeline.hpp"
+#include "locomotion/contact_timeline.hpp"
 
 namespace stride {
 
