@@ -14,7 +14,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -23,14 +22,8 @@
 
 #include "config/command_line.hpp"
 #include "controller/statistics.hpp"
-#include "messages/signing.hpp"
-#include "messages/validate.hpp"
-#include "solver/contact/contact_set.hpp"
-#include "stride/mpc_status_t.hpp"
-#include "stride/robot_state_t.hpp"
-#include "stride/terrain_t.hpp"
-#include "terrain/elevation_map.hpp"
 #include "tools/log/segments.hpp"
+#include "tools/log/session_reader.hpp"
 
 namespace {
 
@@ -57,26 +50,15 @@ json timingJson(const stride::Percentiles& p) {
           {"count", p.count}};
 }
 
-// A stretch of the session (--windows): how the controller kept up in it. Misses come in stretches
-// where a period's work (the tick and the preparation before it) outgrows the period; this puts the
-// two next to each other.
-constexpr std::size_t kMaxWindows = 100000;
-
-struct Window {
-  double start = 0.0;  // [s] from the first status
-  long ticks = 0;
-  long long misses = 0, late = 0;  // cumulative counters at the window's start
-  std::vector<double> latency_ms, prepare_ms, work_ms;
-};
-
-void printWindows(const std::vector<Window>& windows, double width, long long misses_end,
-                  long long late_end) {
+// --windows: how the controller kept up in each stretch of the session (session_reader.hpp).
+void printWindows(const std::vector<stride::logs::Window>& windows, double width,
+                  long long misses_end, long long late_end) {
   std::printf(
       "by %g s window: start [s], ticks, deadline misses, late starts, tick latency p50 "
       "[us], preparation p50 / p99 [us], tick + preparation p50 [us]\n",
       width);
   for (std::size_t i = 0; i < windows.size(); ++i) {
-    const Window& w = windows[i];
+    const stride::logs::Window& w = windows[i];
     const long long m1 = i + 1 < windows.size() ? windows[i + 1].misses : misses_end;
     const long long l1 = i + 1 < windows.size() ? windows[i + 1].late : late_end;
     std::printf("  %6.1f %6ld %6lld %6lld %7.0f %7.0f / %5.0f %7.0f\n", w.start, w.ticks,
@@ -84,113 +66,6 @@ void printWindows(const std::vector<Window>& windows, double width, long long mi
                 us(w.prepare_ms, 0.99), us(w.work_ms, 0.5));
   }
 }
-
-// Messages of the log are read as the live receivers read them (messages/validate.hpp): the counts
-// and the size on the raw bytes (a signature trailer stripped), then the decode, then the content.
-// A malformed message is refused and counted by reason, never decoded on trust: lcm-gen's decoders
-// believe the counts (a count of 2^31 allocates that much).
-struct Refusals {
-  long by_reason[stride::msg::kRejectReasons] = {};
-  long total = 0;
-  void add(stride::msg::Reject why) {
-    ++by_reason[static_cast<int>(why)];
-    ++total;
-  }
-  // "2 (a size that does not match 1, NaN or infinity 1)", or "" for none.
-  std::string said() const {
-    std::string s;
-    for (int r = 0; r < stride::msg::kRejectReasons; ++r)
-      if (by_reason[r] > 0)
-        s += (s.empty() ? "" : ", ") +
-             std::string(stride::msg::describe(static_cast<stride::msg::Reject>(r))) + " " +
-             std::to_string(by_reason[r]);
-    return s;
-  }
-};
-
-// The payload of an event: a signed message's trailer stripped (messages/README.md, "Signing"):
-// the summary reads, it does not verify.
-int payloadSize(const lcm::LogEvent& e) {
-  return static_cast<int>(
-      stride::msg::unsignedPayloadSize(static_cast<const std::uint8_t*>(e.data), e.datalen));
-}
-
-// State estimates, checked as stride-mpc and stride-teleop check them. The summary has no robot:
-// as stride-teleop, it takes the model (hash, nq, nv) of the first state that passes, a floating
-// base (the summary is about where the base went), and holds every later state to it.
-class StateReader {
- public:
-  // True when the event is a state of the model; then state() holds it.
-  bool read(const lcm::LogEvent& e) {
-    using stride::msg::Reject;
-    const int size = payloadSize(e);
-    Reject why = Reject::None;
-    stride::msg::WireModel model = model_;
-    if (!known_) {
-      stride::msg::WireClaim claim;
-      if (!stride::msg::readStateClaim(e.data, size, claim))
-        why = Reject::Undecodable;
-      else if (claim.nq != claim.nv + 1 || claim.nq < 7 || claim.nv > kMaxDofs)
-        why = Reject::WrongSize;  // not a floating base's state (q: position and quaternion)
-      else
-        model = {claim.hash, claim.nq, claim.nv, 0, "the log's first state"};
-    }
-    if (why == Reject::None)
-      why = stride::msg::checkStateWire(e.data, size, model, stride::kMaxContacts);
-    if (why == Reject::None && !stride::msg::decode(e.data, size, state_))
-      why = Reject::Undecodable;
-    if (why == Reject::None) why = stride::msg::checkState(state_, true);
-    if (why != Reject::None) {
-      refused_.add(why);
-      return false;
-    }
-    model_ = model;
-    known_ = true;
-    return true;
-  }
-  const stride::robot_state_t& state() const { return state_; }
-  const Refusals& refused() const { return refused_; }
-
- private:
-  static constexpr int kMaxDofs = 1000;  // as stride-teleop's
-  stride::msg::WireModel model_;
-  bool known_ = false;
-  stride::robot_state_t state_;
-  Refusals refused_;
-};
-
-// Elevation maps, checked as stride-viz checks them (its bound on the cells: viz/server/feed.hpp).
-constexpr int kMaxTerrainCells = 512 * 512;
-
-// A command from the log, accepted as the controller would accept it: sizes on the wire, then the
-// decoded content, then a stamp newer than the last accepted one. Rejects are counted, not fatal.
-struct CommandReader {
-  std::vector<std::int64_t> utimes;
-  std::vector<stride::logs::CommandSample> commands;  // t filled in once the first state is known
-  long rejects = 0;
-
-  void read(const lcm::LogEvent& e) {
-    stride::command_t m;
-    // Signed or not (messages/README.md, "Signing"): the summary reads, it does not verify.
-    const int size = static_cast<int>(
-        stride::msg::unsignedPayloadSize(static_cast<const std::uint8_t*>(e.data), e.datalen));
-    if (stride::msg::checkCommandWire(e.data, size) != stride::msg::Reject::None ||
-        m.decode(e.data, 0, size) < 0 ||
-        stride::msg::checkCommand(m) != stride::msg::Reject::None ||
-        (!utimes.empty() && m.utime <= utimes.back())) {
-      ++rejects;
-      return;
-    }
-    utimes.push_back(m.utime);
-    stride::logs::CommandSample c;
-    c.vx = m.vx;
-    c.vy = m.vy;
-    c.yaw_rate = m.yaw_rate;
-    c.gait = m.gait;
-    c.body_height = m.body_height;
-    commands.push_back(c);
-  }
-};
 
 void printSegments(const std::vector<stride::logs::Segment>& segments, double settle) {
   std::printf(
@@ -338,204 +213,42 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
 
-  lcm::LogFile log(log_path, "r");
-  if (!log.good()) {
-    std::fprintf(stderr, "stride-log-summary: cannot read '%s'\n", log_path.c_str());
+  stride::logs::SessionChannels channels;
+  channels.state = state_channel;
+  channels.status = status_channel;
+  channels.command = command_channel;
+  channels.terrain = terrain_channel;
+  stride::logs::Session session;
+  if (std::string error; !stride::logs::readSession(log_path, channels, window,
+                                                    segment_options.fall, session, error)) {
+    std::fprintf(stderr, "stride-log-summary: %s\n", error.c_str());
     return 1;
   }
-  long states = 0, statuses = 0;
-  StateReader state_reader;
-  Refusals refused_statuses, refused_maps;
-  bool fell = false, policy_seen = false;
-  double x0 = 0, y0 = 0, x1 = 0, y1 = 0, z1 = 0, z_first = 0, z_min = INFINITY, z_max = -INFINITY;
-  double max_tilt = 0.0, t_first = 0.0, t_last = 0.0;
-  std::vector<double> latency_ms, solve_ms, prepare_ms;
-  long prepared = 0, full_steps = 0, short_steps = 0, no_steps = 0;
-  stride::mpc_status_t last_status{};
-  std::vector<Window> windows;
-  std::int64_t status_t0 = -1;
-  std::int64_t state_utime0 = 0, state_event0 = 0;     // the first state's stamp and log time
-  std::vector<stride::logs::BaseSample> base_samples;  // t from the first state's stamp
-  // The newest elevation map, and the terrain's height under the base from it (0 where unknown).
-  stride::terrain::ElevationMap map;
-  long maps = 0, bad_maps = 0;
-  double map_top = -INFINITY;  // the highest known cell of any map
-  double ground_last = 0.0;
-  bool ground_known = false;
-  CommandReader command_reader;
-  // Lost messages: each status carries its tick number (+1 per tick; a restarted controller
-  // starts again from 1), and the estimator publishes at a fixed rate, so a missing tick or a
-  // stamp gap of several periods is a message the log does not have.
-  std::int64_t last_tick = -1, last_state_utime = -1;
-  long lost_statuses = 0;
-  std::vector<std::int64_t> state_gaps_us;
-  for (const lcm::LogEvent* e = log.readNextEvent(); e != nullptr; e = log.readNextEvent()) {
-    if (e->channel == state_channel) {
-      if (!state_reader.read(*e)) continue;
-      const stride::robot_state_t& s = state_reader.state();
-      if (last_state_utime >= 0 && s.utime > last_state_utime)
-        state_gaps_us.push_back(s.utime - last_state_utime);
-      last_state_utime = s.utime;
-      // The terrain under the base, from the newest map that covers it (else the last known, or 0).
-      if (maps > 0) {
-        const double h = map.heightAt(s.q[0], s.q[1]);
-        if (std::isfinite(h)) {
-          ground_last = h;
-          ground_known = true;
-        }
-      }
-      const double z = s.q[2] - ground_last;
-      if (states == 0) {
-        x0 = s.q[0];
-        y0 = s.q[1];
-        z_first = z;
-        t_first = s.utime * 1e-6;
-        state_utime0 = s.utime;
-        state_event0 = e->timestamp;
-      }
-      stride::logs::BaseSample b;
-      b.t = static_cast<double>(s.utime - state_utime0) / 1e6;
-      std::copy(s.q.begin(), s.q.begin() + 7, b.q.begin());
-      b.ground = ground_last;
-      // Finite velocities (checkState): they feed the segments' averages.
-      std::copy(s.v.begin(), s.v.begin() + 6, b.v.begin());
-      base_samples.push_back(b);
-      x1 = s.q[0];
-      y1 = s.q[1];
-      z1 = s.q[2];
-      t_last = s.utime * 1e-6;
-      z_min = std::min(z_min, z);
-      z_max = std::max(z_max, z);
-      // One definition of a fall for the session and its segments (tools/log/segments.hpp).
-      max_tilt = std::max(max_tilt, stride::logs::tilt(b.q) * 180.0 / M_PI);
-      if (stride::logs::fallen(b, z_first, segment_options.fall)) fell = true;
-      ++states;
-    } else if (e->channel == terrain_channel) {
-      stride::terrain_t m;
-      const int size = payloadSize(*e);
-      stride::msg::Reject why = stride::msg::checkTerrainWire(e->data, size, kMaxTerrainCells);
-      if (why == stride::msg::Reject::None && m.decode(e->data, 0, size) != size)
-        why = stride::msg::Reject::Undecodable;
-      if (why == stride::msg::Reject::None) why = stride::msg::checkTerrain(m);
-      if (why != stride::msg::Reject::None) {
-        refused_maps.add(why);
-        ++bad_maps;
-        continue;
-      }
-      map.origin_x = m.origin_x;
-      map.origin_y = m.origin_y;
-      map.resolution = m.resolution;
-      map.resize(m.rows, m.cols);
-      bool sizes = true;
-      for (int r = 0; r < m.rows && sizes; ++r) {
-        sizes = static_cast<int>(m.height[r].size()) == m.cols;
-        for (int c = 0; sizes && c < m.cols; ++c) {
-          map.at(r, c) = m.height[r][c];
-          if (std::isfinite(m.height[r][c])) map_top = std::max<double>(map_top, m.height[r][c]);
-        }
-      }
-      if (!sizes) {
-        ++bad_maps;
-        map.resize(0, 0);
-        continue;
-      }
-      ++maps;
-    } else if (e->channel == command_channel) {
-      command_reader.read(*e);
-    } else if (e->channel == status_channel) {
-      stride::mpc_status_t st;
-      // The string lengths on the bytes first (a corrupt one would make the decoder read past the
-      // event).
-      const int size = payloadSize(*e);
-      stride::msg::Reject why = stride::msg::checkStatusWire(e->data, size);
-      if (why == stride::msg::Reject::None && st.decode(e->data, 0, size) < 0)
-        why = stride::msg::Reject::Undecodable;
-      if (why != stride::msg::Reject::None) {
-        refused_statuses.add(why);
-        continue;
-      }
-      ++statuses;
-      if (last_tick >= 0 && st.tick > last_tick + 1) lost_statuses += st.tick - last_tick - 1;
-      last_tick = st.tick;
-      if (window > 0.0) {
-        if (status_t0 < 0) status_t0 = e->timestamp;
-        const double t = 1e-6 * static_cast<double>(e->timestamp - status_t0);
-        // A time stamp far ahead (a corrupt log) must not open millions of windows: past the cap
-        // a status joins the last window.
-        while ((windows.empty() || t >= windows.back().start + window) &&
-               windows.size() < kMaxWindows) {
-          Window w;
-          w.start = windows.empty() ? 0.0 : windows.back().start + window;
-          w.misses = last_status.deadline_misses;
-          w.late = last_status.late_ticks;
-          windows.push_back(std::move(w));
-        }
-      }
-      last_status = st;
-      // The first published policy comes from the start-up solve (no deadline): not a tick.
-      if (st.policy_status >= 0) {
-        if (policy_seen) {
-          latency_ms.push_back(st.tick_ms);
-          solve_ms.push_back(st.solve_ms);
-          if (st.prepared) {
-            ++prepared;
-            prepare_ms.push_back(st.prepare_ms);
-          }
-          if (!windows.empty()) {
-            Window& w = windows.back();
-            ++w.ticks;
-            w.latency_ms.push_back(st.tick_ms);
-            if (st.prepared) {
-              w.prepare_ms.push_back(st.prepare_ms);
-              w.work_ms.push_back(st.tick_ms + st.prepare_ms);
-            }
-          }
-          if (st.solver_status >= 0)
-            (st.step >= 1.0 ? full_steps : st.step > 0.0 ? short_steps : no_steps)++;
-        }
-        policy_seen = true;
-      }
-    }
-  }
+  const stride::logs::Session& s = session;
+  const long states = s.states, statuses = s.statuses;
+  bool fell = s.fell;
   if (states == 0 && statuses == 0) {
     std::fprintf(stderr, "stride-log-summary: no state on '%s' and no status on '%s' in '%s'\n",
                  state_channel.c_str(), status_channel.c_str(), log_path.c_str());
     return 1;
   }
-  // The estimator's period: the median interval between stamps; a gap of n periods lost n - 1.
-  long missing_states = 0;
-  double state_period_ms = 0.0;
-  if (!state_gaps_us.empty()) {
-    std::vector<std::int64_t> sorted = state_gaps_us;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    const double period = static_cast<double>(sorted[sorted.size() / 2]);
-    state_period_ms = period * 1e-3;
-    for (const std::int64_t gap : state_gaps_us)
-      if (gap > 1.5 * period) missing_states += std::lround(gap / period) - 1;
-  }
-  const long lost = lost_statuses + missing_states;
-  // Segments on the robot's clock: commands played from a script carry the stamp of the state
-  // they answered, so both share the first state's origin.
-  std::vector<stride::logs::CommandSample>& commands = command_reader.commands;
-  for (std::size_t i = 0; i < commands.size(); ++i)
-    commands[i].t = static_cast<double>(command_reader.utimes[i] - state_utime0) / 1e6;
+  const long lost = s.lost_statuses + s.missing_states;
+  const std::vector<stride::logs::CommandSample>& commands = s.commands;
   const std::vector<stride::logs::Segment> segments =
-      stride::logs::segmentCommands(commands, base_samples, segment_options);
+      stride::logs::segmentCommands(commands, s.base_samples, segment_options);
   const std::vector<stride::logs::TrackingMiss> misses =
       stride::logs::checkTracking(segments, tolerance);
   // Keyboard commands carry the teleop's CLOCK_MONOTONIC: the robot's clock in real time, not in
   // lock-step or on a replayed log. Then the segments mean nothing, and the reader must know.
   long off_clock = 0;
   if (states > 0)
-    for (const auto& c : commands) off_clock += c.t < -1.0 || c.t > t_last - t_first + 1.0;
-  if (states == 0) {  // e.g. a replay's output: the controller's side only
-    z_min = z_max = 0.0;
+    for (const auto& c : commands) off_clock += c.t < -1.0 || c.t > s.t_last - s.t_first + 1.0;
+  if (states == 0)  // e.g. a replay's output: the controller's side only
     std::printf("no state estimates in this log (a replay output?): controller side only\n");
-  }
-  const double distance = std::hypot(x1 - x0, y1 - y0);
-  const stride::Percentiles latency = stride::percentiles(latency_ms),
-                            solve = stride::percentiles(solve_ms),
-                            prepare = stride::percentiles(prepare_ms);
+  const double distance = std::hypot(s.x1 - s.x0, s.y1 - s.y0);
+  const stride::Percentiles latency = stride::percentiles(s.latency_ms),
+                            solve = stride::percentiles(s.solve_ms),
+                            prepare = stride::percentiles(s.prepare_ms);
   double log_tail_lost = 0.0;  // [s] of the robot's states the logger did not record
   // The mock robot's verdict: it checks the fall on every physics step, the log only holds what the
   // logger read before it was stopped.
@@ -553,7 +266,7 @@ int main(int argc, char** argv) {
     if (states > 0 && sim_summary.contains("last_state_utime") &&
         sim_summary["last_state_utime"].is_number_integer()) {
       const std::int64_t robot_last = sim_summary["last_state_utime"].get<std::int64_t>();
-      if (robot_last > last_state_utime) log_tail_lost = (robot_last - last_state_utime) * 1e-6;
+      if (robot_last > s.last_state_utime) log_tail_lost = (robot_last - s.last_state_utime) * 1e-6;
     }
     if (log_tail_lost > 0.0)
       std::printf(
@@ -573,37 +286,38 @@ int main(int argc, char** argv) {
     std::printf(
         "session %.1f s: walked %.3f m (x %+.3f, y %+.3f), base height %.3f .. %.3f m, "
         "max tilt %.1f deg, %s\n",
-        t_last - t_first, distance, x1 - x0, y1 - y0, z_min, z_max, max_tilt,
+        s.t_last - s.t_first, distance, s.x1 - s.x0, s.y1 - s.y0, s.z_min, s.z_max, s.max_tilt_deg,
         fell ? "FELL" : "did not fall");
   std::printf(
       "controller: %ld ticks, tick latency p50 %.0f us, p99 %.0f us, max %.0f us, "
       "solve p50 %.0f us, %lld deadline misses (%lld late starts), %lld fallbacks, %lld rejected "
       "messages\n",
       statuses, us(latency.p50), us(latency.p99), us(latency.max), us(solve.p50),
-      static_cast<long long>(last_status.deadline_misses),
-      static_cast<long long>(last_status.late_ticks), static_cast<long long>(last_status.fallbacks),
-      static_cast<long long>(last_status.rejected_messages));
+      static_cast<long long>(s.last_status.deadline_misses),
+      static_cast<long long>(s.last_status.late_ticks),
+      static_cast<long long>(s.last_status.fallbacks),
+      static_cast<long long>(s.last_status.rejected_messages));
   std::printf(
       "lost: %ld status messages (gaps in the tick counter), %ld state estimates (stamp gaps; "
       "period %.3f ms)%s\n",
-      lost_statuses, missing_states, state_period_ms,
+      s.lost_statuses, s.missing_states, s.state_period_ms,
       max_lost >= 0 && lost > max_lost ? ": MORE THAN --max-lost" : "");
   // The other half of each iteration (run after the policy went out) and how the line search
   // went: a tick's latency is one rollout per step length tried.
-  const long solved = full_steps + short_steps + no_steps;
+  const long solved = s.full_steps + s.short_steps + s.no_steps;
   const auto pct = [&](long n) { return solved > 0 ? 100.0 * n / solved : 0.0; };
   std::printf(
       "solver: %ld of %zu ticks answered a prepared iteration (preparation p50 %.0f us, p99 %.0f "
       "us); steps: full %.0f%%, shorter %.0f%%, none %.0f%%\n",
-      prepared, latency_ms.size(), us(prepare.p50), us(prepare.p99), pct(full_steps),
-      pct(short_steps), pct(no_steps));
-  if (!windows.empty())
-    printWindows(windows, window, last_status.deadline_misses, last_status.late_ticks);
+      s.prepared, s.latency_ms.size(), us(prepare.p50), us(prepare.p99), pct(s.full_steps),
+      pct(s.short_steps), pct(s.no_steps));
+  if (!s.windows.empty())
+    printWindows(s.windows, window, s.last_status.deadline_misses, s.last_status.late_ticks);
   // Refused as the live receivers refuse them (messages/validate.hpp), counted by reason.
-  const std::pair<const char*, const Refusals*> refusals[] = {
-      {"states", &state_reader.refused()},
-      {"status messages", &refused_statuses},
-      {"elevation maps", &refused_maps}};
+  const std::pair<const char*, const stride::logs::Refusals*> refusals[] = {
+      {"states", &s.refused_states},
+      {"status messages", &s.refused_statuses},
+      {"elevation maps", &s.refused_maps}};
   for (const auto& [what, refused] : refusals)
     if (refused->total > 0)
       std::printf("log: %ld malformed %s refused (%s)\n", refused->total, what,
@@ -611,14 +325,14 @@ int main(int argc, char** argv) {
   const std::string terrain_name =
       sim_summary.contains("terrain") && sim_summary["terrain"].is_string()
           ? sim_summary["terrain"].get<std::string>()
-          : (maps > 0 ? "(from the log's maps)" : "flat");
+          : (s.maps > 0 ? "(from the log's maps)" : "flat");
   if (states > 0)
     std::printf(
         "terrain '%s': final base (%.3f, %.3f, %.3f) m, %.3f m above the terrain under it%s; %ld "
         "elevation maps%s\n",
-        terrain_name.c_str(), x1, y1, z1, z1 - ground_last,
-        ground_known || maps == 0 ? "" : " (no map covered it: above z = 0)", maps,
-        bad_maps > 0 ? (", " + std::to_string(bad_maps) + " refused").c_str() : "");
+        terrain_name.c_str(), s.x1, s.y1, s.z1, s.z1 - s.ground_last,
+        s.ground_known || s.maps == 0 ? "" : " (no map covered it: above z = 0)", s.maps,
+        s.bad_maps > 0 ? (", " + std::to_string(s.bad_maps) + " refused").c_str() : "");
   bool tracked = true;
   if (commands.empty()) {
     std::printf("commands: none on '%s'%s\n", command_channel.c_str(),
@@ -635,11 +349,11 @@ int main(int argc, char** argv) {
   }
   // Recovery after a fault (issue 33): did control come back, and when.
   if (fault_end_wall >= 0.0 && states > 0)
-    fault_end = (fault_end_wall * 1e6 - static_cast<double>(state_event0)) * 1e-6;
+    fault_end = (fault_end_wall * 1e6 - static_cast<double>(s.state_event0)) * 1e-6;
   stride::logs::Recovery recovery;
   const bool judge_recovery = fault_end >= 0.0 || fault_end_wall >= 0.0;
   if (judge_recovery) {
-    recovery = stride::logs::recovery(segments, base_samples, fault_end, tolerance, {},
+    recovery = stride::logs::recovery(segments, s.base_samples, fault_end, tolerance, {},
                                       segment_options.fall);
     char when[96] = "its command never tracked after it";
     if (recovery.time_to_tracking >= 0.0)
@@ -662,9 +376,9 @@ int main(int argc, char** argv) {
         "commands: %ld of %zu stamped more than 1 s outside the states' time span: their clock is "
         "not the robot's, the segments are not meaningful\n",
         off_clock, commands.size());
-  if (command_reader.rejects > 0)
+  if (s.command_rejects > 0)
     std::printf("commands: %ld rejected (wrong size, non-finite or stamps not increasing)\n",
-                command_reader.rejects);
+                s.command_rejects);
   if (!summary_path.empty()) {
     // Without a state estimate (a replay's output) the robot's side has no data: null; without a
     // status, the controller's counters.
@@ -673,41 +387,41 @@ int main(int argc, char** argv) {
       return statuses > 0 ? json(value) : json(nullptr);
     };
     json j;
-    j["duration_s"] = robot(t_last - t_first);
+    j["duration_s"] = robot(s.t_last - s.t_first);
     j["distance_m"] = robot(distance);
-    j["base_height_min_m"] = robot(z_min);
-    j["base_height_max_m"] = robot(z_max);
-    j["max_tilt_deg"] = robot(max_tilt);
+    j["base_height_min_m"] = robot(s.z_min);
+    j["base_height_max_m"] = robot(s.z_max);
+    j["max_tilt_deg"] = robot(s.max_tilt_deg);
     j["fell"] = fell;
     j["terrain"] = terrain_name;
-    j["final_base"] = states > 0 ? json::array({x1, y1, z1}) : json(nullptr);
-    j["base_height_above_terrain_m"] = robot(z1 - ground_last);
+    j["final_base"] = states > 0 ? json::array({s.x1, s.y1, s.z1}) : json(nullptr);
+    j["base_height_above_terrain_m"] = robot(s.z1 - s.ground_last);
     j["trips"] = sim_summary.contains("trips") ? sim_summary["trips"] : json(nullptr);
     // The feet's touch-downs near edges of the true terrain: only the mock robot knows them.
     for (const char* key :
          {"footholds", "edge_footholds", "min_edge_distance_m", "sole_flat_fraction", "why"})
       j[key] = sim_summary.contains(key) ? sim_summary[key] : json(nullptr);
-    j["terrain_maps"] = maps;
+    j["terrain_maps"] = s.maps;
     // Malformed messages the log holds, refused as the live receivers refuse them.
-    j["refused_states"] = state_reader.refused().total;
-    j["refused_statuses"] = refused_statuses.total;
-    j["refused_terrain_maps"] = refused_maps.total;
-    j["terrain_map_top_m"] = std::isfinite(map_top) ? json(map_top) : json(nullptr);
+    j["refused_states"] = s.refused_states.total;
+    j["refused_statuses"] = s.refused_statuses.total;
+    j["refused_terrain_maps"] = s.refused_maps.total;
+    j["terrain_map_top_m"] = std::isfinite(s.map_top) ? json(s.map_top) : json(nullptr);
     j["tick_latency"] = timingJson(latency);
     j["solve_time"] = timingJson(solve);
-    j["deadline_misses"] = controller(last_status.deadline_misses);
-    j["late_ticks"] = controller(last_status.late_ticks);
-    j["fallbacks"] = controller(last_status.fallbacks);
+    j["deadline_misses"] = controller(s.last_status.deadline_misses);
+    j["late_ticks"] = controller(s.last_status.late_ticks);
+    j["fallbacks"] = controller(s.last_status.fallbacks);
     j["ticks"] = statuses;
-    j["rejected_messages"] = controller(last_status.rejected_messages);
-    j["prepared_ticks"] = prepared;
+    j["rejected_messages"] = controller(s.last_status.rejected_messages);
+    j["prepared_ticks"] = s.prepared;
     j["prepare_time"] = timingJson(prepare);
-    j["line_search"] = {{"full", full_steps}, {"shorter", short_steps}, {"none", no_steps}};
+    j["line_search"] = {{"full", s.full_steps}, {"shorter", s.short_steps}, {"none", s.no_steps}};
     j["commands"] = commands.size();
-    j["command_rejects"] = command_reader.rejects;
+    j["command_rejects"] = s.command_rejects;
     j["segments"] = segmentsJson(segments);
     j["tracked"] = tracked;
-    j["lost"] = {{"statuses", lost_statuses}, {"states", missing_states}};
+    j["lost"] = {{"statuses", s.lost_statuses}, {"states", s.missing_states}};
     j["log_tail_lost_s"] = log_tail_lost;
     if (judge_recovery)
       j["recovery"] = {
