@@ -12,6 +12,7 @@
 #include <memory>
 
 #include "tools/paper/large_stride.hpp"
+#include "tools/paper/stride_playback.hpp"
 
 namespace stride {
 namespace {

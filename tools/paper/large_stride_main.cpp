@@ -18,6 +18,7 @@
 #include "solver/multibody/kinematics.hpp"
 #include "tools/paper/large_stride.hpp"
 #include "tools/paper/motion_log.hpp"
+#include "tools/paper/stride_playback.hpp"
 
 using namespace stride;
 
