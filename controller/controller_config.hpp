@@ -12,32 +12,18 @@
 #include "controller/command.hpp"
 #include "locomotion/gait.hpp"
 #include "locomotion/locomotion_problem.hpp"
+#include "locomotion/planner.hpp"
 #include "messages/hold_pd.hpp"
 #include "solver/ddp/solver.hpp"
 #include "terrain/steppability.hpp"
 
 namespace stride {
 
-// How the robot steps: the timing of each gait (locomotion/gait.hpp), or a planner's plan file, and
-// where the feet land (locomotion/gait_generator.hpp). Times in s.
-struct GaitConfig {
-  std::map<std::string, GaitTiming> timing;  // by gait name: trot, walk, pace
-  std::string plan_file;  // a contact plan file instead of the gaits (resolved path)
-};
-
 enum class Fallback { Previous, Hold };
 
-// Planning on an elevation map (STRIDE_TERRAIN, terrain_t; controller/README.md, "Terrain"): where
-// a foot may stand (steppability) and how a map's age is judged. The foothold shift, swing
-// clearance and apex cap are the generator's (GaitGeneratorOptions).
-struct TerrainConfig {
-  terrain::SteppabilityOptions steppability;
-  // A map measured longer ago than this (robot clock: the state's stamp minus the map's) is stale:
-  // the controller plans blind until a fresh one comes, and counts the ticks.
-  double max_map_age = 0.5;  // [s]
-  // The largest map accepted (cells); a larger one is refused and counted.
-  int max_cells = 256 * 256;
-};
+// The planner's parts (locomotion, generator, gait, terrain, threads) are PlannerOptions' types
+// (locomotion/planner.hpp): GaitConfig (the gaits' timing or a plan file), TerrainConfig (the
+// steppability of a map and the age rule that judges it).
 
 // The shortest policy, in tick periods: it must bridge kMinPolicyPeriods - 1 lost answers in a row
 // (controller_config.cpp, controller/README.md "Robustness").

@@ -7,10 +7,11 @@
 //   1. plan time t of the state (its stamp minus the plan's start);
 //   2. shift the horizon by the whole short knots elapsed since the last solve (the remainder,
 //      under half a knot, stays as an FDDP gap), set x0 = the state;
-//   3. re-plan the references from the state and the command (GaitGenerator::plan: contact timing
-//      with gait switches, footholds, swing arcs, base pose and twist), rewrite every knot's
-//      contacts and references for them (LocomotionProblem::update) and move the warm start onto
-//      the knots' new times (Solver::retimeWarmStart; controller/README.md, "Time grid");
+//   3. the planner (locomotion/planner.hpp): Planner::beginTick (the gait asked for, the command,
+//      the map or blind), then Planner::replan re-plans the references from the state (contact
+//      timing with gait switches, footholds, swing arcs, base pose and twist), rewrites every
+//      knot's contacts and references for them and moves the warm start onto the knots' new times
+//      (controller/README.md, "Time grid");
 //   4. at most max_iterations of (box-)FDDP, stopped at the deadline;
 //   5. the policy: u_ff, K, x_ref of the first contact knots (impulse knots take no time and have
 //      no control, so they are skipped);
@@ -24,29 +25,22 @@
 // or a few rollouts instead of a whole iteration (controller/README.md, "Real-time iteration").
 // After start-up nothing here allocates or throws (tested). Start-up (the first valid state) builds
 // the problem around the robot's measured position and solves it to convergence before the first
-// policy goes out.
+// policy goes out. Which solve a tick makes is the controller's mode (MpcMode, below); how its
+// answer is written on the wire, controller/policy_writer.hpp.
 
 #include <algorithm>
 #include <chrono>
 #include <memory>
 
 #include "controller/controller_config.hpp"
+#include "controller/policy_writer.hpp"
 #include "controller/slow_host.hpp"
-#include "locomotion/locomotion_problem.hpp"
+#include "locomotion/planner.hpp"
 #include "messages/validate.hpp"
 #include "solver/ddp/solver.hpp"
 #include "terrain/elevation_map.hpp"
-#include "terrain/steppability.hpp"
 
 namespace stride {
-
-enum PolicyStatus : std::int8_t {
-  kPolicySolved = 0,
-  kPolicyDeadline = 1,
-  kPolicyPrevious = 2,
-  kPolicyHold = 3,
-  kPolicyNone = -1,
-};
 
 struct MpcCounters {
   std::int64_t ticks = 0;
@@ -80,6 +74,31 @@ struct MpcCounters {
   std::int64_t stale_map_ticks = 0;
 };
 
+// What the controller is doing, between ticks (controller/README.md, "The controller's mode").
+// Every change of it is Mpc::on(MpcEvent), the one place the transitions are written.
+enum class MpcMode : std::int8_t {
+  NotStarted,        // no state yet: no problem, no solver
+  StartingUp,        // the problem was (re)built, or its start-up solve failed: the next solve is
+                     // the start-up solve, from the measured state held still, to convergence
+  ResolvingStartUp,  // the start-up answer came too late to send (real time): the next solve is a
+                     // start-up solve again, from that solution on the newer state
+  Solving,           // warm-started ticks, the next iteration prepared after each policy
+  Restarting,        // a solve failed or stalled: the warm start is made again from the
+                     // references (by the preparation, or by the next tick)
+};
+const char* toString(MpcMode mode);
+
+// What moves the mode (Mpc::on).
+enum class MpcEvent : std::int8_t {
+  Built,          // the problem was (re)built: the first state, or the first after a new plan
+  WarmStartMade,  // a restart's warm start was made from the references
+  ResolveBegun,   // a start-up solve made again has begun (a failure after it is a regular one's)
+  Solved,         // a solve ended with a usable iterate
+  AnswerTooLate,  // a start-up answer too old to send, with re-solves left (kMaxStartupResolves)
+  Failed,         // a solve or a preparation failed, a line search stalled, or a restart's
+                  // references could not be planned
+};
+
 class Mpc {
  public:
   using Clock = Solver::Clock;
@@ -91,34 +110,38 @@ class Mpc {
   const ControllerConfig& config() const { return config_; }
   const Robot& robot() const { return robot_; }
   // The robot's identity on the wire (config/model_hash.hpp), carried by every policy.
-  std::int64_t modelHash() const { return policy_.model_hash; }
+  std::int64_t modelHash() const { return out_.modelHash(); }
   // The controller's identity on the policy channel (policy_t.source_id; MpcNode draws it).
-  void setSourceId(std::int64_t id) { policy_.source_id = previous_.source_id = id; }
+  void setSourceId(std::int64_t id) { out_.setSourceId(id); }
   int nu() const { return nu_; }
-  bool started() const { return loco_ != nullptr; }
+  bool started() const { return mode_ != MpcMode::NotStarted; }
+  MpcMode mode() const { return mode_; }
 
   // Replaces the gaits by a planner's contact plan, starting at start_utime on the robot's clock
   // (the command still sets the velocity). Call between ticks; the next tick rebuilds the problem
   // and solves it to convergence, as at start-up (allocating then). Throws std::invalid_argument.
-  void setPlan(const ContactPlan& plan, std::int64_t start_utime);
+  void setPlan(const ContactPlan& plan, std::int64_t start_utime) {
+    planner_.setPlan(plan, start_utime);
+  }
   // The robot's clock moved by offset_us and stays there (MpcNode: a clock offset or a new
   // robot): every time kept on that clock moves with it, so the plan time goes on where it was.
   void shiftClock(std::int64_t offset_us);
   // The body command in force (the node's CommandFilter smooths it toward the one received), and
   // the gait asked for (an index into gaits()). Takes effect at the next tick's re-planning.
-  void setCommand(const BodyCommand& command, int gait);
+  void setCommand(const BodyCommand& command, int gait) { planner_.setCommand(command, gait); }
   // An elevation map (validated: messages/validate.hpp checkTerrain), measured at map.utime on the
-  // robot's clock: its steppability is computed now (bounded by terrain.max_cells; no allocation
-  // after construction) and the ticks plan on it while it is fresh. False, and counted, for a map
-  // larger than terrain.max_cells or older than the one in use.
+  // robot's clock: copied off the wire and handed to the planner, which computes its steppability
+  // now (bounded by terrain.max_cells; no allocation after construction) and plans on it while it
+  // is fresh. False, and counted, for a map larger than terrain.max_cells or older than the one in
+  // use.
   bool setTerrain(const terrain_t& map);
   // The map the ticks plan on (valid() false before the first).
-  const terrain::Steppability& terrain() const { return steppability_; }
+  const terrain::Steppability& terrain() const { return planner_.map(); }
   // Whether the last tick planned on the map.
-  bool plannedOnMap() const { return on_map_; }
+  bool plannedOnMap() const { return planner_.onMap(); }
 
   // The gaits the robot walks with ("stand" first).
-  const std::vector<std::string>& gaits() const { return gaits_; }
+  const std::vector<std::string>& gaits() const { return planner_.gaits(); }
 
   // One tick. state: the newest valid estimate (null: none yet); age: seconds since it arrived;
   // deadline: for the solve (Clock::time_point::max() when replaying a log). Fills policy() and
@@ -128,7 +151,7 @@ class Mpc {
   // period after this one's, stopping at the deadline (the next tick's start). Allocation-free.
   void prepare(Clock::time_point deadline);
 
-  const policy_t& policy() const { return policy_; }
+  const policy_t& policy() const { return out_.policy(); }
   const mpc_status_t& status() const { return status_; }
   mpc_status_t& status() { return status_; }
   const MpcCounters& counters() const { return counters_; }
@@ -153,15 +176,13 @@ class Mpc {
           std::max(counters_.max_own_misses_in_a_row, misses_in_a_row_);
   }
   // The last tick made the first solve of a (re)built problem, which runs without deadline.
-  bool startupTick() const { return startup_tick_; }
+  bool startupTick() const { return last_.startup_solve; }
   // Start-up solves made again on a newer state before one answer went out (real time).
   static constexpr int kMaxStartupResolves = 3;
 
   // After a tick that solved (a fresh policy, not a fallback): the whole predicted horizon into a
-  // horizon_t shaped by msg::shape(h, horizonKnots(), nq, contacts, horizonFootholds()), with the
-  // footholds the gait generator chose for it: each contact's touch-downs after the state and no
-  // later than the last knot (at most msg::kHorizonFootholdsPerContact each, and the capacity h
-  // was shaped with), by contact then time, their times after the state. Allocation-free. False
+  // horizon_t shaped by msg::shape(h, horizonKnots(), nq, contacts, horizonFootholds())
+  // (PolicyWriter::horizon: with the footholds the planner chose for it). Allocation-free. False
   // when the last tick did not solve.
   bool writeHorizon(horizon_t& h) const;
   int horizonKnots() const { return config_.locomotion.knots; }
@@ -169,21 +190,30 @@ class Mpc {
     return msg::kHorizonFootholdsPerContact * static_cast<int>(robot_.contacts.size());
   }
 
-  // After a tick: the solver and the problem, for tests and tools.
+  // After a tick: the solver, the problem and the planner, for tests and tools.
   const Solver* solver() const { return solver_.get(); }
   Solver* solver() { return solver_.get(); }  // tools/bench times the solver's parts
-  const LocomotionProblem* problem() const { return loco_.get(); }
-  const GaitGenerator* reference() const { return gen_.get(); }
-  double planTime(std::int64_t utime) const { return (utime - plan_start_utime_) * 1e-6; }
+  const Planner& planner() const { return planner_; }
+  const LocomotionProblem* problem() const {
+    return planner_.built() ? &planner_.problem() : nullptr;
+  }
+  const GaitGenerator* reference() const {
+    return planner_.built() ? &planner_.generator() : nullptr;
+  }
+  double planTime(std::int64_t utime) const { return planner_.planTime(utime); }
 
  private:
-  void start(std::int64_t utime);  // builds the problem and the gaits (allocates)
-  // writeHorizon's footholds: the gait generator's touch-downs after the state up to t_end (plan
-  // time).
-  void writeFootholds(horizon_t& h, double t_end) const;
-  // Re-plans the references from the state x_ at plan time t for the horizon from t_warm_, and
-  // rewrites the knots for them. False when either refuses (non-finite time or state).
-  bool replan(double t);
+  // The one place the mode changes (MpcMode, MpcEvent; the table in controller/README.md).
+  void on(MpcEvent event);
+  // The next solve is a start-up solve (to convergence, no deadline).
+  bool startingUp() const {
+    return mode_ == MpcMode::StartingUp || mode_ == MpcMode::ResolvingStartUp;
+  }
+  // The warm start must be made again before the next solve.
+  bool warmStartLost() const {
+    return mode_ == MpcMode::StartingUp || mode_ == MpcMode::Restarting;
+  }
+  void start(std::int64_t utime);  // builds the planner's problem and the solver (allocates)
   // Shifts the horizon and the warm start by the whole knots from the warm start's knot 0 to t
   // (the remainder, under half a knot, is left to FDDP as a gap at x0). False, and nothing
   // shifted, when t is past the horizon: the warm start is used up.
@@ -192,48 +222,34 @@ class Mpc {
   bool solveTick(double t, Clock::time_point deadline, bool late, SolveStatus& status, bool* shed);
   // The warm start made again from the references planned on the state x_ (at plan time t), with
   // its knot 0 at t_knot0; for a start-up solve (allocating), the measured state held instead
-  // (LocomotionProblem::measuredWarmStart).
-  void restartWarmStart(double t, double t_knot0, bool startup);
-  void writePolicy(std::int64_t utime, double t, std::int8_t status);
-  bool previousPolicy(std::int64_t utime);
+  // (LocomotionProblem::measuredWarmStart). False, nothing changed, when the references could not
+  // be planned.
+  bool restartWarmStart(double t, double t_knot0, bool startup);
   void holdPolicy(std::int64_t utime, double t);
   void countAnswer(Clock::time_point deadline);  // a miss when the policy is out after it
   void finishStatus(Clock::time_point tick_start, std::int8_t policy_status);
-  // Before a tick's plan: the map if it is fresh at the state's stamp, else blind (counted).
-  void chooseMap(std::int64_t utime);
 
   ControllerConfig config_;
   Robot robot_;
-  ContactSet contacts_;
-  ContactPlan plan_;
-  bool have_plan_ = false;  // a plan file or a planner's plan replaces the gaits
-  std::vector<std::string> gaits_;
-  std::int64_t plan_start_utime_ = 0;
-  bool plan_start_set_ = false;
-  bool rebuild_ = false;
   int nq_, nv_, nu_;
+  Planner planner_;
+  PolicyWriter out_;
 
-  std::unique_ptr<LocomotionProblem> loco_;
-  std::unique_ptr<GaitGenerator> gen_;
-  std::vector<int> gait_pattern_;  // timeline pattern of each gait
-  BodyCommand command_;
-  int gait_ = 0;
+  MpcMode mode_ = MpcMode::NotStarted;
+  // What the last tick did, for what follows it: facts of one tick, whatever the mode.
+  struct LastTick {
+    bool startup_solve = false;  // it made a start-up solve (no deadline: never a miss)
+    bool fresh_policy = false;   // its policy came from its solve (writeHorizon)
+    // The period after it prepares (prepare()): it solved, it was shed (its preparation made for
+    // another time or cut), or its solve failed into a restart.
+    bool prepare = false;
+  } last_;
+  int startup_resolves_ = 0;  // since start()
+
   std::unique_ptr<SlowHost> slow_host_;  // --emulate-slow-host: the solver's work hook
   std::unique_ptr<Solver> solver_;
   std::vector<Eigen::VectorXd> xs_warm_, us_warm_;  // warm start on the references (restarts)
   double t_warm_ = 0.0;                             // plan time of the warm start's knot 0
-  std::vector<double> knot_times_;                  // replan's copy of the knots' times
-  std::vector<unsigned> knot_masks_;                // and of their contacts (bit c: closed)
-  bool need_restart_ = false;  // the last solve failed: start again from standing
-  bool have_solved_ = false;   // a solve of this problem succeeded (else the next is the first)
-  // The last start-up solve's answer came too late to send: the next tick solves as a start-up
-  // again, from that solution on the newer state (bounded by kMaxStartupResolves).
-  bool startup_again_ = false;
-  int startup_resolves_ = 0;  // since start()
-  bool startup_tick_ = false;
-  bool solved_ = false;        // the last tick solved (prepare() may follow)
-  bool fresh_policy_ = false;  // the last tick's policy came from its solve
-  bool tried_ = false;       // the last tick had a fresh state to solve for (a restart may follow)
   double t_last_ = 0.0;      // plan time of the last tick's state (x_ holds it)
   double prepare_ms_ = 0.0;  // its duration
   double trial_ms_ = 0.0;    // a prepared tick's solve per rollout, averaged, with a margin
@@ -242,14 +258,9 @@ class Mpc {
   std::int64_t misses_in_a_row_ = 0;
   bool run_stalled_ = false;  // the host stalled the controller in the current run of misses
 
-  terrain::ElevationMap map_in_;  // the incoming map, sized for terrain.max_cells
-  terrain::Steppability steppability_;
-  std::int64_t map_utime_ = 0;
-  bool on_map_ = false;
+  terrain::ElevationMap map_in_;  // the incoming map off the wire, sized for terrain.max_cells
 
   Eigen::VectorXd x_;  // the state as a solver vector
-  policy_t policy_, previous_;
-  bool have_previous_ = false;
   mpc_status_t status_{};
   MpcCounters counters_;
 };

@@ -6,8 +6,8 @@
 // the floating base unactuated. Two programs hold a robot with it, each in its own form:
 // - the mock robot applies it directly (sim::HoldPolicy before the first policy, sim::StandDown
 //   when its controller is lost): jointPd();
-// - the controller sends it as a policy (its Hold fallback, Mpc::holdPolicy): x_ref = (q_ref, 0),
-//   u_ff = u and K diagonal on the joints, which the robot's policy evaluation
+// - the controller sends it as a policy (its Hold fallback, PolicyWriter::hold):
+//   x_ref = (q_ref, 0), u_ff = u and K diagonal on the joints, which the robot's policy evaluation
 //   (policy_interpolation.hpp: u_ff + K (x_ref ⊖ x)) turns into the same law: writeJointPdRow().
 // Header-only and free of the model: the controller's configuration takes its default gains from
 // here without linking anything.

@@ -109,7 +109,7 @@ bool decode(const void* buf, int size, robot_state_t& m);
 // The wire's contact masks (policy_t.phase, mpc_status_t.phase, horizon_t.contact_mask) are int32
 // with bit c for contact c: at most this many contacts fit (the sign bit left alone). The contact
 // limit (solver/contact/contact_set.hpp, kMaxContacts) must stay within it: static_assert where
-// both meet (controller/mpc.cpp).
+// both meet (controller/policy_writer.cpp).
 constexpr int kContactMaskBits = 31;
 
 // horizon_t's footholds (issue 31): at most this many per contact (nfootholds <= it times

@@ -451,15 +451,22 @@ TEST(Mpc, ALongStartUpSolveIsMadeAgainOnTheNewestState) {
     ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
     config.emulated_slowdown = 100.0;
     Mpc mpc(config);
+    EXPECT_EQ(mpc.mode(), MpcMode::NotStarted);
     robot_state_t s = standingState(mpc.robot(), 1000000);
     for (int i = 0; i <= Mpc::kMaxStartupResolves; ++i) {
       EXPECT_FALSE(mpc.tick(&s, 0.0, soon())) << i;
       EXPECT_TRUE(mpc.startupTick()) << i;
+      // The controller's mode (controller/README.md): made again while re-solves are left; past
+      // them the answer is dropped and the next tick is a regular one.
+      EXPECT_EQ(mpc.mode(),
+                i < Mpc::kMaxStartupResolves ? MpcMode::ResolvingStartUp : MpcMode::Solving)
+          << i;
       s.utime += 50000;
     }
     EXPECT_EQ(mpc.counters().startup_resolves, Mpc::kMaxStartupResolves + 1);
     ASSERT_TRUE(mpc.tick(&s, 0.0, soon()));
     EXPECT_FALSE(mpc.startupTick());
+    EXPECT_EQ(mpc.mode(), MpcMode::Solving);
     EXPECT_EQ(mpc.policy().utime, s.utime);  // for the newest state
     EXPECT_EQ(mpc.counters().fallbacks, 0);
   }

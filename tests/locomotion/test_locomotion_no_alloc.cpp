@@ -1,7 +1,8 @@
 // The locomotion problem's tick does not touch the heap: a solve of the solo12 trot (FDDP and
 // box-FDDP, Euler and RK4 knots: its swing, cone and impulse terms), LocomotionProblem::update
 // after ShootingProblem::shift and Solver::shiftWarmStart, and 400 commanded ticks of
-// GaitGenerator::plan with gait switches. The solver's own loop is checked on a problem without
+// GaitGenerator::plan with gait switches, and the planner's tick calls (Planner::setMap,
+// beginTick, replan, the read-backs). The solver's own loop is checked on a problem without
 // locomotion/ in tests/ocp/test_solver_no_alloc.cpp. As there, malloc and its relatives are
 // interposed and counted (operator new and Eigen both end there), with Eigen's own check
 // (EIGEN_RUNTIME_NO_MALLOC) armed as well; the interposition is per binary, hence this separate
@@ -16,7 +17,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <string>
 
+#include "locomotion/planner.hpp"
 #include "locomotion_cases.hpp"
 #include "solver/ddp/solver.hpp"
 
@@ -150,6 +153,66 @@ TEST(SolverNoAllocation, GaitGeneratorTicksWithGaitSwitches) {
     EXPECT_EQ(n, 0) << "tick " << tick;
   }
   EXPECT_EQ(switches, 10);
+  EXPECT_TRUE(std::isfinite(checksum));
+}
+
+// The calls the controller's tick makes on the planner (locomotion/planner.hpp): maps taken and
+// judged fresh or stale, gait switches (trot, stand, trot), the re-plan after a shift with the warm
+// start carried and lifted legs re-seeded, and what the messages read back. stride_quad.
+TEST(LocomotionNoAllocation, PlannerTicks) {
+  const Robot robot =
+      loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
+  PlannerOptions options;
+  options.locomotion.knots = 60;
+  options.terrain.max_cells = 400;
+  Planner planner(robot, options, "test");
+  planner.build(0);  // setup: allocates
+  LocomotionProblem& loco = planner.problem();
+  Solver solver(loco.problem(), SolverKind::Fddp);
+  terrain::ElevationMap map;
+  map.origin_x = map.origin_y = -1.0;
+  map.resolution = 0.1;
+  map.rows = map.cols = 20;
+  map.height.assign(400, 0.0f);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(robot.model.nq + robot.model.nv);
+  x.head(robot.model.nq) = robot.default_q;
+  const auto& gaits = planner.gaits();
+  const int trot = static_cast<int>(std::find(gaits.begin(), gaits.end(), "trot") - gaits.begin());
+  const double dt = loco.options().dt;
+  double t_warm = 0.0, checksum = 0.0;
+  int fresh = 0, stale = 0, switches = 0;
+  for (int tick = 0; tick < 300; ++tick) {
+    const long n = allocations([&] {
+      const std::int64_t utime = 5000 * static_cast<std::int64_t>(tick);
+      // Maps at 10 Hz for the first half; then none (the last one ages: blind).
+      if (tick % 20 == 0 && tick < 150) checksum += planner.setMap(map, utime);
+      BodyCommand command;
+      command.vx = 0.2;
+      const int gait = tick < 100 || tick >= 200 ? trot : 0;
+      switches += gait != (tick == 0 ? -1 : (tick - 1 < 100 || tick - 1 >= 200 ? trot : 0));
+      planner.setCommand(command, gait);
+      const double t = planner.planTime(utime);
+      x[0] = 0.2 * t;
+      const MapChoice choice = planner.beginTick(t, utime, tick % 2 == 0 ? 0xFu : 0x9u);
+      fresh += choice == MapChoice::Fresh;
+      stale += choice == MapChoice::Stale;
+      // The knots move by one whole knot every other tick (5 ms ticks, 10 ms knots).
+      if (tick % 2 == 0 && tick > 0) {
+        loco.problem().shift(1);
+        t_warm += dt;
+      }
+      EXPECT_TRUE(planner.replan(t, x, t_warm, solver));
+      checksum += planner.mask(t) + static_cast<double>(planner.gaitAt(t).size());
+      planner.touchDowns(t, t_warm + 0.5, 4, 4, [&](int c, const GaitGenerator::Stance& s) {
+        checksum += c + s.p.x();
+        return true;
+      });
+    });
+    EXPECT_EQ(n, 0) << "tick " << tick;
+  }
+  EXPECT_GT(fresh, 0);
+  EXPECT_GT(stale, 0);
+  EXPECT_EQ(switches, 3);
   EXPECT_TRUE(std::isfinite(checksum));
 }
 

@@ -196,7 +196,7 @@ TEST(Policy, HoldPolicyIsAJointPd) {
 }
 
 // One hold law (messages/hold_pd.hpp): the controller's hold fallback, sent as a policy (x_ref =
-// the measured base and the default joints at rest, K from writeJointPdRow as Mpc::holdPolicy
+// the measured base and the default joints at rest, K from writeJointPdRow as PolicyWriter::hold
 // writes it), gives through the robot's policy evaluation the torques the robot's own hold PD
 // gives, at the same gains, plus the feed-forward.
 TEST(Policy, TheControllersHoldPolicyIsTheRobotsHoldPd) {

@@ -1,0 +1,179 @@
+// The planner the controller drives every tick (locomotion/planner.hpp): gait switches wait for
+// every foot to be down, a map too old is not planned on, maps come in stamp order, and a knot
+// that lifts a foot the warm start had down is re-seeded with the torques that hold its posture.
+// stride_quad (config/robots), the gaits' default timing: trot = all feet 0.1 s, FL-HR swing
+// 0.2 s, all feet 0.1 s, FR-HL swing 0.2 s.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "locomotion/planner.hpp"
+#include "solver/ddp/solver.hpp"
+
+namespace stride {
+namespace {
+
+constexpr unsigned kAllFeet = 0xF;
+
+struct Quad {
+  Robot robot = loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
+  PlannerOptions options;
+  std::unique_ptr<Planner> planner;
+  Eigen::VectorXd x;  // the default posture at rest
+  explicit Quad(double max_map_age = 0.5) {
+    options.locomotion.knots = 40;  // 0.4 s of 10 ms
+    options.terrain.max_map_age = max_map_age;
+    options.terrain.max_cells = 100;
+    planner = std::make_unique<Planner>(robot, options, "test");
+    x = Eigen::VectorXd::Zero(robot.model.nq + robot.model.nv);
+    x.head(robot.model.nq) = robot.default_q;
+  }
+  int gait(const std::string& name) const {
+    const auto& g = planner->gaits();
+    return static_cast<int>(std::find(g.begin(), g.end(), name) - g.begin());
+  }
+};
+
+terrain::ElevationMap flatMap(int rows, int cols) {
+  terrain::ElevationMap map;
+  map.origin_x = map.origin_y = -0.5;
+  map.resolution = 0.1;
+  map.rows = rows;
+  map.cols = cols;
+  map.height.assign(static_cast<std::size_t>(rows) * cols, 0.0f);
+  return map;
+}
+
+TEST(Planner, AGaitSwitchWaitsForEveryFootDown) {
+  Quad q;
+  Planner& p = *q.planner;
+  EXPECT_TRUE(p.needsBuild());
+  p.build(1000000);
+  EXPECT_FALSE(p.needsBuild());
+  EXPECT_DOUBLE_EQ(p.planTime(1500000), 0.5);  // the first build's stamp is plan time 0
+  EXPECT_EQ(p.gaitAt(0.0), "stand");
+  // From a stand the trot starts at once.
+  p.setCommand(BodyCommand{}, q.gait("trot"));
+  p.beginTick(0.0, 1000000, std::nullopt);
+  EXPECT_EQ(p.gaitAt(0.0), "trot");
+  EXPECT_EQ(p.mask(0.05), kAllFeet);
+  EXPECT_NE(p.mask(0.15), kAllFeet);  // FL and HR up from 0.1 to 0.3
+  // A stand asked at 0.15, a swing under way: the trot goes on to the next all-feet phase (0.3).
+  p.setCommand(BodyCommand{}, q.gait("stand"));
+  p.beginTick(0.15, 1150000, std::nullopt);
+  EXPECT_EQ(p.gaitAt(0.29), "trot");
+  EXPECT_NE(p.mask(0.29), kAllFeet);
+  EXPECT_EQ(p.gaitAt(0.31), "stand");
+  for (double t = 0.3 + 1e-6; t < 2.0; t += 0.01) ASSERT_EQ(p.mask(t), kAllFeet) << t;
+  // A gait index out of range is ignored: the gait asked for stays.
+  p.setCommand(BodyCommand{}, 99);
+  p.beginTick(0.4, 1400000, std::nullopt);
+  EXPECT_EQ(p.gaitAt(0.5), "stand");
+}
+
+TEST(Planner, AMapTooOldIsNotPlannedOn) {
+  Quad q(0.5);
+  Planner& p = *q.planner;
+  p.build(0);
+  EXPECT_EQ(p.beginTick(0.0, 0, std::nullopt), MapChoice::None);
+  EXPECT_FALSE(p.onMap());
+  ASSERT_TRUE(p.setMap(flatMap(10, 10), 100000));  // measured at 0.1 s
+  EXPECT_EQ(p.beginTick(0.2, 200000, std::nullopt), MapChoice::Fresh);
+  EXPECT_TRUE(p.onMap());
+  EXPECT_EQ(p.generator().map(), &p.map());
+  EXPECT_EQ(p.beginTick(0.6, 600000, std::nullopt), MapChoice::Fresh);  // 0.5 s old: still fresh
+  EXPECT_EQ(p.beginTick(0.61, 610000, std::nullopt), MapChoice::Stale);
+  EXPECT_FALSE(p.onMap());
+  EXPECT_EQ(p.generator().map(), nullptr);  // blind
+  // From the future by more than the age: not planned on either.
+  EXPECT_EQ(p.beginTick(-0.5, -500000, std::nullopt), MapChoice::Stale);
+  // A fresh map again.
+  ASSERT_TRUE(p.setMap(flatMap(10, 10), 700000));
+  EXPECT_EQ(p.beginTick(0.71, 710000, std::nullopt), MapChoice::Fresh);
+}
+
+TEST(Planner, MapsComeInStampOrder) {
+  Quad q;
+  Planner& p = *q.planner;
+  ASSERT_TRUE(p.setMap(flatMap(10, 10), 5000000));
+  EXPECT_FALSE(p.setMap(flatMap(10, 10), 4500000));  // older than the one in use
+  EXPECT_EQ(p.mapUtime(), 5000000);
+  EXPECT_TRUE(p.setMap(flatMap(10, 10), 3000000));  // over a second older: a restarted clock
+  EXPECT_EQ(p.mapUtime(), 3000000);
+  EXPECT_FALSE(p.setMap(flatMap(11, 10), 3100000));  // larger than terrain.max_cells
+  EXPECT_TRUE(p.map().valid());
+  // A clock offset moves the map's stamp with it.
+  p.shiftClock(-1000000);
+  EXPECT_EQ(p.mapUtime(), 2000000);
+}
+
+TEST(Planner, AKnotThatLiftsAFootStartsFromHoldingTorques) {
+  Quad q;
+  Planner& p = *q.planner;
+  p.build(0);
+  LocomotionProblem& loco = p.problem();
+  Solver solver(loco.problem(), SolverKind::Fddp);
+  // Standing: every knot has every foot down.
+  p.beginTick(0.0, 0, std::nullopt);
+  ASSERT_TRUE(p.replan(0.0, q.x, 0.0, solver));
+  const int T = loco.problem().horizon();
+  for (int k = 0; k < T; ++k) ASSERT_EQ(loco.contactMask(k), kAllFeet) << k;
+  // A warm start whose torques are nobody's holding torques.
+  std::vector<Eigen::VectorXd> xs(T + 1, q.x),
+      us(T, Eigen::VectorXd::Constant(loco.holdingControl(kAllFeet).size(), 0.125));
+  ASSERT_TRUE(solver.setWarmStart(xs, us));
+  // The trot comes in: its knots with a foot up start from the torques holding their contacts,
+  // the knots with every foot down keep the warm start's.
+  p.setCommand(BodyCommand{}, q.gait("trot"));
+  p.beginTick(0.0, 0, std::nullopt);
+  ASSERT_TRUE(p.replan(0.0, q.x, 0.0, solver));
+  int lifted = 0, kept = 0;
+  for (int k = 0; k < T; ++k) {
+    const unsigned mask = loco.contactMask(k);
+    if (mask != kAllFeet) {
+      EXPECT_TRUE(solver.us()[k].isApprox(loco.holdingControl(mask))) << "knot " << k;
+      ++lifted;
+    } else {
+      EXPECT_TRUE(solver.us()[k].isApprox(us[k])) << "knot " << k;
+      ++kept;
+    }
+  }
+  EXPECT_GT(lifted, 10);
+  EXPECT_GT(kept, 10);
+  ASSERT_FALSE(loco.holdingControl(0b1001).isApprox(us[0]));
+  // Re-planned again on the same knots, nothing is lifted that was down: the torques stay.
+  for (int k = 0; k < T; ++k) solver.setControl(k, us[k]);
+  ASSERT_TRUE(p.replan(0.0, q.x, 0.0, solver));
+  for (int k = 0; k < T; ++k) EXPECT_TRUE(solver.us()[k].isApprox(us[k])) << "knot " << k;
+}
+
+TEST(Planner, TouchDownsAfterTheStateByContactThenTime) {
+  Quad q;
+  Planner& p = *q.planner;
+  p.build(0);
+  Solver solver(p.problem().problem(), SolverKind::Fddp);
+  p.setCommand(BodyCommand{}, q.gait("trot"));
+  p.beginTick(0.0, 0, std::nullopt);
+  ASSERT_TRUE(p.replan(0.0, q.x, 0.0, solver));
+  // Trot from 0: FL and HR land at 0.3, FR and HL at 0.6 (after the 0.4 s horizon's end).
+  std::vector<std::pair<int, double>> seen;
+  p.touchDowns(0.0, 0.4, 4, 8, [&](int c, const GaitGenerator::Stance& s) {
+    seen.emplace_back(c, s.touch_down);
+    return true;
+  });
+  ASSERT_EQ(seen.size(), 2u);
+  EXPECT_EQ(seen[0].first, 0);
+  EXPECT_EQ(seen[1].first, 3);
+  EXPECT_NEAR(seen[0].second, 0.3, 1e-9);
+  // The visitor says when it is full.
+  int n = 0;
+  p.touchDowns(0.0, 2.0, 4, 8, [&](int, const GaitGenerator::Stance&) { return ++n < 3; });
+  EXPECT_EQ(n, 3);
+}
+
+}  // namespace
+}  // namespace stride
