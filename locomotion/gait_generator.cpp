@@ -60,6 +60,13 @@ Eigen::Matrix3d alignZ(const Eigen::Vector3d& n) {
 const Eigen::Vector3d kUp = Eigen::Vector3d::UnitZ();
 }  // namespace
 
+PostureBlend postureBlend(double height, double max_height, int n) {
+  if (n < 2 || !(max_height > 0.0)) return {};
+  const double u = std::clamp((height + max_height) / (2.0 * max_height), 0.0, 1.0) * (n - 1);
+  const int i = std::min(static_cast<int>(u), n - 2);
+  return {i, u - i};
+}
+
 GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
                              const Eigen::VectorXd& x_nominal, const GaitGeneratorOptions& options)
     : model_(model),
@@ -572,14 +579,12 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
   const Eigen::Quaterniond o = Eigen::Quaterniond(alignZ(ground.normal)) *
                                Eigen::AngleAxisd(s.yaw, Eigen::Vector3d::UnitZ()) * tilt_;
   x_ref.segment<4>(3) << o.x(), o.y(), o.z(), o.w();
-  // The joints of the posture for this height (interpolated between the solved ones).
+  // The joints of the posture for the commanded height (interpolated between the solved ones).
   const int n = static_cast<int>(crouch_.size());
   if (n > 1) {
-    const double H = options_.max_height;
-    const double u = std::clamp((s.height + H) / (2.0 * H), 0.0, 1.0) * (n - 1);
-    const int i = std::min(static_cast<int>(u), n - 2);
-    const double r = u - i;
-    x_ref.segment(7, nq - 7) = (1.0 - r) * crouch_[i] + r * crouch_[i + 1];
+    const PostureBlend b = postureBlend(s.height, options_.max_height, n);
+    x_ref.segment(7, nq - 7) =
+        (1.0 - b.weight) * crouch_[b.lower] + b.weight * crouch_[b.lower + 1];
   }
   // The twist in the base frame: the heading frame's, seen through the nominal tilt.
   const Eigen::Matrix3d untilt = tilt_.conjugate().toRotationMatrix();
@@ -590,6 +595,10 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
 Eigen::Vector3d GaitGenerator::basePosition(double t) const {
   const Sample s = baseAt(t);
   return {s.x, s.y, z_nominal_ + s.height + groundAt(t).height};
+}
+
+double GaitGenerator::height(double t) const {
+  return baseAt(t).height;
 }
 
 double GaitGenerator::baseYaw(double t) const {
