@@ -6,11 +6,11 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include "solver/multibody/center_of_mass.hpp"
 #include "solver/multibody/frames.hpp"
-#include "solver/multibody/jacobian.hpp"
-#include "solver/multibody/lie_group.hpp"
+#include "solver/multibody/inverse_kinematics.hpp"
 #include "terrain/foothold.hpp"
 #include "terrain/ground_plane.hpp"
 
@@ -59,6 +59,13 @@ Eigen::Matrix3d alignZ(const Eigen::Vector3d& n) {
 
 const Eigen::Vector3d kUp = Eigen::Vector3d::UnitZ();
 }  // namespace
+
+PostureBlend postureBlend(double height, double max_height, int n) {
+  if (n < 2 || !(max_height > 0.0)) return {};
+  const double u = std::clamp((height + max_height) / (2.0 * max_height), 0.0, 1.0) * (n - 1);
+  const int i = std::min(static_cast<int>(u), n - 2);
+  return {i, u - i};
+}
 
 GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
                              const Eigen::VectorXd& x_nominal, const GaitGeneratorOptions& options)
@@ -128,51 +135,29 @@ GaitGenerator::GaitGenerator(const Model& model, const ContactSet& contacts,
 }
 
 void GaitGenerator::buildCrouches(const ContactSet& contacts) {
-  const int nq = model_.nq, nv = model_.nv, nj = nv - 6;
+  const int nq = model_.nq;
   const int n = options_.max_height > 0.0 ? kCrouches : 1;
   Data data(model_);
-  Eigen::VectorXd q0 = x_nominal_.head(nq);
+  const Eigen::VectorXd q0 = x_nominal_.head(nq);
   framesForwardKinematics(model_, data, q0);
-  std::vector<SE3> targets;
-  int rows = 0;
-  for (int c = 0; c < nc_; ++c) {
-    targets.push_back(data.oMf[contacts[c].frame]);
-    rows += contacts[c].dim == 6 ? 6 : 3;
-  }
-  Eigen::MatrixXd J(rows, nj), Jc(6, nv);
-  Eigen::VectorXd e(rows), dv = Eigen::VectorXd::Zero(nv);
+  // Every foot back on its nominal place (a sole flat, its error the SE(3) log), the joints only
+  // moving: damped Gauss-Newton (solver/multibody/inverse_kinematics.hpp) with a damping small
+  // enough that a reachable posture is met to 1e-10.
+  std::vector<IkTarget> targets;
+  for (int c = 0; c < nc_; ++c)
+    targets.push_back({contacts[c].frame, contacts[c].dim == 6 ? 6 : 3, ReferenceFrame::Local,
+                       data.oMf[contacts[c].frame]});
+  InverseKinematicsOptions o;
+  o.damping = 1e-8;
+  o.max_iterations = 100;
+  o.tolerance = 1e-10;
+  InverseKinematics ik(model_, std::move(targets), InverseKinematics::jointColumns(model_), o);
   for (int i = 0; i < n; ++i) {
     const double h = n == 1 ? 0.0 : options_.max_height * (2.0 * i / (n - 1) - 1.0);
     Eigen::VectorXd q = q0;
     q[2] += h;
-    // Damped Gauss-Newton on the joints only: every foot back on its nominal place (soles flat).
-    double residual = 0.0;
-    for (int it = 0; it < 100; ++it) {
-      computeJointJacobians(model_, data, q);
-      updateFramePlacements(model_, data);
-      int r = 0;
-      for (int c = 0; c < nc_; ++c) {
-        const int f = contacts[c].frame;
-        if (contacts[c].dim == 6) {
-          const SE3 error = targets[c].actInv(data.oMf[f]);
-          getFrameJacobian(model_, data, f, ReferenceFrame::Local, Jc);
-          e.segment<6>(r) = log6(error);
-          J.middleRows<6>(r) = Jlog6(error) * Jc.rightCols(nj);
-          r += 6;
-        } else {
-          getFrameJacobian(model_, data, f, ReferenceFrame::LocalWorldAligned, Jc);
-          e.segment<3>(r) = data.oMf[f].p - targets[c].p;
-          J.middleRows<3>(r) = Jc.topRows<3>().rightCols(nj);
-          r += 3;
-        }
-      }
-      residual = e.norm();
-      if (residual < 1e-10) break;
-      const Eigen::MatrixXd JJt = J * J.transpose() + 1e-8 * Eigen::MatrixXd::Identity(rows, rows);
-      dv.tail(nj) = -J.transpose() * JJt.ldlt().solve(e);
-      q = integrate(model_, q, dv);
-    }
-    if (!(residual < 1e-6))
+    const IkResult result = ik.solve(q);
+    if (!(result.error < 1e-6))
       throw std::invalid_argument(
           "GaitGenerator: with the base " + std::to_string(h) +
           " m from its nominal height the feet cannot reach their places (max_height too large)");
@@ -572,14 +557,12 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
   const Eigen::Quaterniond o = Eigen::Quaterniond(alignZ(ground.normal)) *
                                Eigen::AngleAxisd(s.yaw, Eigen::Vector3d::UnitZ()) * tilt_;
   x_ref.segment<4>(3) << o.x(), o.y(), o.z(), o.w();
-  // The joints of the posture for this height (interpolated between the solved ones).
+  // The joints of the posture for the commanded height (interpolated between the solved ones).
   const int n = static_cast<int>(crouch_.size());
   if (n > 1) {
-    const double H = options_.max_height;
-    const double u = std::clamp((s.height + H) / (2.0 * H), 0.0, 1.0) * (n - 1);
-    const int i = std::min(static_cast<int>(u), n - 2);
-    const double r = u - i;
-    x_ref.segment(7, nq - 7) = (1.0 - r) * crouch_[i] + r * crouch_[i + 1];
+    const PostureBlend b = postureBlend(s.height, options_.max_height, n);
+    x_ref.segment(7, nq - 7) =
+        (1.0 - b.weight) * crouch_[b.lower] + b.weight * crouch_[b.lower + 1];
   }
   // The twist in the base frame: the heading frame's, seen through the nominal tilt.
   const Eigen::Matrix3d untilt = tilt_.conjugate().toRotationMatrix();
@@ -590,6 +573,10 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
 Eigen::Vector3d GaitGenerator::basePosition(double t) const {
   const Sample s = baseAt(t);
   return {s.x, s.y, z_nominal_ + s.height + groundAt(t).height};
+}
+
+double GaitGenerator::height(double t) const {
+  return baseAt(t).height;
 }
 
 double GaitGenerator::baseYaw(double t) const {

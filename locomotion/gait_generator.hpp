@@ -55,6 +55,18 @@ struct BodyCommand {
   double height = 0.0;        // [m], from the nominal posture's
 };
 
+// Where a body height offset falls among the body-height postures (GaitGenerator::
+// crouchPostures: n postures for offsets spread evenly over [-max_height, max_height]): between
+// posture `lower` and `lower + 1`, with `weight` on the upper one; the offset clamped to the range.
+// The one interpolation of the postures: the joints' reference (GaitGenerator::state) and the
+// holding torques of the control reference (LocomotionProblem) both blend by it, at the commanded
+// offset (GaitGenerator::height), never at the base's height, which also carries the ground's.
+struct PostureBlend {
+  int lower = 0;
+  double weight = 0.0;
+};
+PostureBlend postureBlend(double height, double max_height, int n);
+
 // Where a stance's position came from (horizon_t.foothold_source carries it as a number).
 enum class StanceSource : std::uint8_t {
   Measured = 0,     // the foot is (or was) down there: its measured position
@@ -184,6 +196,10 @@ class GaitGenerator {
   Eigen::Vector3d com(double t) const;
   // The base reference at t: position, yaw.
   Eigen::Vector3d basePosition(double t) const;
+  // The body height offset commanded at t (the command's, over the ground under the feet; the
+  // base's reference height is the nominal one plus it plus the ground's): the posture the joints'
+  // and the control's references hold (postureBlend).
+  double height(double t) const;
   // The ground the feet feel, blind (options.ground_time_constant), beyond the dead bands: its
   // height at the centroid of the feet down [m] and its slope (dz/dx, dz/dy); every blind
   // foothold, the base and the centre of mass are planned on that plane.

@@ -260,7 +260,7 @@ bool LocomotionProblem::update(double t0, const GaitGenerator& reference) {
     reference.state(t, x_ref_);
     static_cast<StateResidual&>(*costs[state_term_].residual).setReference(x_ref_);
     static_cast<ControlResidual&>(*costs[control_term_].residual)
-        .setReference(holdingControlAt(mask, x_ref_[2] - x_nominal_[2]));
+        .setReference(holdingControlAt(mask, reference.height(t)));
     if (com_term_ >= 0)
       static_cast<ComPositionResidual&>(*costs[com_term_].residual).setReference(reference.com(t));
     after_impulse = impulse;
@@ -293,11 +293,9 @@ void LocomotionProblem::setPostures(const std::vector<Eigen::VectorXd>& joints, 
 const Eigen::VectorXd& LocomotionProblem::holdingControlAt(unsigned mask, double height) {
   const int n = static_cast<int>(u_posture_.size());
   if (n < 2) return u_hold_[mask];
-  // The same interpolation as the joints' reference (GaitGenerator::state).
-  const double s = std::clamp((height + max_height_) / (2.0 * max_height_), 0.0, 1.0) * (n - 1);
-  const int i = std::min(static_cast<int>(s), n - 2);
-  const double r = s - i;
-  u_ref_ = (1.0 - r) * u_posture_[i][mask] + r * u_posture_[i + 1][mask];
+  // The joints' reference's blend (GaitGenerator::state), at the same commanded height.
+  const PostureBlend b = postureBlend(height, max_height_, n);
+  u_ref_ = (1.0 - b.weight) * u_posture_[b.lower][mask] + b.weight * u_posture_[b.lower + 1][mask];
   return u_ref_;
 }
 

@@ -6,8 +6,9 @@
 // Every running knot has
 //   "state"        ½ Σ w_i (x ⊖ x_ref)_i²: x_ref = the generator's base pose and twist, the
 //                  joints at the posture of the commanded body height, at rest;
-//   "control"      ½ w |u - u_ref|²: u_ref = the torques that hold the nominal posture still on
-//                  the knot's closed contacts (minimum-norm forces), so standing costs nothing;
+//   "control"      ½ w |u - u_ref|²: u_ref = the torques that hold the posture of the commanded
+//                  body height (the nominal one without setPostures) still on the knot's closed
+//                  contacts (minimum-norm forces), so standing costs nothing;
 //   "cone_<c>"     friction cone of contact c, on while c is closed;
 //   "cop_<c>"      centre of pressure of surface contact c inside its sole (options.
 //                  sole_half_extents), on while c is closed;
@@ -137,10 +138,11 @@ class LocomotionProblem {
   std::vector<Eigen::VectorXd> holdingControlsOf(const Eigen::VectorXd& q) const;
   // The body-height postures a generator's references move through (GaitGenerator::
   // crouchPostures: joint positions for offsets spread evenly over [-max_height, max_height]):
-  // each knot's control reference then holds the posture of its reference height instead of the
-  // nominal one, whose torques are not those of a raised or crouched body (on the quadruped's
-  // trot the effect on the height reached is small: ~1 mm). Setup (allocates); fewer than two
-  // postures: none.
+  // each knot's control reference then holds the posture of the commanded body height
+  // (GaitGenerator::height, blended by postureBlend as the joints' reference is; not the base's
+  // height, which carries the ground's too) instead of the nominal one, whose torques are not
+  // those of a raised or crouched body (on the quadruped's trot the effect on the height reached
+  // is small: ~1 mm). Setup (allocates); fewer than two postures: none.
   void setPostures(const std::vector<Eigen::VectorXd>& joints, double max_height);
   // A warm start that follows the references: each knot's state reference and holding control
   // (after update).
@@ -166,6 +168,7 @@ class LocomotionProblem {
   std::vector<std::vector<Eigen::VectorXd>> u_posture_;  // per posture, per contact mask
   double max_height_ = 0.0;
   Eigen::VectorXd u_ref_;  // scratch: the interpolated holding torques
+  // The holding torques of mask at the commanded body height `height` (postureBlend).
   const Eigen::VectorXd& holdingControlAt(unsigned mask, double height);
   Eigen::VectorXd u_lower_, u_upper_;
   // The duration of the contact knot starting at plan time t, in grid segment seg with left of its

@@ -11,7 +11,6 @@
 #include "solver/multibody/crba.hpp"
 #include "solver/multibody/frames.hpp"
 #include "solver/multibody/jacobian.hpp"
-#include "solver/multibody/lie_group.hpp"
 
 namespace stride::sim {
 
@@ -57,7 +56,7 @@ StandDown::StandDown(const Model& model, const HoldPolicy& hold,
       options_(options),
       in_leg_(hold.kp.size(), 0),
       data_(model),
-      J_(Matrix6Xd::Zero(6, model.nv)),
+      dv_(Eigen::VectorXd::Zero(model.nv)),
       q_start_(hold.q_ref),
       u_start_(Eigen::VectorXd::Zero(hold.kp.size())) {
   if (!model.hasFreeFlyer()) return;  // a fixed base has nothing to level: default posture only
@@ -90,6 +89,16 @@ StandDown::StandDown(const Model& model, const HoldPolicy& hold,
                                   " joints of its own (1 to " + std::to_string(kMaxLegJoints) +
                                   " expected)");
     leg.base_to_foot = base.actInv(data_.oMf[leg.frame]);
+    // The foot's position (a sole's placement, its orientation error first order in world axes,
+    // as the step is taken afresh every physics step) by the leg's joints; one step each time,
+    // its error capped at max_step.
+    InverseKinematicsOptions ik;
+    ik.damping = kDamping * kDamping;
+    ik.max_error = options.max_step;
+    ik_.emplace_back(model,
+                     std::vector<IkTarget>{{leg.frame, leg.dim, ReferenceFrame::LocalWorldAligned,
+                                            data_.oMf[leg.frame]}},
+                     leg.columns, ik);
     legs_.push_back(std::move(leg));
   }
   // Where the centre of mass stands over the feet in the default posture (base frame, horizontal):
@@ -116,12 +125,6 @@ void StandDown::begin(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
   for (Leg& leg : legs_) leg.latched = false;
 }
 
-// GCC 12 warns that Eigen's AVX-512 reductions read past the legs' small vectors (at most 6 of 8
-// lanes): they take the 8-wide packet path only for sizes of 8 and more, a false positive.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Warray-bounds"
-#endif
 void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
                        const Eigen::Ref<const Eigen::VectorXd>& v, unsigned on_ground,
                        Eigen::Ref<Eigen::VectorXd> tau) {
@@ -208,46 +211,24 @@ void StandDown::torque(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
   const Eigen::Vector3d base_target(base_xy.x(), base_xy.y(), base.p.z());
   for (std::size_t c = 0; c < legs_.size(); ++c) {
     Leg& leg = legs_[c];
-    const SE3& foot = updateFramePlacement(model_, data_, leg.frame);
     // Where the foot belongs in a level base frame at base_target: a planted foot at its place on
     // the ground at the default's depth (the base's height), a foot in the air under its hip.
     // Compared with where the foot is in the real base frame: a tilted base shows as the feet's
-    // height differences, which the legs then undo.
+    // height differences, which the legs then undo. A sole: as at the default posture relative to
+    // the base.
     Eigen::Vector3d target = leg.base_to_foot.p;
     if (leg.latched) target.head<2>() = (level.transpose() * (leg.anchor - base_target)).head<2>();
-    LegVector e(leg.dim);
-    e.head<3>() = target - base.R.transpose() * (foot.p - base.p);
-    if (leg.dim == 6) {  // a sole: as at the default posture relative to a level base
-      const Eigen::Matrix3d foot_in_base = base.R.transpose() * foot.R;
-      e.tail<3>() = foot_in_base * log3(foot_in_base.transpose() * leg.base_to_foot.R);
-    }
-    const double norm = e.norm();
-    if (norm > options_.max_step) e *= options_.max_step / norm;
-
-    // One damped least-squares step of the leg's inverse kinematics (base held where it is).
-    getFrameJacobian(model_, data_, leg.frame, ReferenceFrame::LocalWorldAligned, J_);
-    const int n = static_cast<int>(leg.joints.size());
-    LegJacobian A(leg.dim, n);
-    for (int k = 0; k < n; ++k) {  // in the base's axes, as the errors
-      A.col(k).head<3>() = base.R.transpose() * J_.col(leg.columns[k]).head<3>();
-      if (leg.dim == 6) A.col(k).tail<3>() = base.R.transpose() * J_.col(leg.columns[k]).tail<3>();
-    }
-    LegSquare AAt(leg.dim, leg.dim);
-    AAt.noalias() = A * A.transpose();
-    AAt.diagonal().array() += kDamping * kDamping;
-    const Eigen::LDLT<LegSquare> ldlt(AAt);
-    const LegVector y = ldlt.solve(e);
-    for (int k = 0; k < n; ++k) {
+    // One damped least-squares step of the leg's inverse kinematics (base held where it is), to
+    // that target carried into the world by the real base.
+    ik_[c].setTarget(0, SE3(base.R * leg.base_to_foot.R, base.p + base.R * target));
+    ik_[c].stepFromKinematics(data_, dv_);
+    for (std::size_t k = 0; k < leg.joints.size(); ++k) {
       const int i = leg.joints[k];
-      const double dq = A.col(k).dot(y);
       // The PD on the IK step: q_ref − q = dq.
-      tau[i] = msg::jointPd((1.0 - s) * u_start_[i], hold_.kp[i], hold_.kd[i], dq, 0.0,
-                            v[leg.columns[k]]);
+      tau[i] = msg::jointPd((1.0 - s) * u_start_[i], hold_.kp[i], hold_.kd[i], dv_[leg.columns[k]],
+                            0.0, v[leg.columns[k]]);
     }
   }
 }
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
 
 }  // namespace stride::sim

@@ -7,9 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include <Eigen/Cholesky>
-
 #include "solver/multibody/data.hpp"
+#include "solver/multibody/inverse_kinematics.hpp"
 #include "solver/multibody/model.hpp"
 
 namespace stride::sim {
@@ -90,9 +89,6 @@ class StandDown {
   static constexpr std::size_t kMaxLegJoints = 12;
   static constexpr double kDamping = 0.01;  // [m] of the damped least squares: near a straight
                                             // knee the step stays bounded
-  using LegJacobian = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, kMaxLegJoints>;
-  using LegVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
-  using LegSquare = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
   int freeFlyerJoint() const;
 
   struct Leg {
@@ -108,9 +104,12 @@ class StandDown {
   const HoldPolicy& hold_;
   StandDownOptions options_;
   std::vector<Leg> legs_;
+  // Per leg: one damped least-squares step towards its foot's target, on its own joints'
+  // columns (solver/multibody/inverse_kinematics.hpp; workspaces allocated at construction).
+  std::vector<InverseKinematics> ik_;
   std::vector<char> in_leg_;  // per actuated joint: belongs to a leg
   Data data_;
-  Matrix6Xd J_;
+  Eigen::VectorXd dv_;                                       // nv: a leg's step
   Eigen::Vector2d com_over_feet_ = Eigen::Vector2d::Zero();  // default posture, base frame
   double t0_ = 0.0;
   Eigen::VectorXd q_start_, u_start_;

@@ -17,6 +17,7 @@
 #include "solver/contact/contact_dynamics.hpp"
 #include "solver/ddp/solver.hpp"
 #include "solver/ocp/residual_frame.hpp"
+#include "solver/ocp/residual_state.hpp"
 #include "terrain/steppability.hpp"
 
 namespace stride {
@@ -262,6 +263,79 @@ TEST(LocomotionProblem, ASwingToAFootholdNearAnEdgeWeighsEveryAxis) {
   ASSERT_TRUE(c.update(0.0));
   EXPECT_FALSE(c.ref->stance(FL, 1).near_edge);
   EXPECT_EQ(flSwingWeights(), Eigen::Vector3d(1e3, 1e3, 1e4));
+}
+
+// On raised ground and on a flight of stairs, the control reference of every knot holds the posture
+// of the COMMANDED body height, blended between the crouch postures exactly as the joints'
+// reference is: the ground under the feet raises the base reference, not the offset of the body
+// over the feet (a control reference fed the base's height above the nominal one sat at the highest
+// posture's torques, 30 cm up, while the joints asked for the commanded one).
+TEST(LocomotionProblem, OnStairsTheControlReferenceHoldsTheCommandedHeight) {
+  Case c = loco_cases::make(Problem::SoloTrot, kShared);
+  const loco_cases::Robot& r = *c.robot;
+  LocomotionProblem& loco = *c.loco;
+  GaitGeneratorOptions g = c.ref->options();
+  g.max_height = 0.04;  // solo12's (config/controller/solo12.yaml): postures every 1 cm
+  GaitGenerator gen(r.model, r.contacts, r.x_nominal, g);
+  gen.timeline().reset(gen.timeline().addPattern(loco_cases::soloTrot()), 0.0);
+  ASSERT_EQ(gen.crouchPostures().size(), 9u);
+  loco.setPostures(gen.crouchPostures(), g.max_height);
+  // A commanded height half way between two solved postures: 1.5 cm is u = 5.5 of 0..8.
+  BodyCommand command = c.velocity;
+  command.height = 0.015;
+  gen.setCommand(command);
+  const int nq = r.model.nq;
+  auto holding = [&](int i) {
+    Eigen::VectorXd q = r.x_nominal.head(nq);
+    q.tail(nq - 7) = gen.crouchPostures()[i];
+    return loco.holdingControlsOf(q);
+  };
+  const std::vector<Eigen::VectorXd> u5 = holding(5), u6 = holding(6), u8 = holding(8);
+  const Eigen::VectorXd joints = 0.5 * (gen.crouchPostures()[5] + gen.crouchPostures()[6]);
+  // The robot stands 30 cm up (feet, base and all).
+  Eigen::VectorXd x0 = r.x_nominal;
+  x0[2] += 0.3;
+  auto check = [&](const char* where) {
+    ASSERT_TRUE(gen.plan(0.0, x0, 0.0, loco.span()));
+    ASSERT_TRUE(loco.update(0.0, gen));
+    Eigen::VectorXd x_ref(x0.size());
+    double worst = 0.0, worst_vs_highest = 0.0;
+    for (int k = 0; k < loco.problem().horizon(); ++k) {
+      const double t = loco.knotTime(k);
+      gen.state(t, x_ref);
+      EXPECT_GT(x_ref[2] - r.x_nominal[2], 0.25) << where << " knot " << k;  // on the ground
+      EXPECT_NEAR((x_ref.segment(7, nq - 7) - joints).norm(), 0.0, 1e-12) << where << " " << k;
+      const KnotModel& knot = knotAt(loco, k);
+      const Eigen::VectorXd& u =
+          static_cast<const ControlResidual&>(*knot.costs()[knot.costs().find("control")].residual)
+              .reference();
+      const unsigned mask = loco.contactMask(k);
+      const Eigen::VectorXd expected = 0.5 * (u5[mask] + u6[mask]);
+      worst = std::max(worst, (u - expected).cwiseAbs().maxCoeff());
+      worst_vs_highest = std::max(worst_vs_highest, (u - u8[mask]).cwiseAbs().maxCoeff());
+    }
+    std::printf("%s: |u_ref - u(commanded 1.5 cm)| <= %.3g N m, |u_ref - u(highest)| <= %.3g\n",
+                where, worst, worst_vs_highest);
+    EXPECT_LT(worst, 1e-12) << where;
+  };
+  check("raised ground (blind)");
+  // A flight of stairs up ahead of the robot (10 cm risers, 20 cm treads from x = 0.25) on a map
+  // that is 30 cm high under it.
+  terrain::ElevationMap m;
+  m.resolution = 0.01;
+  m.origin_x = -1.0;
+  m.origin_y = -1.0;
+  m.resize(201, 301);
+  for (int row = 0; row < m.rows; ++row)
+    for (int col = 0; col < m.cols; ++col) {
+      const double x = m.origin_x + col * m.resolution;
+      m.at(row, col) =
+          static_cast<float>(0.3 + 0.1 * std::max(0.0, std::floor((x - 0.25) / 0.2) + 1.0));
+    }
+  terrain::Steppability stairs({}, m.rows * m.cols);
+  ASSERT_TRUE(stairs.update(m));
+  gen.setMap(&stairs);
+  check("stairs (map)");
 }
 
 // A non-uniform grid (LocomotionOptions::grid): the first segment's knots from t0, then each

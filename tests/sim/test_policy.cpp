@@ -10,6 +10,7 @@
 #include "messages/policy_interpolation.hpp"
 #include "sim/disturbances.hpp"
 #include "sim_cases.hpp"
+#include "solver/multibody/jacobian.hpp"
 #include "solver/multibody/lie_group.hpp"
 
 namespace stride {
@@ -290,6 +291,75 @@ TEST(Policy, StandDownHoldsPlantedFeetAtTheDefaultDepthAndBringsTheOthersUnderTh
   EXPECT_GT(std::abs(tau[3]), 0.5);
   EXPECT_NEAR(tau[3], tau[6], 0.01);
   EXPECT_NEAR(tau[3], tau[9], 0.01);
+}
+
+// The legs' step is solver/multibody/inverse_kinematics.hpp's since issue 43; before, the
+// stand-down wrote its own damped least squares in the base's axes: e = [target − Rᵀ(p_f − p_b);
+// the sole's F log3(Fᵀ B)] (F = Rᵀ R_f, B the default's foot in the base), capped at max_step, A =
+// Rᵀ J on the leg's joints, dq = Aᵀ (A Aᵀ + (1 cm)² I)⁻¹ e. The step is invariant to that rotation:
+// a tilted body with bent legs, feet in the air (each goes under its hip), gives the same torques
+// to rounding on both robots (point feet and soles).
+TEST(Policy, StandDownLegStepIsTheBaseFrameDampedLeastSquares) {
+  for (const char* name : {"stride_quad", "stride_humanoid"}) {
+    const Robot& r = robot(name);
+    const Model& model = r.model;
+    const int nv = model.nv, nu = nv - 6;
+    const double kp = 10.0, max_step = 0.05;
+    sim::HoldPolicy hold(r.model, r.default_q, kp, 0.0);
+    sim::StandDown down(model, hold, standDownContacts(r), sim::StandDownOptions{0.05, 0.2});
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Eigen::VectorXd q = r.default_q;
+    for (int i = 7; i < model.nq; ++i) q[i] += 0.15 * u(rng);
+    const Eigen::Quaterniond tilt(
+        Eigen::AngleAxisd(0.2, Eigen::Vector3d(1.0, 0.5, 0.0).normalized()));
+    q.segment<4>(3) << tilt.x(), tilt.y(), tilt.z(), tilt.w();
+    const Eigen::VectorXd v = Eigen::VectorXd::Zero(nv);
+    Eigen::VectorXd tau(nu);
+    down.begin(0.0, q, Eigen::VectorXd::Zero(nu));
+    down.torque(1.0, q, v, 0u, tau);  // after the ramp: the PD alone, kp dq on a leg's joints
+
+    Data d0(model), d(model);
+    framesForwardKinematics(model, d0, r.default_q);
+    computeJointJacobians(model, d, q);
+    updateFramePlacements(model, d);
+    const SE3& base0 = d0.oMi[1];
+    const SE3& base = d.oMi[1];
+    std::vector<int> users(nu, 0);
+    for (const ContactSpec& c : r.contacts)
+      for (int j = model.frames[model.getFrameId(c.frame)].parentJoint; j > 1;
+           j = model.joints[j].parent)
+        ++users[model.joints[j].idx_v - 6];
+    int compared = 0;
+    for (const ContactSpec& c : r.contacts) {
+      const int f = model.getFrameId(c.frame), dim = c.dim == 6 ? 6 : 3;
+      std::vector<int> cols;
+      for (int j = model.frames[f].parentJoint; j > 1; j = model.joints[j].parent)
+        if (users[model.joints[j].idx_v - 6] == 1) cols.push_back(model.joints[j].idx_v);
+      const SE3 B = base0.actInv(d0.oMf[f]);
+      Eigen::VectorXd e(dim);
+      e.head<3>() = B.p - base.R.transpose() * (d.oMf[f].p - base.p);
+      if (dim == 6) {
+        const Eigen::Matrix3d F = base.R.transpose() * d.oMf[f].R;
+        e.tail<3>() = F * log3(F.transpose() * B.R);
+      }
+      if (e.norm() > max_step) e *= max_step / e.norm();
+      Matrix6Xd J = Matrix6Xd::Zero(6, nv);
+      getFrameJacobian(model, d, f, ReferenceFrame::LocalWorldAligned, J);
+      Eigen::MatrixXd A(dim, cols.size());
+      for (std::size_t k = 0; k < cols.size(); ++k) {
+        A.col(k).head<3>() = base.R.transpose() * J.col(cols[k]).head<3>();
+        if (dim == 6) A.col(k).tail<3>() = base.R.transpose() * J.col(cols[k]).tail<3>();
+      }
+      Eigen::MatrixXd AAt = A * A.transpose();
+      AAt.diagonal().array() += 0.01 * 0.01;
+      const Eigen::VectorXd dq = A.transpose() * AAt.ldlt().solve(e);
+      for (std::size_t k = 0; k < cols.size(); ++k, ++compared)
+        EXPECT_NEAR(tau[cols[k] - 6], kp * dq[k], 1e-12 * std::max(1.0, std::abs(kp * dq[k])))
+            << name << " " << c.frame << " joint " << cols[k];
+    }
+    EXPECT_GE(compared, 12) << name;
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
