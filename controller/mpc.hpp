@@ -94,6 +94,9 @@ class Mpc {
   std::int64_t modelHash() const { return policy_.model_hash; }
   // The controller's identity on the policy channel (policy_t.source_id; MpcNode draws it).
   void setSourceId(std::int64_t id) { policy_.source_id = previous_.source_id = id; }
+  // The robot run its policies answer (policy_t.session: robot_state_t.session of the newest
+  // state; MpcNode sets it before each tick).
+  void setSession(std::int64_t session) { policy_.session = previous_.session = session; }
   int nu() const { return nu_; }
   bool started() const { return loco_ != nullptr; }
 
