@@ -52,6 +52,7 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
   floating_ = model.hasFreeFlyer();
   msg::shape(incoming_, model.nq, model.nv, kMaxContactFlags);
   msg::shape(newest_, model.nq, model.nv, kMaxContactFlags);
+  newest_.session = incoming_.session = 0;  // no robot run yet (lcm-gen leaves fields unset)
   mpc_status_t status{};
   status.gait.assign(msg::kMaxGaitName, 'x');  // the longest a status may carry
   buffer_.resize(std::max(msg::policyWireSize(config.policy_knots, model.nq, model.nv, mpc_.nu()),
@@ -319,8 +320,12 @@ void MpcNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channe
   const int size = authenticated(kPolicySlot, rbuf, channel);
   std::int64_t source = 0;
   if (size < 0 || !msg::readPolicySource(rbuf->data, size, source)) return;
-  auth_.accept(kPolicySlot);  // a controller's policy, ours or a rival's: its signature is spent
-  if (source == source_id_) return;  // our own
+  if (source == source_id_) {
+    // Our own, back from the bus: its signature is spent. A rival's are only watched (counted
+    // each time), never remembered: a key holder's junk here must not refuse our own echoes.
+    auth_.accept(kPolicySlot);
+    return;
+  }
   ++rival_policies_;
   for (int i = 0; i < n_rivals_; ++i)
     if (rivals_[i] == source) return;

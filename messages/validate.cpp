@@ -290,6 +290,7 @@ bool decode(const void* buf, int size, robot_state_t& m) {
 }
 
 void shape(robot_state_t& m, int nq, int nv, int ncontacts) {
+  m.session = 0;  // no robot run yet (lcm-gen leaves the fields unset)
   m.nq = nq;
   m.nv = nv;
   m.ncontacts = ncontacts;
@@ -299,6 +300,7 @@ void shape(robot_state_t& m, int nq, int nv, int ncontacts) {
 }
 
 void shape(policy_t& m, int knots, int nq, int nv, int nu) {
+  m.session = 0;  // answers no robot run yet
   m.knots = knots;
   m.nq = nq;
   m.nv = nv;

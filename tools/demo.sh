@@ -11,7 +11,8 @@
 #                 [--robots-dir DIR]... [--check-tracking] [--host-network] [--out DIR]
 #                 [--summary FILE] [--spy] [--viz [--viz-port P]]
 #                 [--slow-host F] [--kill-controller T] [--pause-controller T D]
-#                 [--kill-sim T] [--flood RATE] [--forged-flood RATE] [--rival | --rival-key]
+#                 [--kill-sim T] [--flood RATE] [--forged-flood RATE] [--replay-log FILE]
+#                 [--rival | --rival-key]
 #                 [--key-file F | --no-signing]
 #                 [--terrain NAME|FILE [--map-rate HZ]]
 #
@@ -90,6 +91,11 @@
 #                     sender each and a made-up mac (stride-flood --forged, at nice 10): what an
 #                     attacker without the key can send. Needs signing (not --no-signing).
 #                     tools/faults.sh --forged-flood runs it
+#   --replay-log FILE also replay FILE (an lcm-logger log of an earlier session, e.g. another demo's
+#                     DIR/session.lcmlog signed with the same --key-file) on the bus from the
+#                     robot's start, at its pace (lcm-logplayer): a recording replayed by an
+#                     attacker without the key (issue 44: every message refused as stale or of
+#                     another run). tools/faults.sh --replay runs it
 #   --kill-sim T      SIGKILL stride-sim (the mock robot) T seconds after it starts and start a new
 #                     one 1 s later, standing at the default posture at the origin, for the rest of
 #                     the duration: the controller must take the new robot over as it is (issue
@@ -113,7 +119,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad by_name=0 user_config="" no_setup=0 commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
-spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood="" forged_flood="" kill_sim="" rival=0
+spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood="" forged_flood="" replay_log="" kill_sim="" rival=0
 pause_at="" pause_for="" terrain="" map_rate="" signing=1 key_file="" rival_key=0
 robots_dirs=()
 args=("$@")
@@ -147,6 +153,7 @@ while [ $# -gt 0 ]; do
       pause_at="$2" pause_for="$3"; shift 3 ;;
     --flood) need_value "$@"; flood="$2"; shift 2 ;;
     --forged-flood) need_value "$@"; forged_flood="$2"; shift 2 ;;
+    --replay-log) need_value "$@"; replay_log=$(cd "$(dirname "$2")" && pwd)/$(basename "$2"); shift 2 ;;
     --kill-sim) need_value "$@"; kill_sim="$2"; shift 2 ;;
     --rival) rival=1; shift ;;
     --rival-key) rival=1 rival_key=1; shift ;;
@@ -535,6 +542,12 @@ if [ -n "$pause_at" ]; then
   pids+=($!)
 fi
 robot_started=$(date +%s.%N)  # the faults that last the whole run start here
+if [ -n "$replay_log" ]; then
+  # The attacker's replay of a recording, at its pace, from the robot's start (issue 44).
+  timeout -k 10 "$limit" nice -n 10 "${side[@]}" lcm-logplayer "$replay_log" \
+    > "$out/replay.txt" 2>&1 &
+  pids+=($!)
+fi
 if [ "$commands" = none ]; then
   # No command source: whoever joins the bus drives (the controller stands until then).
   join=""
@@ -668,8 +681,8 @@ fault_end=""
 [ -n "$kill_controller" ] && fault_end=$(sed -n 's/^demo: started a new stride-mpc at //p' "$out/kill.txt" 2>/dev/null)
 [ -n "$pause_at" ] && fault_end=$(sed -n 's/^demo: woke stride-mpc at //p' "$out/pause.txt" 2>/dev/null)
 [ -n "$kill_sim" ] && fault_end=$(cat "$out/sim-restart.txt" 2>/dev/null)
-{ [ "$rival" = 1 ] || [ -n "$flood$forged_flood" ]; } && fault_end=$robot_started
-if [ -n "$kill_controller$pause_at$kill_sim$flood$forged_flood" ] || [ "$rival" = 1 ]; then
+{ [ "$rival" = 1 ] || [ -n "$flood$forged_flood$replay_log" ]; } && fault_end=$robot_started
+if [ -n "$kill_controller$pause_at$kill_sim$flood$forged_flood$replay_log" ] || [ "$rival" = 1 ]; then
   if [ -n "$fault_end" ]; then
     summary_args+=(--fault-end-wall "$fault_end")
   else

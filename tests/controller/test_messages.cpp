@@ -205,7 +205,7 @@ TEST_F(NodeInput, RejectsAndCountsMalformedStates) {
   std::vector<unsigned char> b(m.getEncodedSize());
   m.encode(b.data(), 0, static_cast<int>(b.size()));
   std::vector<unsigned char> huge = b;
-  huge[24] = 0x7f;  // nq = 2^31 - ...: must never reach the decoder
+  huge[32] = 0x7f;  // nq = 2^31 - ...: must never reach the decoder
   feed(huge.data(), static_cast<int>(huge.size()));
   EXPECT_EQ(node_.rejected(Reject::WrongModel), 4);
   huge = b;
@@ -634,8 +634,11 @@ TEST(NodeSigned, RefusesWhatIsNotSignedWithItsKey) {
   ASSERT_FALSE(out.policy.empty());
   msg::Verifier robot_side(key);
   int payload = 0;
-  EXPECT_EQ(robot_side.check("STRIDE_POLICY", out.policy.data(),
-                             static_cast<int>(out.policy.size()), payload),
+  timespec wall{};
+  clock_gettime(CLOCK_REALTIME, &wall);
+  EXPECT_EQ(robot_side.check(
+                "STRIDE_POLICY", out.policy.data(), static_cast<int>(out.policy.size()),
+                static_cast<std::int64_t>(wall.tv_sec) * 1000000 + wall.tv_nsec / 1000, payload),
             msg::Verdict::Ok);
   lcm::ReceiveBuffer own{out.policy.data(), static_cast<uint32_t>(out.policy.size()), 0};
   node.onPolicy(&own, "STRIDE_POLICY");

@@ -492,7 +492,7 @@ TEST(Signing, CountersAndSayOnce) {
     EXPECT_NE(std::string(describe(static_cast<Verdict>(v))), "");
   }
   const Bytes good = signedAt(signer, payload, kT0);
-  Bytes forged(good);
+  Bytes forged = signedAt(signer, payload, kT0 + 1);  // newer, then altered
   forged[0] ^= 0x80;
   const Bytes other = signedAt(Signer(testKey(50), 3), payload, kT0);
   EXPECT_EQ(checkOf(verifier, good), Verdict::Ok);
@@ -671,7 +671,10 @@ TEST(Signing, NoAllocation) {
       verdicts[1] = verifier.check(kPolicyChannel, buf.data(), signed_size, now, payload_size);
       verdicts[2] = verifier.check(kPolicyChannel, plain.data(), size, now, payload_size);
       verdicts[3] = verifier.check(kPolicyChannel, other.data(), signed_size, now, payload_size);
+      // A newer message altered (an altered copy of the accepted one is refused as replayed,
+      // before hashing).
       std::memcpy(forged.data(), buf.data(), buf.size());
+      signer.sign(kPolicyChannel, forged.data(), size, static_cast<int>(forged.size()));
       forged[5] ^= 1;
       verdicts[4] = verifier.check(kPolicyChannel, forged.data(), signed_size, now, payload_size);
       signer.sign(kPolicyChannel, buf.data(), size, static_cast<int>(buf.size()));

@@ -40,6 +40,10 @@ policy_t holdPolicy(const Robot& robot, int nq, int nv, std::int64_t hash) {
   msg::shape(p, 2, nq, nv, nv - 6);
   p.model_hash = hash;
   p.source_id = 1;
+  p.session = 0;  // the caller answers its robot's run
+  p.tick = 0;
+  p.t0 = 0.0;
+  p.phase = 0;  // lcm-gen leaves the fields unset
   p.utime = p.knot0_utime = 1000000;
   p.dt = 0.01;
   p.status = 0;
@@ -289,6 +293,10 @@ policy_t gainPolicy(const Robot& robot) {
   msg::shape(p, 40, nq, nv, nu);
   p.model_hash = modelHash(robot);
   p.source_id = 1;
+  p.session = 0;  // the caller answers its robot's run
+  p.tick = 0;
+  p.t0 = 0.0;
+  p.phase = 0;  // lcm-gen leaves the fields unset
   p.utime = p.knot0_utime = 1000000;
   p.dt = 0.01;
   p.status = 0;
