@@ -115,6 +115,7 @@ Run run(const ControllerConfig& config, const Options& options) {
     r.mpc_unauthenticated += mpc->auth().refused();
     r.mpc_stale += mpc->auth().refused(msg::Verdict::Stale);
     r.mpc_other_session += mpc->rejected(msg::Reject::OtherSession);
+    r.mpc_auth_text = msg::refusedText(mpc->auth());
   };
   while (t_offset + sim->simulator().time() < options.duration - 1e-9) {
     if (options.sim_lost_at >= 0.0 && t_offset == 0.0 &&

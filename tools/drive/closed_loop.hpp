@@ -86,7 +86,7 @@ struct Run {
   std::int64_t rival_policies = 0;  // seen by the controller on its policy channel
   // Signatures (with a key): the robot's refusals in words and those stale; the controller's
   // refusals (every channel), those stale, and its states of another robot run refused.
-  std::string sim_auth_text;
+  std::string sim_auth_text, mpc_auth_text;  // the last controller's
   std::int64_t sim_stale = 0;
   std::int64_t mpc_unauthenticated = 0, mpc_stale = 0, mpc_other_session = 0;
   int controller_starts = 1;             // 2 after a restart (Options::controller_lost_at)
