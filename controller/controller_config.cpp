@@ -311,7 +311,7 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   const YAML::Node lcm = root["lcm"];
   r.onlyKeys(lcm, "lcm",
              {"input", "output", "state", "policy", "status", "plan", "command", "model", "horizon",
-              "horizon_rate_hz", "terrain", "key_file"});
+              "horizon_rate_hz", "terrain", "key_file", "signature_window_s"});
   if (lcm) {
     r.get(lcm, "input", "lcm", c.input_url);
     r.get(lcm, "output", "lcm", c.output_url);
@@ -325,6 +325,11 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(lcm, "terrain", "lcm", c.terrain_channel);
     r.get(lcm, "horizon_rate_hz", "lcm", c.horizon_rate_hz);
     r.get(lcm, "key_file", "lcm", c.key_file);
+    r.get(lcm, "signature_window_s", "lcm", c.signature_window);
+    // Under a millisecond would refuse a sound LAN's messages; over a minute keeps a recording
+    // fresh for that long (messages/README.md, "Freshness").
+    if (!(c.signature_window >= 0.001 && c.signature_window <= 60.0))
+      r.fail("lcm.signature_window_s", "must be in [0.001, 60] s");
     if (!c.key_file.empty() && c.key_file.front() != '/')
       c.key_file =
           (std::filesystem::path(yaml_path).parent_path() / c.key_file).lexically_normal().string();

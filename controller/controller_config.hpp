@@ -14,6 +14,7 @@
 #include "locomotion/locomotion_problem.hpp"
 #include "locomotion/planner.hpp"
 #include "messages/hold_pd.hpp"
+#include "messages/signing.hpp"
 #include "solver/ddp/solver.hpp"
 #include "terrain/steppability.hpp"
 
@@ -68,6 +69,10 @@ struct ControllerConfig {
   // The shared key that signs and checks messages (lcm.key_file, relative to the YAML, or
   // stride-mpc --key-file); empty: the wire is unauthenticated (messages/README.md, "Signing").
   std::string key_file;
+  // The freshness window of signed messages [s] (lcm.signature_window_s): a message whose
+  // signature's timestamp is further than this from this host's CLOCK_REALTIME at its arrival is
+  // refused (messages/README.md, "Freshness": the hosts' clocks kept together by chrony or PTP).
+  double signature_window = static_cast<double>(msg::kFreshnessWindowMicros) * 1e-6;
 
   double max_state_age = 0.05;  // s; an older state is stale
   Fallback fallback = Fallback::Previous;

@@ -113,6 +113,9 @@ class Mpc {
   std::int64_t modelHash() const { return out_.modelHash(); }
   // The controller's identity on the policy channel (policy_t.source_id; MpcNode draws it).
   void setSourceId(std::int64_t id) { out_.setSourceId(id); }
+  // The robot run its policies answer (policy_t.session: robot_state_t.session of the newest
+  // state; MpcNode sets it before each tick).
+  void setSession(std::int64_t session) { out_.setSession(session); }
   int nu() const { return nu_; }
   bool started() const { return mode_ != MpcMode::NotStarted; }
   MpcMode mode() const { return mode_; }

@@ -24,6 +24,16 @@ constexpr std::int64_t kMaxStampLeadUs = 1000000;  // stamps may run 1 s ahead o
 constexpr int kRebaseStates = 20;
 constexpr std::int64_t kRebaseUs = 200000;
 constexpr std::int64_t kMaxRebaseWarnings = 5;
+// The controller follows one robot run (robot_state_t.session): another's states take over only
+// after the followed one has been silent this long (real time: its restarts take seconds), or (in
+// stamps mode, with no clock but the states') after this many of them in a row with none of the
+// followed run between. A recording or another run interleaved with the live robot never does.
+constexpr std::int64_t kSessionSilenceUs = 200000;
+constexpr int kSessionSwitchStates = 3;
+// A rival controller's policies may have more knots than ours: any count up to this one.
+constexpr int kMaxRivalKnots = 200;
+// A command's payload: the fixed fields and a gait name of at most kMaxGaitName characters.
+constexpr int kCommandFixedBytes = 8 + 8 + 3 * 8 + 4 + 1 + 8;
 // What the signing publisher preallocates before the node knows its messages' sizes (reserve).
 constexpr int kSignedCapacity = 1 << 12;
 }  // namespace
@@ -31,9 +41,9 @@ constexpr int kSignedCapacity = 1 << 12;
 MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time)
     : config_(config),
       mpc_(config),
-      auth_(config.key_file.empty()
-                ? msg::WireAuth()
-                : msg::WireAuth(msg::loadKeyFile(config.key_file), "stride-mpc")),
+      auth_(config.key_file.empty() ? msg::WireAuth()
+                                    : msg::WireAuth(msg::loadKeyFile(config.key_file), "stride-mpc",
+                                                    std::llround(config.signature_window * 1e6))),
       signed_out_(out, auth_, kSignedCapacity),
       out_(signed_out_),
       time_(time),
@@ -42,6 +52,7 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
   floating_ = model.hasFreeFlyer();
   msg::shape(incoming_, model.nq, model.nv, kMaxContactFlags);
   msg::shape(newest_, model.nq, model.nv, kMaxContactFlags);
+  newest_.session = incoming_.session = 0;  // no robot run yet (lcm-gen leaves fields unset)
   mpc_status_t status{};
   status.gait.assign(msg::kMaxGaitName, 'x');  // the longest a status may carry
   buffer_.resize(std::max(msg::policyWireSize(config.policy_knots, model.nq, model.nv, mpc_.nu()),
@@ -70,6 +81,18 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
   horizon_buffer_.resize(horizon_.getEncodedSize());
   signed_out_.reserve(
       static_cast<int>(std::max({buffer_.size(), horizon_buffer_.size(), model_buffer_.size()})));
+  // The sizes each channel's type can have for this robot: any other is refused before hashing
+  // (messages/README.md, "Cheap refusals").
+  auth_.setSizes(kStateSlot, {msg::stateWireSize(model.nq, model.nv, 0),
+                              msg::stateWireSize(model.nq, model.nv, kMaxContactFlags), 1});
+  auth_.setSizes(kCommandSlot, {kCommandFixedBytes, kCommandFixedBytes + msg::kMaxGaitName, 1});
+  const int one = msg::policyWireSize(1, model.nq, model.nv, mpc_.nu());
+  auth_.setSizes(kPolicySlot,
+                 {one, msg::policyWireSize(kMaxRivalKnots, model.nq, model.nv, mpc_.nu()),
+                  msg::policyWireSize(2, model.nq, model.nv, mpc_.nu()) - one});
+  auth_.setSizes(
+      kTerrainSlot,
+      {0, static_cast<std::int64_t>(msg::terrainWireSize(1, config.terrain.max_cells)), 1});
 }
 
 robot_model_t robotModelMessage(const Robot& robot, int nu) {
@@ -172,7 +195,7 @@ void MpcNode::reject(msg::Reject reason) {
 int MpcNode::authenticated(int slot, const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
   const int size =
       auth_.receive(slot, channel.c_str(), static_cast<const std::uint8_t*>(rbuf->data),
-                    static_cast<int>(rbuf->data_size));
+                    static_cast<int>(rbuf->data_size), rbuf->recv_utime);
   if (size < 0) reject(msg::Reject::Unauthenticated);
   return size;
 }
@@ -191,6 +214,10 @@ void MpcNode::onState(const lcm::ReceiveBuffer* rbuf, const std::string& channel
   }
   const bool real_time = time_ == TimeSource::RealTime;
   const std::int64_t arrival_us = real_time ? arrivalMicros(rbuf->recv_utime) : incoming_.utime;
+  if (!followSession(arrival_us, channel)) {
+    reject(msg::Reject::OtherSession);
+    return;
+  }
   // The stamp checks: newer than the newest state, and (real time) not far ahead of the time that
   // really passed since it arrived, which a corrupt stamp or a clock jump would be.
   std::int64_t lead_us = 0;
@@ -227,6 +254,34 @@ void MpcNode::onState(const lcm::ReceiveBuffer* rbuf, const std::string& channel
   have_state_ = true;
   new_state_ = true;
   ++accepted_;
+  session_ = incoming_.session;
+  have_session_ = true;
+  session_seen_us_ = real_time ? arrival_us : 0;
+  other_session_states_ = 0;
+  auth_.accept(kStateSlot);  // taken: only now is its signature remembered against replay
+}
+
+bool MpcNode::followSession(std::int64_t arrival_us, const std::string& channel) {
+  if (!have_session_ || incoming_.session == session_) return true;
+  const bool real_time = time_ == TimeSource::RealTime;
+  const bool silent = real_time ? arrival_us - session_seen_us_ >= kSessionSilenceUs
+                                : ++other_session_states_ >= kSessionSwitchStates;
+  char theirs[17], ours[17];
+  msg::formatHash(incoming_.session, theirs);
+  msg::formatHash(session_, ours);
+  if (silent) {  // the robot (or its estimator) restarted: its new run is followed
+    if (++session_switches_ <= 4)
+      std::fprintf(stderr, "stride-mpc: following the robot's run %s on '%s' (%s went silent)\n",
+                   theirs, channel.c_str(), ours);
+    return true;
+  }
+  if (rejected(msg::Reject::OtherSession) == 0)
+    std::fprintf(stderr,
+                 "stride-mpc: refused a state on '%s' of another run of the robot (session %s) "
+                 "while the run followed (%s) is alive: a recording, or another robot on these "
+                 "channels (the first such; the later ones are counted)\n",
+                 channel.c_str(), theirs, ours);
+  return false;
 }
 
 void MpcNode::rebaseClock(std::int64_t offset_us) {
@@ -264,8 +319,13 @@ void MpcNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channe
   // unread: they are counted as refused, not as a rival's).
   const int size = authenticated(kPolicySlot, rbuf, channel);
   std::int64_t source = 0;
-  if (size < 0 || !msg::readPolicySource(rbuf->data, size, source) || source == source_id_)
-    return;  // refused, our own, or too short to say whose
+  if (size < 0 || !msg::readPolicySource(rbuf->data, size, source)) return;
+  if (source == source_id_) {
+    // Our own, back from the bus: its signature is spent. A rival's are only watched (counted
+    // each time), never remembered: a key holder's junk here must not refuse our own echoes.
+    auth_.accept(kPolicySlot);
+    return;
+  }
   ++rival_policies_;
   for (int i = 0; i < n_rivals_; ++i)
     if (rivals_[i] == source) return;
@@ -291,6 +351,7 @@ void MpcNode::onPlan(const lcm::ReceiveBuffer* rbuf, const std::string& channel)
     reject(why);
     return;
   }
+  auth_.accept(kPlanSlot);
   plan_pending_ = true;
 }
 
@@ -321,6 +382,7 @@ void MpcNode::onCommand(const lcm::ReceiveBuffer* rbuf, const std::string& chann
     return;
   }
   last_command_utime_ = command_msg_.utime;
+  auth_.accept(kCommandSlot);
 }
 
 void MpcNode::onTerrain(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
@@ -333,7 +395,10 @@ void MpcNode::onTerrain(const lcm::ReceiveBuffer* rbuf, const std::string& chann
   // Mpc::setTerrain refuses a map older than the one in use (out of order) or larger than
   // terrain.max_cells (the wire check has refused those already).
   if (why == msg::Reject::None && !mpc_.setTerrain(terrain_msg_)) why = msg::Reject::OutOfOrder;
-  if (why != msg::Reject::None) reject(why);
+  if (why != msg::Reject::None)
+    reject(why);
+  else
+    auth_.accept(kTerrainSlot);
 }
 
 void MpcNode::applyPendingPlan() {
@@ -368,6 +433,7 @@ void MpcNode::tick(Clock::time_point deadline) {
                          : static_cast<double>(monotonicMicros() - newest_arrival_us_) * 1e-6;
   commands_.update(now());
   mpc_.setCommand(commands_.command(), commands_.gait());
+  mpc_.setSession(newest_.session);  // the run its policy answers (policy_t.session)
   const bool publish = mpc_.tick(state, age, deadline);
   new_state_ = false;
   if (have_state_) {

@@ -96,6 +96,10 @@ class MpcNode {
   // clock offset) or behind the newest state (a new robot): onState.
   std::int64_t clockRebasesAhead() const { return rebases_ahead_; }
   std::int64_t clockRebasesBack() const { return rebases_back_; }
+  // The robot run followed (robot_state_t.session; 0 before the first state), and the times a new
+  // run was followed after the previous one went silent (a robot restarted).
+  std::int64_t session() const { return session_; }
+  std::int64_t sessionSwitches() const { return session_switches_; }
   // States refused for another model, and the distinct causes (at most kMaxMismatches kept).
   struct ModelMismatch {
     msg::WireClaim claim;
@@ -115,6 +119,9 @@ class MpcNode {
   void publishModelIfDue();
   void publishHorizonIfDue();
   void rebaseClock(std::int64_t offset_us);
+  // True when incoming_ is of the robot run followed, or of a new one that takes over (the
+  // followed one silent); false: refused as another run's (counted by the caller, said once).
+  bool followSession(std::int64_t arrival_us, const std::string& channel);
   static std::int64_t monotonicMicros();
   static std::int64_t arrivalMicros(std::int64_t recv_utime);
   double now() const;  // the controller's clock [s]: monotonic, or the newest state's stamp
@@ -136,6 +143,11 @@ class MpcNode {
   int streak_ = 0;
   std::int64_t streak_since_us_ = 0, streak_utime_ = 0;
   std::int64_t rebases_ahead_ = 0, rebases_back_ = 0;
+  // The robot run followed, when its last state was taken (real time: arrival), the states of
+  // another run since, and the switches to a new run.
+  std::int64_t session_ = 0, session_seen_us_ = 0, session_switches_ = 0;
+  bool have_session_ = false;
+  int other_session_states_ = 0;
   std::int64_t next_tick_utime_ = 0;
   bool tick_grid_set_ = false;
   std::int64_t accepted_ = 0, rejected_total_ = 0, plan_updates_ = 0, policies_published_ = 0;

@@ -39,6 +39,8 @@ class PolicyWriter {
   std::int64_t modelHash() const { return policy_.model_hash; }
   // The controller's identity on the policy channel (policy_t.source_id).
   void setSourceId(std::int64_t id) { policy_.source_id = previous_.source_id = id; }
+  // The robot run the policies answer (policy_t.session).
+  void setSession(std::int64_t session) { policy_.session = previous_.session = session; }
   // A new problem: no earlier policy is re-sent for it.
   void forgetPrevious() { have_previous_ = false; }
   bool hasPrevious() const { return have_previous_; }

@@ -249,11 +249,18 @@ void writeSummary(const MpcNode& node, const std::string& path) {
   // Messages refused for their signatures, by reason (null: no key, the wire unauthenticated).
   const msg::WireAuth& auth = node.auth();
   j["unauthenticated"] =
-      auth.keyed() ? nlohmann::ordered_json{{"unsigned", auth.refused(msg::Verdict::Unsigned)},
-                                            {"wrong_key", auth.refused(msg::Verdict::WrongKey)},
-                                            {"forged", auth.refused(msg::Verdict::Forged)},
-                                            {"replayed", auth.refused(msg::Verdict::Replayed)}}
-                   : nlohmann::ordered_json(nullptr);
+      auth.keyed()
+          ? nlohmann::ordered_json{{"unsigned", auth.refused(msg::Verdict::Unsigned)},
+                                   {"wrong_key", auth.refused(msg::Verdict::WrongKey)},
+                                   {"forged", auth.refused(msg::Verdict::Forged)},
+                                   {"replayed", auth.refused(msg::Verdict::Replayed)},
+                                   {"stale", auth.refused(msg::Verdict::Stale)},
+                                   {"future", auth.refused(msg::Verdict::Future)},
+                                   {"impossible_size", auth.refused(msg::Verdict::Implausible)},
+                                   {"over_rate", auth.refused(msg::Verdict::OverRate)}}
+          : nlohmann::ordered_json(nullptr);
+  j["other_session_states"] = node.rejected(msg::Reject::OtherSession);
+  j["session_switches"] = node.sessionSwitches();
   j["clock_rebases"] = {{"offset", node.clockRebasesAhead()},
                         {"new_robot", node.clockRebasesBack()}};
   j["tick_latency"] = timingJson(lat);

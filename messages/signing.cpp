@@ -24,6 +24,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -323,27 +324,86 @@ const char* describe(Verdict verdict) {
       return "forged or altered (the signature does not match)";
     case Verdict::Replayed:
       return "replayed (timestamp not newer than the sender's last accepted one)";
+    case Verdict::Stale:
+      return "stale (timestamp further behind this host's clock than the freshness window)";
+    case Verdict::Future:
+      return "from the future (timestamp further ahead of this host's clock than the freshness "
+             "window)";
+    case Verdict::Implausible:
+      return "a size no message of this channel's type has (refused before its signature was "
+             "checked)";
+    case Verdict::OverRate:
+      return "over the budget of messages from new senders (refused before its signature was "
+             "checked)";
   }
   return "unknown verdict";
 }
 
-Verdict Verifier::check(const char* channel, const std::uint8_t* buf, int size,
+void Verifier::setNewSenderRate(double per_second, double burst) {
+  new_rate_ = per_second;
+  new_burst_ = burst;
+  tokens_ = burst;
+  tokens_started_ = false;
+}
+
+Verifier::Sender* Verifier::find(std::uint32_t sender) noexcept {
+  for (int i = 0; i < used_; ++i)
+    if (table_[i].id == sender) return &table_[i];
+  return nullptr;
+}
+
+bool Verifier::spendNewSender(std::int64_t now_us) noexcept {
+  if (new_rate_ <= 0.0) return true;
+  if (tokens_started_ && now_us > tokens_at_)
+    tokens_ =
+        std::min(new_burst_, tokens_ + new_rate_ * static_cast<double>(now_us - tokens_at_) * 1e-6);
+  if (!tokens_started_ || now_us > tokens_at_) tokens_at_ = now_us;
+  tokens_started_ = true;
+  if (tokens_ < 1.0) return false;
+  tokens_ -= 1.0;
+  return true;
+}
+
+Verdict Verifier::check(const char* channel, const std::uint8_t* buf, int size, std::int64_t now_us,
                         int& payload_size) noexcept {
+  pending_ = false;
   Verdict verdict = Verdict::Unsigned;
   payload_size = size;
   if (endsWithMagic(buf, size)) {
     payload_size = size - kSignatureSize;
     const std::uint8_t* trailer = buf + payload_size;
+    const std::uint32_t sender = getBe32(trailer + kSenderAt);
+    const auto timestamp = static_cast<std::int64_t>(getBe64(trailer + kTimestampAt));
+    // In double: a timestamp near either end of int64 minus the clock would overflow.
+    const double offset = static_cast<double>(timestamp) - static_cast<double>(now_us);
+    offset_ = offset > 9e18    ? std::numeric_limits<std::int64_t>::max()
+              : offset < -9e18 ? std::numeric_limits<std::int64_t>::min()
+                               : timestamp - now_us;
+    const Sender* known = find(sender);
+    // The cheap refusals, on the trailer's fields as claimed (unverified) and the size: a frame
+    // refused here costs no hashing.
     if (getBe32(trailer + kKeyIdAt) != key_.id) {
       verdict = Verdict::WrongKey;
+    } else if (!sizes_.allows(payload_size)) {
+      verdict = Verdict::Implausible;
+    } else if (offset < -static_cast<double>(window_)) {
+      verdict = Verdict::Stale;
+    } else if (offset > static_cast<double>(window_)) {
+      verdict = Verdict::Future;
+    } else if (known != nullptr && timestamp <= known->last_timestamp) {
+      verdict = Verdict::Replayed;
+    } else if (known == nullptr && !spendNewSender(now_us)) {
+      verdict = Verdict::OverRate;
     } else {
       std::uint8_t mac[kSignatureMacSize];
       computeMac(key_, channel, trailer, buf, static_cast<std::size_t>(payload_size), mac);
       if (sodium_memcmp(mac, trailer + kMacAt, kSignatureMacSize) != 0) {
         verdict = Verdict::Forged;
       } else {
-        verdict = admit(getBe32(trailer + kSenderAt),
-                        static_cast<std::int64_t>(getBe64(trailer + kTimestampAt)));
+        verdict = Verdict::Ok;
+        pending_ = true;
+        pending_sender_ = sender;
+        pending_timestamp_ = timestamp;
       }
     }
   }
@@ -351,36 +411,25 @@ Verdict Verifier::check(const char* channel, const std::uint8_t* buf, int size,
   return verdict;
 }
 
-Verdict Verifier::admit(std::uint32_t sender, std::int64_t timestamp) noexcept {
-  Sender* entry = nullptr;
-  for (int i = 0; i < used_ && entry == nullptr; ++i) {
-    if (table_[i].id == sender) entry = &table_[i];
-  }
-  if (entry != nullptr) {
-    if (timestamp <= entry->last_timestamp) return Verdict::Replayed;
-  } else {
-    // A new stream (or one forgotten): no older than the window before the newest accepted.
-    if (have_newest_) {
-      constexpr std::int64_t lowest = std::numeric_limits<std::int64_t>::min();
-      const std::int64_t floor =
-          newest_ < lowest + kNewSenderWindowMicros ? lowest : newest_ - kNewSenderWindowMicros;
-      if (timestamp <= floor) return Verdict::Replayed;
-    }
+void Verifier::accept() noexcept {
+  if (!pending_) return;
+  pending_ = false;
+  Sender* entry = find(pending_sender_);
+  if (entry == nullptr) {
     if (used_ < kReplaySenders) {
       entry = &table_[used_++];
     } else {
       entry = &table_[0];  // full: forget the least recently accepted sender
-      for (Sender& s : table_) {
+      for (Sender& s : table_)
         if (s.last_accepted < entry->last_accepted) entry = &s;
-      }
     }
-    entry->id = sender;
+    entry->id = pending_sender_;
+    entry->last_timestamp = pending_timestamp_;
   }
-  entry->last_timestamp = timestamp;
+  // Accepted messages of one sender may complete out of their signing order only across channels
+  // (one Verifier each): here the newest wins.
+  entry->last_timestamp = std::max(entry->last_timestamp, pending_timestamp_);
   entry->last_accepted = ++accepted_;
-  if (!have_newest_ || timestamp > newest_) newest_ = timestamp;
-  have_newest_ = true;
-  return Verdict::Ok;
 }
 
 bool Verifier::sayOnce(Verdict verdict) noexcept {

@@ -8,6 +8,8 @@
 //   key_id (4) | sender (4) | timestamp (8, microseconds, signed) | mac (16) | magic "STS1" (4)
 // The magic comes last, so that a receiver finds the trailer from the end; LCM decoders read from
 // the front and ignore trailing bytes, so lcm-spy and the type fingerprints are unaffected.
+// A receiver judges the trailer's fields and the size first (cheap), then the mac (messages/
+// README.md, "Cheap refusals").
 //   key_id = first 4 bytes of SHA-256("stride key id" || key)
 //   mac    = first 16 bytes of HMAC-SHA256(key, "stride-sig-v1" || channel || 0x00 || key_id ||
 //                                               sender || timestamp || SHA-256(payload))
@@ -28,11 +30,23 @@ constexpr int kKeySize = 32;           // the shared secret's bytes
 constexpr int kSignatureMacSize = 16;  // HMAC-SHA256 truncated to its first 16 bytes
 // The last 4 bytes of a signed message.
 constexpr std::array<std::uint8_t, 4> kSignatureMagic = {'S', 'T', 'S', '1'};
-// A sender a Verifier does not know yet is accepted only with a timestamp newer than this much
-// before the newest one it has accepted from anybody (MAVLink's rule for a new stream).
-constexpr std::int64_t kNewSenderWindowMicros = 60'000'000;
+// The freshness window (messages/README.md, "Freshness"): a signed message is taken only when its
+// timestamp is within this much of the receiver's own clock (CLOCK_REALTIME when it arrived),
+// behind or ahead. What it must cover: the clock offset between the two hosts (chrony on a LAN
+// keeps it under a millisecond, PTP under a microsecond) and the time from signing to arrival
+// (a LAN: under a millisecond; a 160 kB policy in fragments: ~2 ms). Half a second is hundreds
+// of times that, and short enough that a recording is stale within it; a replay inside it meets
+// the per-sender table and the sessions (robot_state_t.session). The controller's
+// lcm.signature_window_s and stride-sim's --signature-window change it.
+constexpr std::int64_t kFreshnessWindowMicros = 500'000;
 // Senders a Verifier remembers; beyond them the least recently accepted one is forgotten.
 constexpr int kReplaySenders = 16;
+// The messages per second a Verifier hashes from senders it has not accepted yet (a sender is
+// new for its first accepted message only), with a burst of this many: a flood of frames with
+// made-up sender ids costs at most this many hashes a second (messages/README.md, "Cheap
+// refusals"). 1000/s: a 1 kHz estimator's start, or a receiver that refuses every state of a
+// sender for its content (another robot's), are not cut.
+constexpr double kNewSenderRate = 1000.0, kNewSenderBurst = 100.0;
 
 // A shared secret key and its id (keyId(bytes)). Make one with makeKey or loadKeyFile, which
 // compute the id.
@@ -85,25 +99,59 @@ class Signer {
   std::int64_t last_ = std::numeric_limits<std::int64_t>::min();
 };
 
+// The verdicts in the order they are judged: the cheap ones (nothing but the trailer's fields and
+// the size: Unsigned to OverRate) before the mac is computed; Forged after it.
 enum class Verdict : std::uint8_t {
-  Ok,        // signed with our key, the mac matches, newer than the sender's last
-  Unsigned,  // too short for a trailer, or no magic at the end
-  WrongKey,  // signed, with another key (key id not ours)
-  Forged,    // our key id, but the mac does not match (altered, or a forgery)
-  Replayed,  // a valid mac, but the timestamp is not newer than the last accepted from the sender
+  Ok,           // signed with our key, fresh, newer than the sender's last, the mac matches
+  Unsigned,     // too short for a trailer, or no magic at the end
+  WrongKey,     // signed, with another key (key id not ours)
+  Forged,       // our key id, but the mac does not match (altered, or a forgery)
+  Replayed,     // the timestamp is not newer than the last accepted from the sender
+  Stale,        // the timestamp is further behind the receiver's clock than the window
+  Future,       // the timestamp is further ahead of the receiver's clock than the window
+  Implausible,  // a size no message of the channel's type has (SizeRule)
+  OverRate,     // over the budget of messages from senders not accepted yet (kNewSenderRate)
 };
-constexpr int kVerdicts = static_cast<int>(Verdict::Replayed) + 1;
+constexpr int kVerdicts = static_cast<int>(Verdict::OverRate) + 1;
 const char* describe(Verdict verdict);
 
-// Checks signed messages against one key and remembers, per sender, the newest timestamp it
-// accepted (kReplaySenders senders, preallocated). Only messages with a valid mac update it.
+// The payload sizes (before the trailer) a channel's type can have: min, min + step, min + 2 step
+// ... up to max. A state of one robot has a handful of sizes, a policy one per knot count: any
+// other size cannot be ours and is refused before hashing.
+struct SizeRule {
+  std::int64_t min = 0, max = std::numeric_limits<std::int64_t>::max(), step = 1;
+  bool allows(std::int64_t payload) const {
+    return payload >= min && payload <= max && (step <= 1 || (payload - min) % step == 0);
+  }
+};
+
+// Checks signed messages against one key and the receiver's clock, and remembers, per sender, the
+// newest timestamp accepted (kReplaySenders senders, preallocated). The table changes only in
+// accept(), which a receiver calls once it has accepted the message's content too: a message
+// refused for any reason (its signature, its freshness, its payload) locks nobody out.
 class Verifier {
  public:
-  explicit Verifier(const Key& key) noexcept : key_(key) {}
+  explicit Verifier(const Key& key, std::int64_t window_us = kFreshnessWindowMicros) noexcept
+      : key_(key), window_(window_us) {}
 
-  // The verdict on size bytes at buf received on channel. payload_size is set to the bytes before
-  // the trailer when there is one (every verdict but Unsigned), else to size. Counted.
-  Verdict check(const char* channel, const std::uint8_t* buf, int size, int& payload_size) noexcept;
+  // The sizes this channel's payloads may have (default: any).
+  void setSizes(const SizeRule& sizes) { sizes_ = sizes; }
+  // The budget of messages per second from senders not accepted yet (<= 0: none).
+  void setNewSenderRate(double per_second, double burst);
+
+  // The verdict on size bytes at buf received on channel at now_us (the receiver's CLOCK_REALTIME
+  // when it arrived, microseconds). payload_size is set to the bytes before the trailer when there
+  // is one (every verdict but Unsigned), else to size. Counted. Ok leaves the message pending:
+  // accept() remembers it.
+  Verdict check(const char* channel, const std::uint8_t* buf, int size, std::int64_t now_us,
+                int& payload_size) noexcept;
+  // The message of the last Ok verdict was accepted by its receiver: its sender's timestamp is
+  // remembered (a replay of it, or of anything older of that sender, is refused from now on).
+  // Nothing when the last verdict was not Ok or was accepted already.
+  void accept() noexcept;
+  // The last message's timestamp minus the receiver's clock [µs] (positive: ahead), as checked.
+  std::int64_t lastOffset() const { return offset_; }
+  std::int64_t window() const { return window_; }
 
   // Messages per verdict so far (indexed by the Verdict's value).
   const std::array<std::int64_t, kVerdicts>& counters() const { return counters_; }
@@ -122,16 +170,24 @@ class Verifier {
     std::int64_t last_timestamp = 0;
     std::uint64_t last_accepted = 0;  // order of acceptance (accepted_ when it was last accepted)
   };
-  // Ok (and the table updated), or Replayed, for a message whose mac is valid. The table has one
-  // key (ours: a mac is valid only with it), so a sender id alone names a (key_id, sender) pair.
-  Verdict admit(std::uint32_t sender, std::int64_t timestamp) noexcept;
+  // The table's entry of a sender, or null. The table has one key (ours: a mac is valid only with
+  // it), so a sender id alone names a (key_id, sender) pair.
+  Sender* find(std::uint32_t sender) noexcept;
+  // The new-sender budget: false when it is spent (a token bucket on the receiver's clock).
+  bool spendNewSender(std::int64_t now_us) noexcept;
 
   Key key_;
+  std::int64_t window_;
+  SizeRule sizes_;
+  double new_rate_ = kNewSenderRate, new_burst_ = kNewSenderBurst, tokens_ = kNewSenderBurst;
+  std::int64_t tokens_at_ = 0;
+  bool tokens_started_ = false;
   std::array<Sender, kReplaySenders> table_{};
   int used_ = 0;
   std::uint64_t accepted_ = 0;
-  bool have_newest_ = false;
-  std::int64_t newest_ = 0;  // the newest timestamp accepted from any sender
+  bool pending_ = false;  // the last verdict was Ok and not accepted yet
+  std::uint32_t pending_sender_ = 0;
+  std::int64_t pending_timestamp_ = 0, offset_ = 0;
   std::array<std::int64_t, kVerdicts> counters_{};
   std::array<bool, kVerdicts> said_{};
 };

@@ -30,7 +30,9 @@ const char* describe(Reject reason) {
     case Reject::WrongModel:
       return "another robot's model (hash or sizes)";
     case Reject::Unauthenticated:
-      return "not signed with our key (unsigned, forged, replayed or another key's)";
+      return "not signed with our key (unsigned, forged, replayed, stale or another key's)";
+    case Reject::OtherSession:
+      return "another run of the robot (session) than the one followed";
   }
   return "unknown";
 }
@@ -41,11 +43,12 @@ constexpr int kHash = 8;  // every LCM message starts with its 64-bit type finge
 
 // Big-endian reads at fixed offsets: readInt32, readInt64 (wire_reader.hpp, the one reader).
 
-// Offsets after the type hash: robot_state_t is utime, model_hash, nq, nv, ...; policy_t is utime,
-// model_hash, source_id, knot0_utime, tick, t0, dt, then knots nq nv nu nx ndx nk.
-constexpr long kStateHashAt = kHash + 8, kStateNqAt = kHash + 16;
+// Offsets after the type hash: robot_state_t is utime, model_hash, session, nq, nv, ...; policy_t
+// is utime, model_hash, source_id, session, knot0_utime, tick, t0, dt, then knots nq nv nu nx ndx
+// nk.
+constexpr long kStateHashAt = kHash + 8, kStateSessionAt = kHash + 16, kStateNqAt = kHash + 24;
 constexpr long kPolicyHashAt = kHash + 8, kPolicySourceAt = kHash + 16,
-               kPolicyCountsAt = kHash + 56;
+               kPolicySessionAt = kHash + 24, kPolicyCountsAt = kHash + 64;
 // terrain_t is utime, origin_x, origin_y, resolution, then rows and cols.
 constexpr long kTerrainRowsAt = kHash + 32, kTerrainHeader = kTerrainRowsAt + 8;
 
@@ -64,12 +67,12 @@ Reject checkQuaternion(const std::vector<double>& q) {
 }  // namespace
 
 int stateWireSize(int nq, int nv, int ncontacts) {
-  return kHash + 8 + 8 + 4 + 4 + 8 * (nq + nv) + 4 + ncontacts;
+  return kHash + 8 + 8 + 8 + 4 + 4 + 8 * (nq + nv) + 4 + ncontacts;
 }
 
 int policyWireSize(int knots, int nq, int nv, int nu) {
   const long per_knot = 8L * ((nq + nv) + nu + static_cast<long>(nu) * 2 * nv);
-  return static_cast<int>(kHash + 7 * 8 + 7 * 4 + knots * per_knot + 4 + 1);
+  return static_cast<int>(kHash + 8 * 8 + 7 * 4 + knots * per_knot + 4 + 1);
 }
 
 long terrainWireSize(int rows, int cols) {
@@ -90,6 +93,14 @@ bool readPolicySource(const void* buf, int size, std::int64_t& source_id) {
   std::int64_t type = 0;  // another type on the channel (garbage, say) is nobody's policy
   return readInt64(buf, size, 0, type) && type == policy_t::getHash() &&
          readInt64(buf, size, kPolicySourceAt, source_id);
+}
+
+bool readStateSession(const void* buf, int size, std::int64_t& session) {
+  return readInt64(buf, size, kStateSessionAt, session);
+}
+
+bool readPolicySession(const void* buf, int size, std::int64_t& session) {
+  return readInt64(buf, size, kPolicySessionAt, session);
 }
 
 bool readPolicyClaim(const void* buf, int size, WireClaim& claim) {
@@ -279,6 +290,7 @@ bool decode(const void* buf, int size, robot_state_t& m) {
 }
 
 void shape(robot_state_t& m, int nq, int nv, int ncontacts) {
+  m.session = 0;  // no robot run yet (lcm-gen leaves the fields unset)
   m.nq = nq;
   m.nv = nv;
   m.ncontacts = ncontacts;
@@ -288,6 +300,7 @@ void shape(robot_state_t& m, int nq, int nv, int ncontacts) {
 }
 
 void shape(policy_t& m, int knots, int nq, int nv, int nu) {
+  m.session = 0;  // answers no robot run yet
   m.knots = knots;
   m.nq = nq;
   m.nv = nv;

@@ -31,9 +31,11 @@ enum class Reject : std::uint8_t {
   OutOfOrder,         // stamp not newer than the last accepted one
   Stale,              // stamp older than the allowed age
   WrongModel,         // another robot's or model's message: model hash, nq or nv not ours
-  Unauthenticated,    // with a key: unsigned, forged, replayed or another key's (wire_auth.hpp)
+  Unauthenticated,    // with a key: unsigned, forged, replayed, stale or another key's
+                      // (wire_auth.hpp)
+  OtherSession,       // a state of another robot run while the one followed is alive
 };
-constexpr int kRejectReasons = static_cast<int>(Reject::Unauthenticated) + 1;
+constexpr int kRejectReasons = static_cast<int>(Reject::OtherSession) + 1;
 const char* describe(Reject reason);
 
 // Quaternions within this distance of unit norm are accepted (and renormalized by the reader);
@@ -58,6 +60,10 @@ bool readPolicyClaim(const void* buf, int size, WireClaim& claim);
 // The controller a policy comes from (policy_t.source_id), read from its raw bytes; false when
 // the buffer is too short or not a policy_t (its type fingerprint).
 bool readPolicySource(const void* buf, int size, std::int64_t& source_id);
+// The robot run a state comes from (robot_state_t.session) and the one a policy answers
+// (policy_t.session), read from the raw bytes; false when the buffer is too short.
+bool readStateSession(const void* buf, int size, std::int64_t& session);
+bool readPolicySession(const void* buf, int size, std::int64_t& session);
 // "expected nq 19, nv 18 (anymal_c, hash 8c1d...), got nq 29, nv 28 (hash 03a4...)", or for the
 // same sizes "expected hash 8c1d... (anymal_c, nq 19, nv 18), got hash 5e7f...: same sizes, another
 // joint layout". Into a caller's buffer (no allocation); returns `out`.

@@ -5,6 +5,12 @@
 // once on stderr. Without a key it signs nothing and reads signed messages as plain ones (the
 // trailer stripped, nothing verified): the wire is unauthenticated, as it was before signing.
 //
+// What it checks, cheapest first (messages/README.md, "Freshness", "Cheap refusals"): a size the
+// channel's type cannot have (setSizes), a timestamp outside the freshness window around this
+// host's clock when the message arrived, a replay of a sender's, the budget of new senders, and
+// only then the mac. A message it passes is pending until the node has checked its content too
+// and calls accept(slot): only then is its sender's timestamp remembered.
+//
 // One Verifier per channel a node reads: a sender's timestamps increase across all its channels,
 // and a large policy that arrives in fragments may complete after a later, smaller message of the
 // same sender on another channel.
@@ -27,15 +33,22 @@ class WireAuth {
   // No key: unauthenticated.
   WireAuth() = default;
   // Signs as a random sender (one per process start); `who` prefixes what it says
-  // ("stride-mpc").
-  WireAuth(const Key& key, const char* who);
+  // ("stride-mpc"). window_us: the freshness window (kFreshnessWindowMicros).
+  WireAuth(const Key& key, const char* who, std::int64_t window_us = kFreshnessWindowMicros);
 
   bool keyed() const { return signer_.has_value(); }
   std::uint32_t keyId() const { return keyed() ? signer_->keyId() : 0; }
 
   // The payload's size to decode at buf (size bytes received on `channel`, the node's channel
-  // number `slot` < kMaxChannels), or -1 when the message is refused. No allocation.
-  int receive(int slot, const char* channel, const std::uint8_t* buf, int size) noexcept;
+  // number `slot` < kMaxChannels, at recv_utime: LCM's wall-clock arrival, µs; <= 0: now), or -1
+  // when the message is refused. No allocation.
+  int receive(int slot, const char* channel, const std::uint8_t* buf, int size,
+              std::int64_t recv_utime = 0) noexcept;
+  // The node took the message receive() passed last on `slot` (its content checked too): its
+  // sender's timestamp is remembered against replay. No allocation.
+  void accept(int slot) noexcept;
+  // The payload sizes a slot's channel can carry: others are refused before hashing.
+  void setSizes(int slot, const SizeRule& sizes);
   // Signs the payload_size bytes at buf in place when keyed; returns the size to publish, or -1
   // when the buffer has no room for the trailer (the buffers are sized with kSignatureSize
   // spare: never). No allocation.

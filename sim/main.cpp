@@ -91,6 +91,11 @@ int main(int argc, char** argv) {
                  "the shared key (64 hex digits, mode 0600; stride-keygen makes one): states and "
                  "maps are signed with it, and only policies signed with it are taken "
                  "(messages/README.md, \"Signing\"); without one the wire is unauthenticated");
+  double signature_window = static_cast<double>(stride::msg::kFreshnessWindowMicros) * 1e-6;
+  app.add_option("--signature-window", signature_window,
+                 "seconds a signed policy's timestamp may be from this host's clock, behind or "
+                 "ahead (0.5; messages/README.md, \"Freshness\")")
+      ->check(CLI::Range(0.001, 60.0));
   app.add_flag("--print-model", print_model,
                "print the robot in wire order (q, v, u, contacts, limits) and exit");
   app.footer(
@@ -126,6 +131,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     node_options.key = stride::msg::keyForProgram(key_file, "stride-sim");
+    node_options.signature_window = signature_window;
     url = stride::lcmUrl(url);
     if (url.empty()) return stride::noLcmUrl("stride-sim", "pass --url");
     lcm::LCM lcm(url);

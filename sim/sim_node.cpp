@@ -6,6 +6,7 @@
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "config/model_hash.hpp"
 #include "messages/hold_pd.hpp"
@@ -56,7 +57,9 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
       options_(options),
       plant_(options.plant.enabled() ? plantOf(robot, options.plant) : robot),
       sim_(plant_, sim),
-      auth_(options.key ? msg::WireAuth(*options.key, "stride-sim") : msg::WireAuth()),
+      auth_(options.key ? msg::WireAuth(*options.key, "stride-sim",
+                                        std::llround(options.signature_window * 1e6))
+                        : msg::WireAuth()),
       signed_out_(out, auth_, 1 << 12),
       out_(signed_out_),
       evaluator_(robot.model, actuatedDimension(robot.model)),
@@ -75,6 +78,12 @@ SimNode::SimNode(const Robot& robot, const SimOptions& sim, const SimNodeOptions
   msg::shape(state_msg_, model.nq, model.nv, static_cast<int>(robot.contacts.size()));
   state_msg_.model_hash = modelHash(robot);
   wire_ = {state_msg_.model_hash, model.nq, model.nv, sim_.nu(), robot_.name.c_str()};
+  newSession();
+  // The policies' sizes, one per knot count: a frame of any other size is refused before hashing.
+  const int one = msg::policyWireSize(1, model.nq, model.nv, sim_.nu());
+  auth_.setSizes(0,
+                 {one, msg::policyWireSize(options.max_policy_knots, model.nq, model.nv, sim_.nu()),
+                  msg::policyWireSize(2, model.nq, model.nv, sim_.nu()) - one});
   buffer_.resize(state_msg_.getEncodedSize());
   signed_out_.reserve(std::max(static_cast<int>(buffer_.size()), mapper_.messageSize()));
   q_pub_ = Eigen::VectorXd::Zero(model.nq);
@@ -97,7 +106,18 @@ std::int64_t SimNode::utime() const {
   return options_.utime_base + static_cast<std::int64_t>(std::llround(sim_.time() * 1e6));
 }
 
+void SimNode::newSession() {
+  // Random and nonzero: two runs (two days, two lock-step runs whose clocks both start at 0) never
+  // share one, and no policy answers a run it was not made for.
+  std::random_device entropy;
+  std::int64_t id = 0;
+  while (id == 0) id = static_cast<std::int64_t>((std::uint64_t(entropy()) << 32) | entropy());
+  session_ = id;
+  state_msg_.session = id;
+}
+
 void SimNode::reset(const Eigen::VectorXd& q, const Eigen::VectorXd& v) {
+  newSession();  // the robot's clock starts again: another run
   sim_.reset(q, v, 0.0);
   sensing_.reset(q, v);
   sensed_at_ = -1;
@@ -122,16 +142,35 @@ void SimNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channe
   // With a key, a policy not signed with it is never read (a rival or a forger without the key
   // changes nothing on the robot).
   const int size = auth_.receive(0, channel.c_str(), static_cast<const std::uint8_t*>(rbuf->data),
-                                 static_cast<int>(rbuf->data_size));
+                                 static_cast<int>(rbuf->data_size), rbuf->recv_utime);
   if (size < 0) {
     ++stats_.policies_unauthenticated;
     ++stats_.policies_rejected;
     return;
   }
-  // Cheap checks on the raw bytes first (model, sizes, source): a flood of foreign policies costs
-  // no decoding.
+  // Cheap checks on the raw bytes first (model, sizes, session, source): a flood of foreign
+  // policies costs no decoding.
   const msg::Reject wire = msg::checkPolicyWire(rbuf->data, size, wire_, options_.max_policy_knots);
   if (wire == msg::Reject::WrongModel) noteWrongModel(rbuf->data, size, channel);
+  // A policy made for another run of this robot (a recording of an earlier run, or of a run
+  // whose clock also started at 0) is refused whatever its stamps, before it can take the
+  // robot from its controller (messages/README.md, "Sessions").
+  std::int64_t session = 0;
+  if (wire == msg::Reject::None && msg::readPolicySession(rbuf->data, size, session) &&
+      session != session_) {
+    ++stats_.policies_rejected;
+    if (++stats_.policies_other_session == 1) {
+      char theirs[17], ours[17];
+      msg::formatHash(session, theirs);
+      msg::formatHash(session_, ours);
+      std::fprintf(stderr,
+                   "stride-sim: refused a policy on '%s' made for another run of the robot "
+                   "(session %s; this run is %s): a recording, or another run's controller (the "
+                   "first such; the later ones are counted)\n",
+                   channel.c_str(), theirs, ours);
+    }
+    return;
+  }
   std::int64_t source = 0;
   if (wire == msg::Reject::None && msg::readPolicySource(rbuf->data, size, source) &&
       !followSource(source, channel)) {
@@ -144,6 +183,7 @@ void SimNode::onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string& channe
     ++stats_.policies_rejected;
     return;
   }
+  auth_.accept(0);  // taken: only now is its signature's timestamp remembered against replay
   source_ = source;
   have_source_ = true;
   source_seen_ = sim_.time();
@@ -383,7 +423,8 @@ void SimNode::writeSummary(const std::string& path) const {
       static_cast<long long>(s.lockstep_timeouts));
   if (auth_.keyed())
     std::printf(
-        "stride-sim: signed with key %08x; %lld policies not signed with it refused%s%s%s\n",
+        "stride-sim: signed with key %08x; %lld policies not signed with it (or not fresh) "
+        "refused%s%s%s\n",
         auth_.keyId(), static_cast<long long>(s.policies_unauthenticated),
         auth_.refused() > 0 ? " (" : "", msg::refusedText(auth_).c_str(),
         auth_.refused() > 0 ? ")" : "");
@@ -416,6 +457,7 @@ void SimNode::writeSummary(const std::string& path) const {
   j["policies_wrong_model"] = s.policies_wrong_model;
   j["policies_rival"] = s.policies_rival;
   j["policies_unauthenticated"] = s.policies_unauthenticated;
+  j["policies_other_session"] = s.policies_other_session;
   j["source_switches"] = s.source_switches;
   j["waiting_steps"] = s.waiting_steps;
   j["hold_steps"] = s.hold_steps;

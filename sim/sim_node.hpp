@@ -63,6 +63,9 @@ struct SimNodeOptions {
   // The shared key (stride-sim --key-file): the robot signs its states and maps and takes only
   // policies signed with it (messages/README.md, "Signing"). None: unauthenticated.
   std::optional<msg::Key> key;
+  // The freshness window of signed policies [s] (messages/README.md, "Freshness"): a policy whose
+  // signature's timestamp is further than this from the robot's CLOCK_REALTIME is refused.
+  double signature_window = static_cast<double>(msg::kFreshnessWindowMicros) * 1e-6;
 };
 
 // The robot's default posture standing on the terrain at its default place: the base raised by the
@@ -80,6 +83,8 @@ struct SimNodeStats {
   // Of policies_rejected: not signed with the robot's key (unsigned, forged, replayed, another
   // key's): never read.
   std::int64_t policies_unauthenticated = 0;
+  // Of policies_rejected: made for another run of the robot (policy_t.session not this run's).
+  std::int64_t policies_other_session = 0;
   std::int64_t source_switches = 0;  // a new controller followed after a silence
   // On the hold PD: before the first policy came (waiting, e.g. the controller's start-up solve
   // in real time), and after (a policy that did not apply: a fallback of the robot).
@@ -144,6 +149,12 @@ class SimNode {
   const SimNodeStats& stats() const { return stats_; }
   void countLockstepTimeout() { ++stats_.lockstep_timeouts; }
   const TerrainMapper& mapper() const { return mapper_; }
+  // This run of the robot (robot_state_t.session): drawn at construction and at each reset().
+  std::int64_t session() const { return session_; }
+  // The policies' signatures: refusals by reason (messages/README.md, "Signing").
+  const msg::WireAuth& auth() const { return auth_; }
+  // Replaces the random session (tests and the fuzzer's replay: the same bits on every run).
+  void setSession(std::int64_t session) { session_ = state_msg_.session = session; }
   int stepsPerState() const { return steps_per_state_; }
 
   // A human summary on stdout and, when path is not empty, JSON.
@@ -154,6 +165,7 @@ class SimNode {
   // The terrain's height under the base (the ground's for a fixed base).
   double baseTerrainHeight(const Eigen::VectorXd& q) const;
   void noteWrongModel(const void* buf, int size, const std::string& channel);
+  void newSession();
   // False (and counted) for a rival controller's policy; follows a new source after a silence.
   bool followSource(std::int64_t source, const std::string& channel);
 
@@ -190,7 +202,8 @@ class SimNode {
   msg::WireModel wire_;
   std::array<msg::WireClaim, 4> mismatches_{};  // the causes already written to stderr
   int n_mismatches_ = 0;
-  std::int64_t source_ = 0;  // the controller followed (policy_t.source_id)
+  std::int64_t session_ = 0;  // this run (robot_state_t.session)
+  std::int64_t source_ = 0;   // the controller followed (policy_t.source_id)
   bool have_source_ = false;
   double source_seen_ = 0.0;              // sim time of its newest policy
   std::array<std::int64_t, 4> rivals_{};  // the rival sources already reported

@@ -11,7 +11,8 @@
 #                 [--robots-dir DIR]... [--check-tracking] [--host-network] [--out DIR]
 #                 [--summary FILE] [--spy] [--viz [--viz-port P]]
 #                 [--slow-host F] [--kill-controller T] [--pause-controller T D]
-#                 [--kill-sim T] [--flood RATE] [--rival | --rival-key]
+#                 [--kill-sim T] [--flood RATE] [--forged-flood RATE] [--replay-log FILE]
+#                 [--rival | --rival-key]
 #                 [--key-file F | --no-signing]
 #                 [--terrain NAME|FILE [--map-rate HZ]]
 #
@@ -84,6 +85,17 @@
 #                     model hash) on the policy channel (stride-flood, on the side core at nice
 #                     10): every receiver must refuse them cheaply and the robot walk on (issue
 #                     19); stride-flood's line in DIR/flood.txt. tools/faults.sh --flood runs it
+#   --forged-flood RATE  also publish RATE forged frames per second on the state and policy
+#                     channels, in turn, for the whole run (issue 44): 60 kB of random bytes with a
+#                     signature trailer that claims the run's key id, a fresh timestamp, a new
+#                     sender each and a made-up mac (stride-flood --forged, at nice 10): what an
+#                     attacker without the key can send. Needs signing (not --no-signing).
+#                     tools/faults.sh --forged-flood runs it
+#   --replay-log FILE also replay FILE (an lcm-logger log of an earlier session, e.g. another demo's
+#                     DIR/session.lcmlog signed with the same --key-file) on the bus from the
+#                     robot's start, at its pace (lcm-logplayer): a recording replayed by an
+#                     attacker without the key (issue 44: every message refused as stale or of
+#                     another run). tools/faults.sh --replay runs it
 #   --kill-sim T      SIGKILL stride-sim (the mock robot) T seconds after it starts and start a new
 #                     one 1 s later, standing at the default posture at the origin, for the rest of
 #                     the duration: the controller must take the new robot over as it is (issue
@@ -107,7 +119,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad by_name=0 user_config="" no_setup=0 commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
-spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood="" kill_sim="" rival=0
+spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood="" forged_flood="" replay_log="" kill_sim="" rival=0
 pause_at="" pause_for="" terrain="" map_rate="" signing=1 key_file="" rival_key=0
 robots_dirs=()
 args=("$@")
@@ -140,6 +152,8 @@ while [ $# -gt 0 ]; do
       [ $# -ge 3 ] || { echo "demo.sh: --pause-controller needs T and D (--help)" >&2; exit 2; }
       pause_at="$2" pause_for="$3"; shift 3 ;;
     --flood) need_value "$@"; flood="$2"; shift 2 ;;
+    --forged-flood) need_value "$@"; forged_flood="$2"; shift 2 ;;
+    --replay-log) need_value "$@"; replay_log=$(cd "$(dirname "$2")" && pwd)/$(basename "$2"); shift 2 ;;
     --kill-sim) need_value "$@"; kill_sim="$2"; shift 2 ;;
     --rival) rival=1; shift ;;
     --rival-key) rival=1 rival_key=1; shift ;;
@@ -245,7 +259,7 @@ summary="${summary:-$out/summary.json}"
 if [ -z "${STRIDE_DEMO_INSIDE:-}" ] && [ -z "${STRIDE_DEMO_NO_SETUP:-}" ] && [ "$no_setup" = 0 ]; then
   # Only what this run starts: the tests, benchmarks and paper tools build with tools/test.sh.
   deps=(--demo) targets=(stride-mpc stride-sim stride-teleop stride-keygen stride-log-summary)
-  [ -n "$flood" ] && targets+=(stride-flood)
+  [ -n "$flood$forged_flood" ] && targets+=(stride-flood)
   [ "$viz" = 1 ] && deps+=(--viz) targets+=(stride-viz stride-viz-web)
   [ "$spy" = 1 ] && deps+=(--spy) targets+=(stride_lcm_jar)
   "$root/tools/install-deps.sh" "${deps[@]}"
@@ -463,6 +477,14 @@ if [ -n "$flood" ]; then
     > "$out/flood.txt" 2>&1 &
   pids+=($!)
 fi
+if [ -n "$forged_flood" ]; then
+  [ "$signing" = 1 ] || { echo "demo: --forged-flood needs signing (not --no-signing)" >&2; exit 2; }
+  # Frames claiming the run's key id (an attacker reads it off the wire; the key is not used).
+  timeout -k 10 "$limit" nice -n 10 "${side[@]}" "$build/tools/stride-flood" \
+    --rate "$forged_flood" --forged "$key_file" --size 60000 --channel STRIDE_STATE,STRIDE_POLICY \
+    > "$out/flood.txt" 2>&1 &
+  pids+=($!)
+fi
 if [ "$rival" = 1 ]; then
   # The rival's YAML, in a temporary folder (the robot's configuration is only read): the robot's,
   # with its paths made absolute (robot:, gait.plan_file, lcm.key_file: relative to the YAML's
@@ -520,6 +542,12 @@ if [ -n "$pause_at" ]; then
   pids+=($!)
 fi
 robot_started=$(date +%s.%N)  # the faults that last the whole run start here
+if [ -n "$replay_log" ]; then
+  # The attacker's replay of a recording, at its pace, from the robot's start (issue 44).
+  timeout -k 10 "$limit" nice -n 10 "${side[@]}" lcm-logplayer "$replay_log" \
+    > "$out/replay.txt" 2>&1 &
+  pids+=($!)
+fi
 if [ "$commands" = none ]; then
   # No command source: whoever joins the bus drives (the controller stands until then).
   join=""
@@ -636,7 +664,7 @@ if [ "$rival" = 1 ]; then
   echo "demo: a rival stride-mpc ran on the same channels; the rival:"
   grep -E '^stride-mpc:' "$out/mpc-rival.txt" 2>/dev/null || echo "  (no output)"
 fi
-[ -n "$flood" ] && { grep -E '^stride-flood: .* sent' "$out/flood.txt" || echo "demo: stride-flood said nothing ($out/flood.txt)"; }
+[ -n "$flood$forged_flood" ] && { grep -E '^stride-flood: .* sent' "$out/flood.txt" || echo "demo: stride-flood said nothing ($out/flood.txt)"; }
 [ -f "$out/teleop.txt" ] && grep -E '^stride-teleop: stopped' "$out/teleop.txt" || true
 [ "$sim_status" = 124 ] && echo "demo: the sim was stopped by the safety net after $limit s"
 echo
@@ -653,8 +681,8 @@ fault_end=""
 [ -n "$kill_controller" ] && fault_end=$(sed -n 's/^demo: started a new stride-mpc at //p' "$out/kill.txt" 2>/dev/null)
 [ -n "$pause_at" ] && fault_end=$(sed -n 's/^demo: woke stride-mpc at //p' "$out/pause.txt" 2>/dev/null)
 [ -n "$kill_sim" ] && fault_end=$(cat "$out/sim-restart.txt" 2>/dev/null)
-{ [ "$rival" = 1 ] || [ -n "$flood" ]; } && fault_end=$robot_started
-if [ -n "$kill_controller$pause_at$kill_sim$flood" ] || [ "$rival" = 1 ]; then
+{ [ "$rival" = 1 ] || [ -n "$flood$forged_flood$replay_log" ]; } && fault_end=$robot_started
+if [ -n "$kill_controller$pause_at$kill_sim$flood$forged_flood$replay_log" ] || [ "$rival" = 1 ]; then
   if [ -n "$fault_end" ]; then
     summary_args+=(--fault-end-wall "$fault_end")
   else

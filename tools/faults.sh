@@ -7,6 +7,14 @@
 # Instead of the controller kills, one other fault per run:
 #   --flood RATE   another robot's policies on the policy channel at RATE per second all along
 #                  (tools/demo.sh --flood; lock-step: Faults.AFloodOf...)
+#   --forged-flood RATE  forged frames on the state and policy channels at RATE per second all
+#                  along: 60 kB claiming the run's key id, fresh timestamps, a new sender each, a
+#                  made-up mac (issue 44: refused before hashing; tools/demo.sh --forged-flood;
+#                  ctest forged_flood_real_time)
+#   --replay       a recording of a signed session (a first demo walking the same script, its
+#                  session.lcmlog) replayed with lcm-logplayer at a new robot and controller with
+#                  the same key, from their start (issue 44: every message refused as stale, or of
+#                  another run; tools/demo.sh --replay-log; lock-step: SignedReplay.*)
 #   --rival        a second stride-mpc on the same channels, standing while the robot walks
 #                  (tools/demo.sh --rival; lock-step: ClosedLoop.ARivalController...)
 #   --kill-sim     stride-sim killed at the same instants and a new one started 1 s later, the
@@ -19,11 +27,13 @@
 # segment starting 2 s after the fault's end tracked: stride-log-summary --fault-end) and when
 # the command was first tracked.
 #   tools/faults.sh [--robot stride_quad|stride_humanoid] [--runs N] [--out DIR]
-#                   [--flood RATE | --rival | --kill-sim | --pause D]
+#                   [--flood RATE | --forged-flood RATE | --replay | --rival | --kill-sim |
+#                    --pause D]
 #   --robot NAME   stride_quad (default: trots at 0.5 m/s) or stride_humanoid (walks at 0.2 m/s)
 #   --runs N       kills (or runs with the other fault), one run each (default 10)
 #   --out DIR      each run's demo folder (default build/faults/ROBOT, build/flood/ROBOT,
-#                  build/rival/ROBOT, build/sim-restart/ROBOT, build/pause/ROBOT)
+#                  build/rival/ROBOT, build/sim-restart/ROBOT, build/pause/ROBOT,
+#                  build/forged-flood/ROBOT, build/replay/ROBOT)
 # Exit status: 0 no fall and control back in every run; 4 the robot fell in some run; 6 control
 # did not come back in some run; 1 another failure.
 set -euo pipefail
@@ -36,6 +46,8 @@ while [ $# -gt 0 ]; do
     --runs) runs="$2"; shift 2 ;;
     --out) out="$2"; shift 2 ;;
     --flood) flood="$2" fault=flood; shift 2 ;;
+    --forged-flood) flood="$2" fault=forged-flood; shift 2 ;;
+    --replay) fault=replay; shift ;;
     --rival) fault=rival; shift ;;
     --kill-sim) fault=kill-sim; shift ;;
     --pause) pause="$2" fault=pause; shift 2 ;;
@@ -51,6 +63,8 @@ esac
 case "$fault" in
   kill) out="${out:-$build/faults/$robot}" ;;
   flood) out="${out:-$build/flood/$robot}" ;;
+  forged-flood) out="${out:-$build/forged-flood/$robot}" ;;
+  replay) out="${out:-$build/replay/$robot}" ;;
   rival) out="${out:-$build/rival/$robot}" ;;
   kill-sim) out="${out:-$build/sim-restart/$robot}" ;;
   pause) out="${out:-$build/pause/$robot}" ;;
@@ -80,6 +94,16 @@ for ((i = 0; i < runs; i++)); do
   case "$fault" in
     kill) args=(--kill-controller "$kill_at") ;;
     flood) args=(--flood "$flood") ;;
+    forged-flood) args=(--forged-flood "$flood") ;;
+    replay)
+      # The recording: the same walk, signed with the key the attacked runs use.
+      if [ ! -f "$out/recorded/session.lcmlog" ]; then
+        rm -f "$out/key"
+        "$build/tools/stride-keygen" "$out/key" > /dev/null
+        "$root/tools/demo.sh" --robot "$robot" --commands "$script" --duration "$duration" \
+          --realtime --key-file "$out/key" --out "$out/recorded" > "$out/recorded.txt" 2>&1 || true
+      fi
+      args=(--replay-log "$out/recorded/session.lcmlog" --key-file "$out/key") ;;
     rival) args=(--rival) ;;
     kill-sim) args=(--kill-sim "$kill_at") ;;
     pause) args=(--pause-controller "$kill_at" "$pause") ;;
@@ -87,7 +111,7 @@ for ((i = 0; i < runs; i++)); do
   "$root/tools/demo.sh" --robot "$robot" --commands "$script" --duration "$duration" --realtime \
     "${args[@]}" --out "$dir" > "$dir.txt" 2>&1 || status=$?
   # A flooded session's log holds every foreign policy (44 MB a second): the summaries are kept.
-  [ "$fault" = flood ] && rm -f "$dir/session.lcmlog"
+  case "$fault" in flood|forged-flood) rm -f "$dir/session.lcmlog" ;; esac
   line=$(python3 - "$dir" "$fault" <<'EOF'
 import json, os, sys
 d, fault = sys.argv[1], sys.argv[2]
@@ -116,12 +140,19 @@ if fault == "kill-sim":
           + recovery())
     sys.exit(0)
 s = load("sim.json")
-line = ("tilt max %.1f deg, base %.3f..%.3f m, walked %.2f m; %d steps standing down, %d past a "
-        "policy's end, %d controller switches; %d policies taken, %d of another model refused, %d "
-        "not signed with the key refused"
+line = ("tilt max %.1f deg, base %.3f..%.3f m, walked %.2f m; %d stand-downs (%d steps standing "
+        "down), %d past a policy's end, %d controller switches; %d policies taken, %d of another "
+        "model refused, %d not signed with the key refused"
         % (s["max_tilt_deg"], s["base_height_min_m"], s["base_height_max_m"], s["distance_m"],
-           s["stand_down_steps"], s["exhausted_steps"], s["source_switches"], s["policies"],
-           s["policies_wrong_model"], s["policies_unauthenticated"]))
+           s["stand_downs"], s["stand_down_steps"], s["exhausted_steps"], s["source_switches"],
+           s["policies"], s["policies_wrong_model"], s["policies_unauthenticated"]))
+if fault in ("forged-flood", "replay"):
+    m = load("mpc.json")
+    u = m.get("unauthenticated") or {}
+    line += ("; the robot refused %d policies of another run; the controller refused %s, and %d "
+             "states of another run" % (s.get("policies_other_session", 0),
+                                        ", ".join("%d %s" % (n, k) for k, n in u.items() if n),
+                                        m.get("other_session_states", 0)))
 if fault == "rival":
     m, r = load("mpc.json"), load("mpc-rival.json")
     line += ("; %d of the rival refused; the controller saw %d of the rival's policies, the rival "
@@ -135,6 +166,8 @@ EOF
   case "$fault" in
     kill) echo "faults: $robot run $i, stride-mpc killed at $kill_at s: $line" ;;
     flood) echo "faults: $robot run $i, $flood foreign policies/s: $line" ;;
+    forged-flood) echo "faults: $robot run $i, $flood forged 60 kB frames/s: $line" ;;
+    replay) echo "faults: $robot run $i, a recorded session replayed: $line" ;;
     rival) echo "faults: $robot run $i, a rival stride-mpc: $line" ;;
     kill-sim) echo "faults: $robot run $i, stride-sim killed at $kill_at s: $line" ;;
     pause) echo "faults: $robot run $i, stride-mpc stopped at $kill_at s for $pause s: $line" ;;
@@ -143,6 +176,8 @@ done
 case "$fault" in
   kill) what="kills and restarts" ;;
   flood) what="runs under $flood foreign policies/s" ;;
+  forged-flood) what="runs under $flood forged frames/s" ;;
+  replay) what="runs with a recorded session replayed" ;;
   rival) what="runs with a rival controller" ;;
   kill-sim) what="mock-robot kills and restarts" ;;
   pause) what="pauses of $pause s" ;;

@@ -205,7 +205,7 @@ TEST_F(NodeInput, RejectsAndCountsMalformedStates) {
   std::vector<unsigned char> b(m.getEncodedSize());
   m.encode(b.data(), 0, static_cast<int>(b.size()));
   std::vector<unsigned char> huge = b;
-  huge[24] = 0x7f;  // nq = 2^31 - ...: must never reach the decoder
+  huge[32] = 0x7f;  // nq = 2^31 - ...: must never reach the decoder
   feed(huge.data(), static_cast<int>(huge.size()));
   EXPECT_EQ(node_.rejected(Reject::WrongModel), 4);
   huge = b;
@@ -476,6 +476,70 @@ std::string newKeyFile() {
 // and maps signed with it. Unsigned, forged, replayed and another key's are refused, counted by
 // reason (and as Reject::Unauthenticated), the first of each said once; what it publishes is
 // signed (its policies verify with the key, and are not taken as a rival's).
+// Issue 44: a robot whose clock is off by more than the freshness window (2 s behind, 2 s ahead
+// of the controller's host) is refused, counted as stale or from the future, and said once with
+// the offset; within the window it is taken. A junk state from the future signed with the key and
+// the robot's sender id locks nobody out: the robot's next state is taken. A state of another
+// robot run is refused while the run followed is alive (Reject::OtherSession), said once.
+TEST(NodeSigned, AClockOffsetBeyondTheWindowIsRefusedAndSaid) {
+  ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
+  config.key_file = newKeyFile();
+  const msg::Key key = msg::loadKeyFile(config.key_file);
+  struct Sink : Publisher {
+    void publish(const std::string&, const void*, int) override {}
+  } out;
+  MpcNode node(config, out, TimeSource::Stamps);
+  const msg::Signer robot(key, 7);
+  timespec wall{};
+  clock_gettime(CLOCK_REALTIME, &wall);
+  const std::int64_t now = static_cast<std::int64_t>(wall.tv_sec) * 1000000 + wall.tv_nsec / 1000;
+  const auto feed = [&](robot_state_t m, std::int64_t signed_at) {
+    std::vector<std::uint8_t> b(m.getEncodedSize() + msg::kSignatureSize);
+    const int n = m.encode(b.data(), 0, m.getEncodedSize());
+    b.resize(robot.signAt("STRIDE_STATE", b.data(), n, static_cast<int>(b.size()), signed_at));
+    // Arrived at `now` on this host's clock (LCM's recv_utime).
+    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), now};
+    node.onState(&rbuf, "STRIDE_STATE");
+  };
+  const auto state = [&](std::int64_t utime, std::int64_t session) {
+    robot_state_t m = standingState(node.mpc().robot(), utime);
+    m.session = session;
+    return m;
+  };
+  testing::internal::CaptureStderr();
+  feed(state(1000, 5), now - 2000000);
+  feed(state(2000, 5), now - 2000000 + 1);
+  feed(state(3000, 5), now + 2000000);
+  EXPECT_EQ(node.acceptedStates(), 0);
+  EXPECT_EQ(node.auth().refused(msg::Verdict::Stale), 2);
+  EXPECT_EQ(node.auth().refused(msg::Verdict::Future), 1);
+  // The robot's clock fixed (within the window): taken.
+  feed(state(4000, 5), now - 400000);
+  EXPECT_EQ(node.acceptedStates(), 1);
+  // Junk with the key and the robot's id, stamped an hour ahead and 0.3 s ahead (its content
+  // refused: not a unit quaternion): neither is remembered, the robot's next state is taken.
+  robot_state_t junk = state(5000, 5);
+  junk.q[3] = 2.0;
+  feed(junk, now + 3600LL * 1000000);
+  feed(junk, now + 300000);
+  feed(state(6000, 5), now - 300000);
+  EXPECT_EQ(node.acceptedStates(), 2);
+  // Another run's state while this one is alive.
+  feed(state(7000, 6), now - 200000);
+  feed(state(8000, 5), now - 100000);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(node.acceptedStates(), 3);
+  EXPECT_EQ(node.rejected(msg::Reject::OtherSession), 1);
+  EXPECT_EQ(node.auth().refused(msg::Verdict::Future), 2);
+  EXPECT_NE(err.find("2.000 s behind this host's clock"), std::string::npos) << err;
+  EXPECT_NE(err.find("2.000 s ahead of this host's clock"), std::string::npos) << err;
+  EXPECT_NE(err.find("chrony or PTP"), std::string::npos) << err;
+  EXPECT_NE(err.find("another run of the robot"), std::string::npos) << err;
+  // Stale and future said once each, the refused junk content is not a signature's refusal, the
+  // other run once.
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 3) << err;
+}
+
 TEST(NodeSigned, RefusesWhatIsNotSignedWithItsKey) {
   ControllerConfig config = loadControllerConfig(configPath("stride_quad"));
   config.key_file = newKeyFile();
@@ -570,8 +634,11 @@ TEST(NodeSigned, RefusesWhatIsNotSignedWithItsKey) {
   ASSERT_FALSE(out.policy.empty());
   msg::Verifier robot_side(key);
   int payload = 0;
-  EXPECT_EQ(robot_side.check("STRIDE_POLICY", out.policy.data(),
-                             static_cast<int>(out.policy.size()), payload),
+  timespec wall{};
+  clock_gettime(CLOCK_REALTIME, &wall);
+  EXPECT_EQ(robot_side.check(
+                "STRIDE_POLICY", out.policy.data(), static_cast<int>(out.policy.size()),
+                static_cast<std::int64_t>(wall.tv_sec) * 1000000 + wall.tv_nsec / 1000, payload),
             msg::Verdict::Ok);
   lcm::ReceiveBuffer own{out.policy.data(), static_cast<uint32_t>(out.policy.size()), 0};
   node.onPolicy(&own, "STRIDE_POLICY");

@@ -115,7 +115,7 @@ class Corpus {
     s.utime = -1;
     add(Channel::MpcState, "negative_stamp", encode(s));
     const Bytes good = encode(state(1003000, true));
-    add(Channel::MpcState, "nq_2e31", poke32(good, 8 + 16, kHuge));
+    add(Channel::MpcState, "nq_2e31", poke32(good, 8 + 24, kHuge));
     add(Channel::MpcState, "truncated", Bytes(good.begin(), good.end() - 5));
     Bytes longer = good;
     longer.push_back(0);
@@ -183,7 +183,10 @@ class Corpus {
     p = policy(1000000, 2, 1);
     p.status = 9;
     add(Channel::SimPolicy, "status_unknown", encode(p));
-    add(Channel::SimPolicy, "knots_2e31", poke32(encode(policy(1000000, 2, 1)), 8 + 56, kHuge));
+    add(Channel::SimPolicy, "knots_2e31", poke32(encode(policy(1000000, 2, 1)), 8 + 64, kHuge));
+    p = policy(1000000, 2, 1);
+    p.session ^= 1;  // made for another run of the robot (issue 44)
+    add(Channel::SimPolicy, "another_session", encode(p));
 
     // stride-viz (the fuzzer gave it stride_quad's model at start), and what it draws.
     const robot_model_t model = robotModelMessage(robot_, nu_);
@@ -285,6 +288,7 @@ class Corpus {
     msg::shape(m, nq_, nv_, contacts ? nc_ : 0);
     m.utime = utime;
     m.model_hash = hash_;
+    m.session = kSession;
     for (int i = 0; i < nq_; ++i) m.q[i] = tidy(robot_.default_q[i]);
     for (auto& c : m.contact) c = 1;
     return m;
@@ -320,6 +324,7 @@ class Corpus {
     m.utime = m.knot0_utime = utime;
     m.model_hash = hash_;
     m.source_id = source;
+    m.session = kSession;
     m.tick = 1;
     m.t0 = 0.0;
     m.dt = 0.015625;

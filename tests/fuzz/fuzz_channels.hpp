@@ -26,6 +26,10 @@ enum class Channel : std::uint8_t {
 };
 constexpr int kFuzzChannels = static_cast<int>(Channel::MpcTerrain) + 1;
 
+// The robot run (robot_state_t.session) of the corpus's states and of the mock robot the harness
+// feeds policies to (SimNode::setSession): its valid policies answer it and reach the decoder.
+constexpr std::int64_t kSession = 0x5e5510;
+
 // The corpus files' names start with it ("mpc_state-standing").
 inline const char* name(Channel c) {
   constexpr const char* kNames[kFuzzChannels] = {

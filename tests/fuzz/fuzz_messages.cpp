@@ -136,6 +136,7 @@ void toMpc(Harness& h, Channel channel, const lcm::ReceiveBuffer& rbuf) {
 
 void toSim(Harness& h, const lcm::ReceiveBuffer& rbuf) {
   h.sim.reset(h.q0, h.v0);
+  h.sim.setSession(kSession);  // the corpus's policies answer this run
   h.sim.onPolicy(&rbuf, "STRIDE_POLICY");
   const sim::SimNodeStats& s = h.sim.stats();
   if (s.policies + s.policies_rejected != 1)

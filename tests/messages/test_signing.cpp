@@ -82,9 +82,19 @@ Bytes signedAt(const Signer& signer, const Bytes& payload, std::int64_t timestam
   return buf;
 }
 
-Verdict checkOf(Verifier& verifier, const Bytes& buf, const char* channel = kPolicyChannel) {
+// The verdict of a receiver whose clock reads `now`; a message passed is accepted (its content
+// taken), as the nodes do after their own checks.
+Verdict checkOf(Verifier& verifier, const Bytes& buf, const char* channel = kPolicyChannel,
+                std::int64_t now = kT0) {
   int payload_size = -1;
-  return verifier.check(channel, buf.data(), static_cast<int>(buf.size()), payload_size);
+  const Verdict v =
+      verifier.check(channel, buf.data(), static_cast<int>(buf.size()), now, payload_size);
+  verifier.accept();
+  return v;
+}
+
+Verdict checkAt(Verifier& verifier, const Bytes& buf, std::int64_t now) {
+  return checkOf(verifier, buf, kPolicyChannel, now);
 }
 
 std::int64_t trailerTimestamp(const std::uint8_t* buf, int size) {
@@ -143,8 +153,9 @@ TEST(Signing, KnownAnswerTrailer) {
             "53545331");                        // "STS1"
   Verifier verifier(key);
   int payload_size = 0;
-  EXPECT_EQ(verifier.check("STRIDE_POLICY", buf.data(), static_cast<int>(buf.size()), payload_size),
-            Verdict::Ok);
+  EXPECT_EQ(
+      verifier.check("STRIDE_POLICY", buf.data(), static_cast<int>(buf.size()), kT0, payload_size),
+      Verdict::Ok);
   EXPECT_EQ(payload_size, 12);
 }
 
@@ -162,7 +173,9 @@ TEST(Signing, RoundTrip) {
     EXPECT_TRUE(std::equal(payload.begin(), payload.end(), buf.begin()));
     Verifier verifier(key);
     int payload_size = -1;
-    EXPECT_EQ(verifier.check(kPolicyChannel, buf.data(), signed_size, payload_size), Verdict::Ok)
+    EXPECT_EQ(verifier.check(kPolicyChannel, buf.data(), signed_size,
+                             trailerTimestamp(buf.data(), signed_size), payload_size),
+              Verdict::Ok)
         << size;
     EXPECT_EQ(payload_size, size);
     EXPECT_EQ(unsignedPayloadSize(buf.data(), signed_size), size);
@@ -184,10 +197,15 @@ TEST(Signing, EverySingleBitFlipIsRefused) {
       bad[i] ^= static_cast<std::uint8_t>(1u << bit);
       Verifier verifier(key);
       int payload_size = -1;
-      const Verdict v = verifier.check(kPolicyChannel, bad.data(), n, payload_size);
+      const Verdict v = verifier.check(kPolicyChannel, bad.data(), n, kT0, payload_size);
       Verdict expected = Verdict::Forged;  // payload, sender, timestamp, mac
       if (i >= trailer && i < trailer + 4) expected = Verdict::WrongKey;  // the key id
       if (i >= n - 4) expected = Verdict::Unsigned;                       // the magic
+      if (i >= trailer + 8 && i < trailer + 16) {  // the timestamp: outside the window unhashed
+        const std::int64_t t = trailerTimestamp(bad.data(), n);
+        if (t < kT0 - kFreshnessWindowMicros) expected = Verdict::Stale;
+        if (t > kT0 + kFreshnessWindowMicros) expected = Verdict::Future;
+      }
       EXPECT_EQ(v, expected) << "byte " << i << " bit " << bit;
       EXPECT_EQ(verifier.count(Verdict::Ok), 0);
     }
@@ -230,31 +248,126 @@ TEST(SigningReplay, SendersInterleaved) {
   const Signer a(key, 10), b(key, 11);
   const Bytes payload = payloadOf(64);
   Verifier verifier(key);
-  // b runs 1 s behind a: each sender only has to be newer than itself.
+  // b runs 0.3 s behind a (within the window): each sender only has to be newer than itself.
+  const std::int64_t behind = 3 * kSecond / 10;
   for (int k = 0; k < 20; ++k) {
     EXPECT_EQ(checkOf(verifier, signedAt(a, payload, kT0 + k * 1000)), Verdict::Ok) << k;
-    EXPECT_EQ(checkOf(verifier, signedAt(b, payload, kT0 - kSecond + k * 1000)), Verdict::Ok) << k;
+    EXPECT_EQ(checkOf(verifier, signedAt(b, payload, kT0 - behind + k * 1000)), Verdict::Ok) << k;
   }
-  EXPECT_EQ(checkOf(verifier, signedAt(b, payload, kT0 - kSecond + 19 * 1000)), Verdict::Replayed);
+  EXPECT_EQ(checkOf(verifier, signedAt(b, payload, kT0 - behind + 19 * 1000)), Verdict::Replayed);
   EXPECT_EQ(verifier.senders(), 2);
 }
 
-TEST(SigningReplay, NewSenderWithinAMinuteOfTheNewest) {
+// Issue 44: every message, a new sender's first included, within the window around the receiver's
+// clock, behind and ahead; the old rule (a new sender within 60 s of the newest accepted) took a
+// first message however old.
+TEST(SigningFreshness, EveryMessageWithinTheWindowOfTheReceiversClock) {
   const Key key = testKey();
   const Bytes payload = payloadOf(64);
+  const std::int64_t w = kFreshnessWindowMicros;
   Verifier verifier(key);
-  EXPECT_EQ(checkOf(verifier, signedAt(Signer(key, 1), payload, kT0)), Verdict::Ok);
-  EXPECT_EQ(checkOf(verifier, signedAt(Signer(key, 2), payload, kT0 - 61 * kSecond)),
-            Verdict::Replayed);
-  EXPECT_EQ(checkOf(verifier, signedAt(Signer(key, 3), payload, kT0 - 59 * kSecond)), Verdict::Ok);
-  // The refused new sender was not remembered: it may come back with a timestamp in the window.
-  EXPECT_EQ(checkOf(verifier, signedAt(Signer(key, 2), payload, kT0 - 30 * kSecond)), Verdict::Ok);
-  EXPECT_EQ(verifier.senders(), 3);
-  // The window follows the newest timestamp from anybody.
-  EXPECT_EQ(checkOf(verifier, signedAt(Signer(key, 1), payload, kT0 + 100 * kSecond)), Verdict::Ok);
-  EXPECT_EQ(checkOf(verifier, signedAt(Signer(key, 4), payload, kT0 + 39 * kSecond)),
-            Verdict::Replayed);
-  EXPECT_EQ(checkOf(verifier, signedAt(Signer(key, 4), payload, kT0 + 41 * kSecond)), Verdict::Ok);
+  // A recording: its first message, to a receiver that knows nobody, a minute and a day late.
+  EXPECT_EQ(checkAt(verifier, signedAt(Signer(key, 1), payload, kT0), kT0 + 60 * kSecond),
+            Verdict::Stale);
+  EXPECT_EQ(checkAt(verifier, signedAt(Signer(key, 1), payload, kT0), kT0 + 86400 * kSecond),
+            Verdict::Stale);
+  EXPECT_EQ(verifier.lastOffset(), -86400 * kSecond);
+  // The edges: the window itself passes, a microsecond more does not.
+  EXPECT_EQ(checkAt(verifier, signedAt(Signer(key, 2), payload, kT0 - w), kT0), Verdict::Ok);
+  EXPECT_EQ(checkAt(verifier, signedAt(Signer(key, 3), payload, kT0 - w - 1), kT0), Verdict::Stale);
+  EXPECT_EQ(checkAt(verifier, signedAt(Signer(key, 4), payload, kT0 + w), kT0), Verdict::Ok);
+  EXPECT_EQ(checkAt(verifier, signedAt(Signer(key, 5), payload, kT0 + w + 1), kT0),
+            Verdict::Future);
+  EXPECT_EQ(verifier.lastOffset(), w + 1);
+  // A sender an hour ahead (its clock off, or a key holder's junk) is refused and locks nobody
+  // out: the sender's next message in the window passes.
+  const Signer live(key, 6);
+  EXPECT_EQ(checkAt(verifier, signedAt(live, payload, kT0 + 3600 * kSecond), kT0), Verdict::Future);
+  EXPECT_EQ(
+      checkAt(verifier, signedAt(live, payload, std::numeric_limits<std::int64_t>::max()), kT0),
+      Verdict::Future);
+  EXPECT_EQ(
+      checkAt(verifier, signedAt(live, payload, std::numeric_limits<std::int64_t>::min()), kT0),
+      Verdict::Stale);
+  EXPECT_EQ(checkAt(verifier, signedAt(live, payload, kT0 + 1), kT0), Verdict::Ok);
+  EXPECT_EQ(verifier.count(Verdict::Stale), 4);
+  EXPECT_EQ(verifier.count(Verdict::Future), 3);
+  // Another window.
+  Verifier wide(key, 60 * kSecond);
+  EXPECT_EQ(wide.window(), 60 * kSecond);
+  EXPECT_EQ(checkAt(wide, signedAt(Signer(key, 7), payload, kT0 - 59 * kSecond), kT0), Verdict::Ok);
+}
+
+// Issue 44: the table changes only when the receiver accepts the message (its content too). A
+// message with a valid mac that the receiver then refuses (a junk payload, with the key) leaves
+// nothing behind: the sender's next, older but still fresh message passes.
+TEST(SigningFreshness, OnlyAcceptedMessagesChangeTheTable) {
+  const Key key = testKey();
+  const Signer signer(key, 8);
+  const Bytes payload = payloadOf(64);
+  Verifier verifier(key);
+  int payload_size = 0;
+  const Bytes junk = signedAt(signer, payload, kT0 + 400000);
+  ASSERT_EQ(
+      verifier.check(kPolicyChannel, junk.data(), static_cast<int>(junk.size()), kT0, payload_size),
+      Verdict::Ok);
+  // Not accepted (its content refused): the sender is still unknown.
+  EXPECT_EQ(verifier.senders(), 0);
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payload, kT0)), Verdict::Ok);
+  EXPECT_EQ(verifier.senders(), 1);
+  // accept() twice, or after a refusal, changes nothing.
+  verifier.accept();
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payload, kT0 + 1)), Verdict::Ok);
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payload, kT0 + 1)), Verdict::Replayed);
+  verifier.accept();
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payload, kT0 + 2)), Verdict::Ok);
+}
+
+// Issue 44: cheap refusals before hashing. A size the channel's type cannot have; more frames from
+// unknown senders than the budget; a stale or replayed claim. Made-up frames at 4000/s for 1 s
+// hash at most the budget's.
+TEST(SigningCheapRefusals, ImpossibleSizesAndTheNewSendersBudget) {
+  const Key key = testKey();
+  Verifier verifier(key);
+  verifier.setSizes({100, 1000, 100});  // 100, 200, ... 1000
+  const Signer signer(key, 9);
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payloadOf(300), kT0)), Verdict::Ok);
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payloadOf(301), kT0 + 1)), Verdict::Implausible);
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payloadOf(1100), kT0 + 2)), Verdict::Implausible);
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payloadOf(60000), kT0 + 3)), Verdict::Implausible);
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payloadOf(50), kT0 + 4)), Verdict::Implausible);
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payloadOf(1000), kT0 + 5)), Verdict::Ok);
+
+  // Forged frames (our key id, a made-up mac) from a new sender id each, at 4000/s for a second:
+  // at most the budget's burst and rate are hashed (Forged), the rest refused before.
+  Verifier flooded(key);
+  Bytes forged = signedAt(Signer(key, 1), payloadOf(600), kT0);
+  const int n = static_cast<int>(forged.size());
+  const Signer live(key, 0xabc);
+  int live_ok = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const std::int64_t now = kT0 + i * 250;
+    for (int b = 0; b < 4; ++b)
+      forged[n - kSignatureSize + 4 + b] = static_cast<std::uint8_t>((0x10000 + i) >> (8 * b));
+    for (int b = 0; b < 8; ++b)
+      forged[n - kSignatureSize + 8 + b] =
+          static_cast<std::uint8_t>(std::uint64_t(now) >> (56 - 8 * b));
+    const Verdict v = checkAt(flooded, forged, now);
+    EXPECT_TRUE(v == Verdict::Forged || v == Verdict::OverRate) << describe(v);
+    // The live sender, known after its first message, is not held by the new senders' budget.
+    if (i % 40 == 0)
+      live_ok += checkAt(flooded, signedAt(live, payloadOf(600), now), now) == Verdict::Ok;
+  }
+  EXPECT_LE(flooded.count(Verdict::Forged), kNewSenderBurst + kNewSenderRate + 2);
+  EXPECT_GE(flooded.count(Verdict::OverRate), 4000 - kNewSenderBurst - kNewSenderRate - 2);
+  EXPECT_GE(live_ok, 99);  // the first may meet a spent budget
+  // Frames claiming a known sender with a timestamp not newer than its last: refused unhashed.
+  Bytes replay = signedAt(live, payloadOf(600), kT0);
+  replay[10] ^= 1;  // the payload altered: a forgery, but refused before its mac is computed
+  EXPECT_EQ(checkAt(flooded, replay, kT0 + 4000 * 250), Verdict::Stale);
+  Bytes older = signedAt(live, payloadOf(600), kT0 + 3960 * 250 - 1);
+  older[10] ^= 1;
+  EXPECT_EQ(checkAt(flooded, older, kT0 + 4000 * 250), Verdict::Replayed);
 }
 
 TEST(SigningReplay, SeventeenSendersEvictTheLeastRecentlyAccepted) {
@@ -277,7 +390,7 @@ TEST(SigningReplay, SeventeenSendersEvictTheLeastRecentlyAccepted) {
     if (s == 2) continue;
     EXPECT_EQ(checkOf(verifier, last[s]), Verdict::Replayed) << s;  // still remembered
   }
-  // Sender 2 was forgotten: its last message passes again, as a new sender's within the minute.
+  // Sender 2 was forgotten: its last message passes again, as a new sender's within the window.
   // This is the documented limit of a fixed table (messages/README.md, "Signing").
   EXPECT_EQ(checkOf(verifier, last[2]), Verdict::Ok);
   EXPECT_EQ(checkOf(verifier, last[2]), Verdict::Replayed);
@@ -290,7 +403,7 @@ TEST(SigningReplay, OnlyValidMacsUpdateTheTable) {
   const Signer signer(key, 5);
   const Bytes payload = payloadOf(64);
   Verifier verifier(key);
-  Bytes forged = signedAt(signer, payload, kT0 + 10 * kSecond);
+  Bytes forged = signedAt(signer, payload, kT0 + kSecond / 10);
   forged[3] ^= 1;
   EXPECT_EQ(checkOf(verifier, forged), Verdict::Forged);
   EXPECT_EQ(verifier.senders(), 0);
@@ -308,21 +421,22 @@ TEST(Signing, UnsignedWrongKeyAndTruncated) {
   Verifier verifier(key);
   int payload_size = -1;
   EXPECT_EQ(checkOf(verifier, payload), Verdict::Unsigned);
-  EXPECT_EQ(verifier.check(kPolicyChannel, payload.data(), 200, payload_size), Verdict::Unsigned);
+  EXPECT_EQ(verifier.check(kPolicyChannel, payload.data(), 200, kT0, payload_size),
+            Verdict::Unsigned);
   EXPECT_EQ(payload_size, 200);
   EXPECT_EQ(unsignedPayloadSize(payload.data(), 200), 200);
 
   const Bytes other = signedAt(Signer(testKey(100), 9), payload, kT0);
-  EXPECT_EQ(
-      verifier.check(kPolicyChannel, other.data(), static_cast<int>(other.size()), payload_size),
-      Verdict::WrongKey);
+  EXPECT_EQ(verifier.check(kPolicyChannel, other.data(), static_cast<int>(other.size()), kT0,
+                           payload_size),
+            Verdict::WrongKey);
   EXPECT_EQ(payload_size, 200);
 
   const Bytes good = signedAt(signer, payload, kT0);
   for (int cut = 1; cut <= kSignatureSize + 10; ++cut) {
     const int size = static_cast<int>(good.size()) - cut;
-    const Verdict v = verifier.check(kPolicyChannel, good.data(), size, payload_size);
-    EXPECT_TRUE(v == Verdict::Unsigned || v == Verdict::Forged) << cut << ": " << describe(v);
+    const Verdict v = verifier.check(kPolicyChannel, good.data(), size, kT0, payload_size);
+    EXPECT_NE(v, Verdict::Ok) << cut << ": " << describe(v);
   }
   // The payload cut short, the trailer whole.
   Bytes shorter(good.begin(), good.begin() + 150);
@@ -331,13 +445,14 @@ TEST(Signing, UnsignedWrongKeyAndTruncated) {
 
   for (int size = 0; size < kSignatureSize; ++size) {
     // The last `size` bytes of a signed message: the magic, but too short for a trailer.
-    EXPECT_EQ(verifier.check(kPolicyChannel, good.data() + good.size() - size, size, payload_size),
-              Verdict::Unsigned)
+    EXPECT_EQ(
+        verifier.check(kPolicyChannel, good.data() + good.size() - size, size, kT0, payload_size),
+        Verdict::Unsigned)
         << size;
     EXPECT_EQ(payload_size, size);
     EXPECT_EQ(unsignedPayloadSize(good.data() + good.size() - size, size), size);
   }
-  EXPECT_EQ(verifier.check(kPolicyChannel, nullptr, 0, payload_size), Verdict::Unsigned);
+  EXPECT_EQ(verifier.check(kPolicyChannel, nullptr, 0, kT0, payload_size), Verdict::Unsigned);
   EXPECT_EQ(unsignedPayloadSize(nullptr, 0), 0);
   EXPECT_EQ(checkOf(verifier, good), Verdict::Ok);  // nothing above was accepted
 }
@@ -377,7 +492,7 @@ TEST(Signing, CountersAndSayOnce) {
     EXPECT_NE(std::string(describe(static_cast<Verdict>(v))), "");
   }
   const Bytes good = signedAt(signer, payload, kT0);
-  Bytes forged(good);
+  Bytes forged = signedAt(signer, payload, kT0 + 1);  // newer, then altered
   forged[0] ^= 0x80;
   const Bytes other = signedAt(Signer(testKey(50), 3), payload, kT0);
   EXPECT_EQ(checkOf(verifier, good), Verdict::Ok);
@@ -388,7 +503,14 @@ TEST(Signing, CountersAndSayOnce) {
   EXPECT_EQ(checkOf(verifier, payload), Verdict::Unsigned);
   EXPECT_EQ(checkOf(verifier, payload), Verdict::Unsigned);
   EXPECT_EQ(checkOf(verifier, other), Verdict::WrongKey);
-  const std::array<std::int64_t, kVerdicts> expected = {1, 3, 1, 1, 2};
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payload, kT0 - 10 * kSecond)), Verdict::Stale);
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payload, kT0 + 10 * kSecond)), Verdict::Future);
+  verifier.setSizes({0, 10, 1});
+  EXPECT_EQ(checkOf(verifier, signedAt(signer, payload, kT0 + 1)), Verdict::Implausible);
+  verifier.setSizes({});
+  verifier.setNewSenderRate(1.0, 0.0);
+  EXPECT_EQ(checkOf(verifier, signedAt(Signer(key, 4), payload, kT0 + 1)), Verdict::OverRate);
+  const std::array<std::int64_t, kVerdicts> expected = {1, 3, 1, 1, 2, 1, 1, 1, 1};
   EXPECT_EQ(verifier.counters(), expected);
   for (int v = 0; v < kVerdicts; ++v) {
     EXPECT_TRUE(verifier.sayOnce(static_cast<Verdict>(v))) << v;
@@ -532,32 +654,42 @@ TEST(Signing, NoAllocation) {
     Bytes buf = payloadOf(size);
     buf.resize(buf.size() + kSignatureSize);
     const Bytes plain = payloadOf(size);
-    Bytes other = signedAt(Signer(other_key, 1), plain, kT0);
+    timespec wall{};
+    clock_gettime(CLOCK_REALTIME, &wall);
+    const std::int64_t now = static_cast<std::int64_t>(wall.tv_sec) * kSecond + wall.tv_nsec / 1000;
+    Bytes other = signedAt(Signer(other_key, 1), plain, now);
     Bytes forged(buf);
     Signer signer(key, 2);
     Verifier verifier(key);
     int signed_size = 0, payload_size = 0;
-    std::array<Verdict, 6> verdicts{};
+    std::array<Verdict, 7> verdicts{};
     std::int64_t unsigned_size = 0;
     const long allocations = stride::testing::allocations([&] {
       signed_size = signer.sign(kPolicyChannel, buf.data(), size, static_cast<int>(buf.size()));
-      verdicts[0] = verifier.check(kPolicyChannel, buf.data(), signed_size, payload_size);
-      verdicts[1] = verifier.check(kPolicyChannel, buf.data(), signed_size, payload_size);
-      verdicts[2] = verifier.check(kPolicyChannel, plain.data(), size, payload_size);
-      verdicts[3] = verifier.check(kPolicyChannel, other.data(), signed_size, payload_size);
+      verdicts[0] = verifier.check(kPolicyChannel, buf.data(), signed_size, now, payload_size);
+      verifier.accept();
+      verdicts[1] = verifier.check(kPolicyChannel, buf.data(), signed_size, now, payload_size);
+      verdicts[2] = verifier.check(kPolicyChannel, plain.data(), size, now, payload_size);
+      verdicts[3] = verifier.check(kPolicyChannel, other.data(), signed_size, now, payload_size);
+      // A newer message altered (an altered copy of the accepted one is refused as replayed,
+      // before hashing).
       std::memcpy(forged.data(), buf.data(), buf.size());
+      signer.sign(kPolicyChannel, forged.data(), size, static_cast<int>(forged.size()));
       forged[5] ^= 1;
-      verdicts[4] = verifier.check(kPolicyChannel, forged.data(), signed_size, payload_size);
+      verdicts[4] = verifier.check(kPolicyChannel, forged.data(), signed_size, now, payload_size);
       signer.sign(kPolicyChannel, buf.data(), size, static_cast<int>(buf.size()));
-      verdicts[5] = verifier.check(kPolicyChannel, buf.data(), signed_size, payload_size);
+      verdicts[5] = verifier.check(kPolicyChannel, buf.data(), signed_size, now, payload_size);
+      verifier.accept();
+      verdicts[6] = verifier.check(kPolicyChannel, buf.data(), signed_size, now + 3600 * kSecond,
+                                   payload_size);
       unsigned_size = unsignedPayloadSize(buf.data(), signed_size);
     });
     EXPECT_EQ(allocations, 0) << size;
     EXPECT_EQ(signed_size, size + kSignatureSize);
     EXPECT_EQ(unsigned_size, size);
-    const std::array<Verdict, 6> expected = {Verdict::Ok,       Verdict::Replayed,
-                                             Verdict::Unsigned, Verdict::WrongKey,
-                                             Verdict::Forged,   Verdict::Ok};
+    const std::array<Verdict, 7> expected = {
+        Verdict::Ok,     Verdict::Replayed, Verdict::Unsigned, Verdict::WrongKey,
+        Verdict::Forged, Verdict::Ok,       Verdict::Stale};
     EXPECT_EQ(verdicts, expected) << size;
   }
 }
@@ -580,7 +712,8 @@ TEST(Signing, TimestampsStrictlyIncrease) {
     EXPECT_EQ(t, signer.lastTimestamp());
     previous = t;
     int payload_size = 0;
-    EXPECT_EQ(verifier.check(kPolicyChannel, buf.data(), size, payload_size), Verdict::Ok) << i;
+    EXPECT_EQ(verifier.check(kPolicyChannel, buf.data(), size, t, payload_size), Verdict::Ok) << i;
+    verifier.accept();
   }
   // The wall clock's microseconds (1000 quick calls may run ahead of it by at most 1000).
   EXPECT_GE(previous, start);

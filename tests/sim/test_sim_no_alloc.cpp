@@ -152,6 +152,7 @@ TEST(SimNoAllocation, SignedStatesAndPolicies) {
   p.t0 = 0.0;
   p.model_hash = modelHash(r);
   p.source_id = 1;
+  p.session = node.session();
   p.dt = 0.01;
   for (int k = 0; k < 4; ++k)
     for (int i = 0; i < r.model.nq; ++i) p.x_ref[k][i] = r.default_q[i];

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <limits>
 #include <string>
 #include <vector>
@@ -39,6 +40,10 @@ policy_t holdPolicy(const Robot& robot, int nq, int nv, std::int64_t hash) {
   msg::shape(p, 2, nq, nv, nv - 6);
   p.model_hash = hash;
   p.source_id = 1;
+  p.session = 0;  // the caller answers its robot's run
+  p.tick = 0;
+  p.t0 = 0.0;
+  p.phase = 0;  // lcm-gen leaves the fields unset
   p.utime = p.knot0_utime = 1000000;
   p.dt = 0.01;
   p.status = 0;
@@ -57,7 +62,8 @@ TEST(SimNode, StatesCarryTheModelHashAndAnotherModelsPoliciesAreRefused) {
   ASSERT_GE(node.publishState(), 0);
   EXPECT_EQ(out.state.model_hash, modelHash(robot));
 
-  auto feed = [&](const policy_t& p) {
+  auto feed = [&](policy_t p) {
+    p.session = node.session();  // answers this run
     std::vector<unsigned char> b = encode(p);
     lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
     node.onPolicy(&rbuf, "STRIDE_POLICY");
@@ -114,7 +120,10 @@ TEST(SimNode, WithAKeyOnlySignedPoliciesAreTaken) {
   // Its state verifies with the key, and carries the plain state.
   msg::Verifier controller(key);
   int payload = 0;
+  timespec wall{};
+  clock_gettime(CLOCK_REALTIME, &wall);
   ASSERT_EQ(controller.check("STRIDE_STATE", out.state.data(), static_cast<int>(out.state.size()),
+                             static_cast<std::int64_t>(wall.tv_sec) * 1000000 + wall.tv_nsec / 1000,
                              payload),
             msg::Verdict::Ok);
   robot_state_t state;
@@ -124,6 +133,7 @@ TEST(SimNode, WithAKeyOnlySignedPoliciesAreTaken) {
   msg::Signer ours(key, 11), theirs(other, 11);
   const auto bytes = [&](std::int64_t utime, msg::Signer* signer) {
     policy_t p = holdPolicy(robot, 19, 18, modelHash(robot));
+    p.session = node.session();
     p.utime = p.knot0_utime = utime;
     std::vector<std::uint8_t> b = encode(p);
     const int n = static_cast<int>(b.size());
@@ -154,6 +164,48 @@ TEST(SimNode, WithAKeyOnlySignedPoliciesAreTaken) {
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 4) << "the first of each reason: " << err;
 }
 
+// Issue 44: a robot run has an identity its states carry (robot_state_t.session, new at every
+// start and reset) and its policies must answer: a policy made for another run (a recording, a
+// lock-step run whose clock also started at 0) is refused whatever its stamps, counted and said
+// once, and does not take the robot from its controller.
+TEST(SimNode, APolicyForAnotherRunIsRefused) {
+  const Robot& robot = sim_test::robot("stride_quad");
+  Sink out;
+  sim::SimNode node(robot, sim::SimOptions{}, sim::SimNodeOptions{}, out);
+  node.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
+  const std::int64_t first = node.session();
+  ASSERT_NE(first, 0);
+  ASSERT_GE(node.publishState(), 0);
+  EXPECT_EQ(out.state.session, first);
+  node.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
+  EXPECT_NE(node.session(), first) << "a reset is another run";
+  const auto feed = [&](std::int64_t session, std::int64_t source) {
+    policy_t p = holdPolicy(robot, 19, 18, modelHash(robot));
+    p.session = session;
+    p.source_id = source;
+    p.utime = p.knot0_utime = 1000000;
+    std::vector<unsigned char> b = encode(p);
+    lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
+    node.onPolicy(&rbuf, "STRIDE_POLICY");
+  };
+  testing::internal::CaptureStderr();
+  feed(first, 7);  // the previous run's
+  feed(0, 7);
+  feed(node.session() ^ 1, 7);
+  EXPECT_EQ(node.stats().policies, 0);
+  EXPECT_EQ(node.stats().policies_other_session, 3);
+  EXPECT_EQ(node.stats().policies_rejected, 3);
+  feed(node.session(), 8);  // this run's controller: taken, and followed
+  EXPECT_EQ(node.stats().policies, 1);
+  feed(first, 7);  // another run's policies never count as a rival's nor switch the source
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(node.stats().policies_other_session, 4);
+  EXPECT_EQ(node.stats().policies_rival, 0);
+  EXPECT_EQ(node.stats().source_switches, 0);
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_NE(err.find("another run of the robot"), std::string::npos) << err;
+}
+
 // A valid policy whose knot 0 sits at any stamp, down to -2^63 µs: its time on the robot's clock
 // was an int64 difference that overflowed (undefined behaviour, found by the message fuzzer,
 // tests/fuzz; UndefinedBehaviorSanitizer sees it in tools/test.sh --sanitize). Long past its
@@ -166,6 +218,7 @@ TEST(SimNode, APolicyOfAnyStampIsTakenWithoutOverflow) {
                                    std::numeric_limits<std::int64_t>::max()}) {
     node.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
     policy_t p = holdPolicy(robot, 19, 18, modelHash(robot));
+    p.session = node.session();
     p.knot0_utime = knot0;
     std::vector<unsigned char> b = encode(p);
     lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
@@ -195,6 +248,7 @@ TEST(SimNode, APolicyPastItsEndOnArrivalIsSaidSo) {
 
   auto feed = [&](double knot0) {
     policy_t p = holdPolicy(robot, 19, 18, modelHash(robot));
+    p.session = node.session();
     p.utime = p.knot0_utime = 1000000 + static_cast<std::int64_t>(std::llround(knot0 * 1e6));
     std::vector<unsigned char> b = encode(p);
     lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
@@ -239,6 +293,10 @@ policy_t gainPolicy(const Robot& robot) {
   msg::shape(p, 40, nq, nv, nu);
   p.model_hash = modelHash(robot);
   p.source_id = 1;
+  p.session = 0;  // the caller answers its robot's run
+  p.tick = 0;
+  p.t0 = 0.0;
+  p.phase = 0;  // lcm-gen leaves the fields unset
   p.utime = p.knot0_utime = 1000000;
   p.dt = 0.01;
   p.status = 0;
@@ -279,7 +337,9 @@ TEST(SimNode, NoiseFreeSensingIsTheTruthAndLatencyFeedsBackTheOldState) {
     o.sensing.latency = latency;
     sim::SimNode node(robot, sim::SimOptions{}, o, out);
     node.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
-    std::vector<unsigned char> b = encode(message);
+    policy_t answer = message;
+    answer.session = node.session();
+    std::vector<unsigned char> b = encode(answer);
     lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
     node.onPolicy(&rbuf, "STRIDE_POLICY");
     ASSERT_TRUE(node.advance(200));
@@ -362,7 +422,9 @@ TEST(SimNode, AHeavierRobotIsTheSameRobotOnTheWire) {
     sim::SimNode node(robot, sim::SimOptions{}, o, out);
     EXPECT_NEAR(node.simulator().model().totalMass(), robot.model.totalMass() + heavy, 1e-12);
     node.reset(robot.default_q, Eigen::VectorXd::Zero(robot.model.nv));
-    std::vector<unsigned char> b = encode(message);
+    policy_t answer = message;
+    answer.session = node.session();
+    std::vector<unsigned char> b = encode(answer);
     lcm::ReceiveBuffer rbuf{b.data(), static_cast<uint32_t>(b.size()), 0};
     node.onPolicy(&rbuf, "STRIDE_POLICY");
     ASSERT_TRUE(node.advance(100));

@@ -67,6 +67,7 @@ class Robot {
     stride::robot_state_t s;
     s.utime = utime;
     s.model_hash = 0;  // a bare base: no model to name (stride-teleop learns the first state's)
+    s.session = 1;
     s.nq = 7;
     s.nv = 6;
     s.q = {x_, y_, 0.3 + command_.body_height, 0, 0, std::sin(yaw_ / 2), std::cos(yaw_ / 2)};

@@ -65,6 +65,7 @@ std::string writeSession(const std::string& name, Robot robot) {
     stride::robot_state_t s;
     s.utime = utime;
     s.model_hash = 0;  // a bare base (the summary holds every state to the first one's model)
+    s.session = 1;
     s.nq = 7;
     s.nv = 6;
     const bool down = robot == Robot::FallsInSegment2 && t >= 7.0;
@@ -193,6 +194,7 @@ stride::robot_state_t standing(std::int64_t utime) {
   stride::robot_state_t s;
   s.utime = utime;
   s.model_hash = 0;
+  s.session = 1;
   s.nq = 7;
   s.nv = 6;
   s.q = std::vector<double>{0, 0, 0.3, 0, 0, 0, 1};

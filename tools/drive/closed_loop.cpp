@@ -54,6 +54,7 @@ Run run(const ControllerConfig& config, const Options& options) {
   mpc->subscribe(lcm);
   // The sim keeps its own copy of the robot: the controller may die (options.controller_lost_at).
   const Robot robot = mpc->mpc().robot();
+  if (!options.controller) mpc.reset();  // the robot alone
   sim::SimNodeOptions o = options.sim;
   o.state_rate_hz = config.rate_hz;
   // Signatures (messages/README.md, "Signing"): the controller's key (its config's key_file) is
@@ -110,6 +111,11 @@ Run run(const ControllerConfig& config, const Options& options) {
     command_counters = mpc->commands().counters();
     rejected = mpc->rejected();
     rival_policies = mpc->rivalPolicies();
+    // Summed over the controllers of the run (a restart is a new one).
+    r.mpc_unauthenticated += mpc->auth().refused();
+    r.mpc_stale += mpc->auth().refused(msg::Verdict::Stale);
+    r.mpc_other_session += mpc->rejected(msg::Reject::OtherSession);
+    r.mpc_auth_text = msg::refusedText(mpc->auth());
   };
   while (t_offset + sim->simulator().time() < options.duration - 1e-9) {
     if (options.sim_lost_at >= 0.0 && t_offset == 0.0 &&
@@ -155,6 +161,7 @@ Run run(const ControllerConfig& config, const Options& options) {
       lcm.publish(config.command_channel, command_bytes.data(), static_cast<unsigned>(n));
       r.commands.push_back({t, c.vx, c.vy, c.yaw_rate, c.gait, c.body_height});
     }
+    if (options.on_bus) options.on_bus(lcm, t);
     drain(lcm);
     if (mpc && mpc->tickDue()) {
       mpc->tick(Mpc::Clock::time_point::max());
@@ -218,6 +225,8 @@ Run run(const ControllerConfig& config, const Options& options) {
   }
   drain(lcm);
   r.sim = sim->stats();
+  r.sim_auth_text = msg::refusedText(sim->auth());
+  r.sim_stale = sim->auth().refused(msg::Verdict::Stale);
   r.sim_before_restart = sim_before;
   if (mpc) keepFigures();
   r.mpc = mpc_counters;

@@ -6,6 +6,7 @@
 // tests, stride-drive and the sweeps (tools/drive/README.md) all drive robots through it.
 
 #include <functional>
+#include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <memory>
 #include <string>
@@ -63,6 +64,12 @@ struct Options {
   // new one starts, the robot standing at the default posture at the origin. Negative: never.
   double sim_lost_at = -1.0, sim_back_after = 1.0;
   int flood_per_period = 0;
+  // Called every period with the bus and the run time [s], after the robot's state and the
+  // command went out and before they are delivered: an attacker on the bus (a recording replayed,
+  // forged or junk messages; tests/controller/test_signed_replay.cpp).
+  std::function<void(lcm::LCM& bus, double t)> on_bus;
+  // False: no controller at all (the robot alone on the bus, with whatever on_bus sends it).
+  bool controller = true;
   // The world (terrain/terrain.hpp): null, the flat ground at z = 0. The robot starts standing on
   // it at its default place, drop_height above (sim::startingPose).
   std::shared_ptr<const terrain::Terrain> terrain;
@@ -76,7 +83,12 @@ struct Run {
   MpcCounters mpc;
   CommandCounters command_counters;
   std::int64_t rejected = 0;
-  std::int64_t rival_policies = 0;       // seen by the controller on its policy channel
+  std::int64_t rival_policies = 0;  // seen by the controller on its policy channel
+  // Signatures (with a key): the robot's refusals in words and those stale; the controller's
+  // refusals (every channel), those stale, and its states of another robot run refused.
+  std::string sim_auth_text, mpc_auth_text;  // the last controller's
+  std::int64_t sim_stale = 0;
+  std::int64_t mpc_unauthenticated = 0, mpc_stale = 0, mpc_other_session = 0;
   int controller_starts = 1;             // 2 after a restart (Options::controller_lost_at)
   int sim_starts = 1;                    // 2 after a restart (Options::sim_lost_at)
   sim::SimNodeStats sim_before_restart;  // the first mock robot's figures, if restarted

@@ -3,21 +3,30 @@
 // valid stream). Each is a well-formed policy_t of another robot's sizes and model hash, so every
 // receiver refuses it on its raw bytes (messages/validate.hpp) after paying for its delivery:
 // what a misconfigured controller of a bigger robot on the same network would send.
+// With --forged KEY_FILE (issue 44), frames an attacker without the key would send instead: --size
+// random bytes with a signature trailer that claims the key's id (read from the file: the wire
+// shows it), a new sender id each, a timestamp of now (fresh), a random mac: each receiver with the
+// key must refuse them without hashing them (a size no message of the channel has, the new
+// senders' budget), and the robot walk on. --channel takes several channels, comma-separated,
+// sent in turn.
 //   stride-flood [--url URL] [--channel STRIDE_POLICY] [--rate 1000] [--duration S]
-//                [--nq 20] [--nv 19] [--nu 13] [--knots 10]
+//                [--nq 20] [--nv 19] [--nu 13] [--knots 10] [--forged KEY_FILE --size 60000]
 // Exit status: 0 after --duration (or SIGINT/SIGTERM); 1 LCM could not start; 2 bad arguments.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <vector>
 
 #include "config/command_line.hpp"
+#include "messages/signing.hpp"
 #include "messages/validate.hpp"
 #include "stride/policy_t.hpp"
 
@@ -55,6 +64,13 @@ int main(int argc, char** argv) {
   app.add_option("--nv", nv, "its velocity size (19)")->check(CLI::Range(1, 1000));
   app.add_option("--nu", nu, "its control size (13)")->check(CLI::Range(1, 1000));
   app.add_option("--knots", knots, "its knots (10)")->check(CLI::Range(1, 1000));
+  std::string forged_key;
+  int forged_size = 60000;
+  app.add_option("--forged", forged_key,
+                 "send forged frames claiming this key file's key id instead (the key itself is "
+                 "not used)");
+  app.add_option("--size", forged_size, "bytes of a forged frame's payload (60000)")
+      ->check(CLI::Range(1, 1 << 24));
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
   url = stride::lcmUrl(url);
   if (url.empty()) return stride::noLcmUrl("stride-flood", "pass --url");
@@ -66,6 +82,29 @@ int main(int argc, char** argv) {
   foreign.dt = 0.01;
   std::vector<unsigned char> bytes(foreign.getEncodedSize());
   foreign.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  std::uint32_t key_id = 0;
+  if (!forged_key.empty()) {
+    try {
+      key_id = stride::msg::loadKeyFile(forged_key).id;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "stride-flood: %s\n", e.what());
+      return 2;
+    }
+    bytes.assign(static_cast<std::size_t>(forged_size) + stride::msg::kSignatureSize, 0);
+    for (std::size_t i = 0; i < bytes.size(); ++i)
+      bytes[i] = static_cast<unsigned char>(std::rand());
+  }
+  // The channels, sent in turn.
+  std::vector<std::string> channels;
+  for (std::size_t at = 0; at <= channel.size();) {
+    const std::size_t comma = std::min(channel.find(',', at), channel.size());
+    if (comma > at) channels.push_back(channel.substr(at, comma - at));
+    at = comma + 1;
+  }
+  if (channels.empty()) {
+    std::fprintf(stderr, "stride-flood: --channel names no channel\n");
+    return 2;
+  }
 
   lcm::LCM lcm(url);
   if (!lcm.good()) {
@@ -76,10 +115,16 @@ int main(int argc, char** argv) {
   sa.sa_handler = onSignal;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
-  std::printf(
-      "stride-flood: %.0f policies/s of %zu bytes (nq %d, nv %d, nu %d, %d knots, model "
-      "hash 0x5eed) on '%s'\n",
-      rate, bytes.size(), nq, nv, nu, knots, channel.c_str());
+  if (forged_key.empty())
+    std::printf(
+        "stride-flood: %.0f policies/s of %zu bytes (nq %d, nv %d, nu %d, %d knots, model "
+        "hash 0x5eed) on '%s'\n",
+        rate, bytes.size(), nq, nv, nu, knots, channel.c_str());
+  else
+    std::printf(
+        "stride-flood: %.0f forged frames/s of %zu bytes claiming key id %08x, fresh timestamps, "
+        "a new sender each, on '%s'\n",
+        rate, bytes.size(), key_id, channel.c_str());
   std::fflush(stdout);
 
   const long long period_ns = static_cast<long long>(1e9 / rate);
@@ -88,7 +133,22 @@ int main(int argc, char** argv) {
   next = start;
   long long sent = 0, failed = 0;
   while (!g_stop) {
-    if (lcm.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size())) == 0)
+    if (!forged_key.empty()) {
+      // The trailer: key id, a new sender, now, a made-up mac, the magic (big-endian fields).
+      unsigned char* t = bytes.data() + bytes.size() - stride::msg::kSignatureSize;
+      timespec wall{};
+      clock_gettime(CLOCK_REALTIME, &wall);
+      const std::uint64_t now =
+          static_cast<std::uint64_t>(wall.tv_sec) * 1000000u + wall.tv_nsec / 1000;
+      const std::uint32_t sender = static_cast<std::uint32_t>(sent) * 2654435761u + 1u;
+      for (int i = 0; i < 4; ++i) t[i] = static_cast<unsigned char>(key_id >> (24 - 8 * i));
+      for (int i = 0; i < 4; ++i) t[4 + i] = static_cast<unsigned char>(sender >> (24 - 8 * i));
+      for (int i = 0; i < 8; ++i) t[8 + i] = static_cast<unsigned char>(now >> (56 - 8 * i));
+      for (int i = 0; i < 16; ++i) t[16 + i] = static_cast<unsigned char>(std::rand());
+      std::memcpy(t + 32, stride::msg::kSignatureMagic.data(), 4);
+    }
+    const std::string& to = channels[static_cast<std::size_t>(sent + failed) % channels.size()];
+    if (lcm.publish(to, bytes.data(), static_cast<unsigned>(bytes.size())) == 0)
       ++sent;
     else
       ++failed;
@@ -110,7 +170,8 @@ int main(int argc, char** argv) {
   clock_gettime(CLOCK_MONOTONIC, &end);
   const double elapsed = static_cast<double>(end.tv_sec - start.tv_sec) +
                          1e-9 * static_cast<double>(end.tv_nsec - start.tv_nsec);
-  std::printf("stride-flood: %lld policies sent in %.1f s (%.0f/s), %lld failed to send\n", sent,
-              elapsed, elapsed > 0.0 ? sent / elapsed : 0.0, failed);
+  std::printf("stride-flood: %lld %s sent in %.1f s (%.0f/s), %lld failed to send\n", sent,
+              forged_key.empty() ? "policies" : "forged frames", elapsed,
+              elapsed > 0.0 ? sent / elapsed : 0.0, failed);
   return 0;
 }

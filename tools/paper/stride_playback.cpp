@@ -213,6 +213,7 @@ class PlaybackAnswerer {
     const int nx = policy_.nq + policy_.nv, nk = policy_.nu * 2 * policy_.nv;
     msg_.utime = state_.utime;
     msg_.model_hash = state_.model_hash;  // the sim's own robot: it answers in the sim's model
+    msg_.session = state_.session;        // and its run (messages/README.md, "Sessions")
     msg_.knot0_utime = utime_base_ + static_cast<std::int64_t>(
                                          std::llround((policy_.t0 + first * policy_.dt) * 1e6));
     msg_.tick = ticks_++;

@@ -178,8 +178,10 @@ class ScriptInput {
 
   void handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     // The robot's clock only from the robot (with a key: signed with it).
+    // With a key, a state whose signature is not fresh (a recording replayed) never moves the
+    // script's clock (messages/README.md, "Freshness").
     const int size = auth_.receive(0, channel.c_str(), static_cast<const std::uint8_t*>(rbuf->data),
-                                   static_cast<int>(rbuf->data_size));
+                                   static_cast<int>(rbuf->data_size), rbuf->recv_utime);
     if (size < 0) {
       ++rejected_;
       return;
@@ -195,6 +197,7 @@ class ScriptInput {
       ++rejected_;
       return;
     }
+    auth_.accept(0);
     play(state_.utime);
   }
   long rejected() const { return rejected_; }

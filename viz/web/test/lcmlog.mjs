@@ -23,6 +23,7 @@ export const robotStateType = {
   members: [
     ['utime', 'int64_t'],
     ['model_hash', 'int64_t'],
+    ['session', 'int64_t'],
     ['nq', 'int32_t'],
     ['nv', 'int32_t'],
     ['q', 'double', ['nq']],

@@ -56,6 +56,7 @@ function stateMessage({ utime, hash, q, v, contact }) {
   w.u64(fingerprint(robotStateType));
   w.i64(utime);
   w.i64(hash);
+  w.i64(0x5e5510n);  // session
   w.i32(q.length);
   w.i32(v.length);
   q.forEach((x) => w.f64(x));
