@@ -11,7 +11,7 @@
 #                 [--robots-dir DIR]... [--check-tracking] [--host-network] [--out DIR]
 #                 [--summary FILE] [--spy] [--viz [--viz-port P]]
 #                 [--slow-host F] [--kill-controller T] [--pause-controller T D]
-#                 [--kill-sim T] [--flood RATE] [--forged-flood RATE] [--replay-log FILE]
+#                 [--kill-sim T] [--flood RATE] [--forged-flood RATE] [--future-junk RATE] [--replay-log FILE]
 #                 [--rival | --rival-key]
 #                 [--key-file F | --no-signing]
 #                 [--terrain NAME|FILE [--map-rate HZ]]
@@ -91,6 +91,11 @@
 #                     sender each and a made-up mac (stride-flood --forged, at nice 10): what an
 #                     attacker without the key can send. Needs signing (not --no-signing).
 #                     tools/faults.sh --forged-flood runs it
+#   --future-junk RATE  also publish RATE junk policies per second signed with the run's key under
+#                     the live controller's sender id, stamped INT64_MAX, 1 h ahead and 0.3 s ahead
+#                     in turn (issue 44: a key holder with a wrong clock, or a compromised one;
+#                     stride-flood --future). Every one is refused (outside the window, or of no
+#                     run) and none locks the live controller out. tools/faults.sh --future runs it
 #   --replay-log FILE also replay FILE (an lcm-logger log of an earlier session, e.g. another demo's
 #                     DIR/session.lcmlog signed with the same --key-file) on the bus from the
 #                     robot's start, at its pace (lcm-logplayer): a recording replayed by an
@@ -119,7 +124,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 build="${STRIDE_BUILD_DIR:-$root/build}"
 
 robot=stride_quad by_name=0 user_config="" no_setup=0 commands="" teleop=0 duration="" mode="" host_network=0 out="" summary=""
-spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood="" forged_flood="" replay_log="" kill_sim="" rival=0
+spy=0 check=0 slow_host="" viz=0 viz_port=8765 rss=0 kill_controller="" flood="" forged_flood="" future_junk="" replay_log="" kill_sim="" rival=0
 pause_at="" pause_for="" terrain="" map_rate="" signing=1 key_file="" rival_key=0
 robots_dirs=()
 args=("$@")
@@ -153,6 +158,7 @@ while [ $# -gt 0 ]; do
       pause_at="$2" pause_for="$3"; shift 3 ;;
     --flood) need_value "$@"; flood="$2"; shift 2 ;;
     --forged-flood) need_value "$@"; forged_flood="$2"; shift 2 ;;
+    --future-junk) need_value "$@"; future_junk="$2"; shift 2 ;;
     --replay-log) need_value "$@"; replay_log=$(cd "$(dirname "$2")" && pwd)/$(basename "$2"); shift 2 ;;
     --kill-sim) need_value "$@"; kill_sim="$2"; shift 2 ;;
     --rival) rival=1; shift ;;
@@ -259,7 +265,7 @@ summary="${summary:-$out/summary.json}"
 if [ -z "${STRIDE_DEMO_INSIDE:-}" ] && [ -z "${STRIDE_DEMO_NO_SETUP:-}" ] && [ "$no_setup" = 0 ]; then
   # Only what this run starts: the tests, benchmarks and paper tools build with tools/test.sh.
   deps=(--demo) targets=(stride-mpc stride-sim stride-teleop stride-keygen stride-log-summary)
-  [ -n "$flood$forged_flood" ] && targets+=(stride-flood)
+  [ -n "$flood$forged_flood$future_junk" ] && targets+=(stride-flood)
   [ "$viz" = 1 ] && deps+=(--viz) targets+=(stride-viz stride-viz-web)
   [ "$spy" = 1 ] && deps+=(--spy) targets+=(stride_lcm_jar)
   "$root/tools/install-deps.sh" "${deps[@]}"
@@ -485,6 +491,13 @@ if [ -n "$forged_flood" ]; then
     > "$out/flood.txt" 2>&1 &
   pids+=($!)
 fi
+if [ -n "$future_junk" ]; then
+  [ "$signing" = 1 ] || { echo "demo: --future-junk needs signing (not --no-signing)" >&2; exit 2; }
+  # Signed with the run's key: what a key holder with a wrong clock (or a compromised one) sends.
+  timeout -k 10 "$limit" nice -n 10 "${side[@]}" "$build/tools/stride-flood" \
+    --rate "$future_junk" --future "$key_file" --channel STRIDE_POLICY > "$out/flood.txt" 2>&1 &
+  pids+=($!)
+fi
 if [ "$rival" = 1 ]; then
   # The rival's YAML, in a temporary folder (the robot's configuration is only read): the robot's,
   # with its paths made absolute (robot:, gait.plan_file, lcm.key_file: relative to the YAML's
@@ -664,7 +677,7 @@ if [ "$rival" = 1 ]; then
   echo "demo: a rival stride-mpc ran on the same channels; the rival:"
   grep -E '^stride-mpc:' "$out/mpc-rival.txt" 2>/dev/null || echo "  (no output)"
 fi
-[ -n "$flood$forged_flood" ] && { grep -E '^stride-flood: .* sent' "$out/flood.txt" || echo "demo: stride-flood said nothing ($out/flood.txt)"; }
+[ -n "$flood$forged_flood$future_junk" ] && { grep -E '^stride-flood: .* sent' "$out/flood.txt" || echo "demo: stride-flood said nothing ($out/flood.txt)"; }
 [ -f "$out/teleop.txt" ] && grep -E '^stride-teleop: stopped' "$out/teleop.txt" || true
 [ "$sim_status" = 124 ] && echo "demo: the sim was stopped by the safety net after $limit s"
 echo
@@ -681,8 +694,8 @@ fault_end=""
 [ -n "$kill_controller" ] && fault_end=$(sed -n 's/^demo: started a new stride-mpc at //p' "$out/kill.txt" 2>/dev/null)
 [ -n "$pause_at" ] && fault_end=$(sed -n 's/^demo: woke stride-mpc at //p' "$out/pause.txt" 2>/dev/null)
 [ -n "$kill_sim" ] && fault_end=$(cat "$out/sim-restart.txt" 2>/dev/null)
-{ [ "$rival" = 1 ] || [ -n "$flood$forged_flood$replay_log" ]; } && fault_end=$robot_started
-if [ -n "$kill_controller$pause_at$kill_sim$flood$forged_flood$replay_log" ] || [ "$rival" = 1 ]; then
+{ [ "$rival" = 1 ] || [ -n "$flood$forged_flood$future_junk$replay_log" ]; } && fault_end=$robot_started
+if [ -n "$kill_controller$pause_at$kill_sim$flood$forged_flood$future_junk$replay_log" ] || [ "$rival" = 1 ]; then
   if [ -n "$fault_end" ]; then
     summary_args+=(--fault-end-wall "$fault_end")
   else

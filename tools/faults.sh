@@ -11,6 +11,11 @@
 #                  along: 60 kB claiming the run's key id, fresh timestamps, a new sender each, a
 #                  made-up mac (issue 44: refused before hashing; tools/demo.sh --forged-flood;
 #                  ctest forged_flood_real_time)
+#   --future RATE  junk policies signed with the run's key under the live controller's sender id,
+#                  stamped INT64_MAX, 1 h ahead and 0.3 s ahead in turn, RATE per second all along:
+#                  a key holder with a wrong clock, or a compromised one (issue 44: each refused,
+#                  none locks the live controller out; tools/demo.sh --future-junk; lock-step:
+#                  SignedReplay.AJunkMessageFromTheFutureLocksNobodyOut)
 #   --replay       a recording of a signed session (a first demo walking the same script, its
 #                  session.lcmlog) replayed with lcm-logplayer at a new robot and controller with
 #                  the same key, from their start (issue 44: every message refused as stale, or of
@@ -27,13 +32,13 @@
 # segment starting 2 s after the fault's end tracked: stride-log-summary --fault-end) and when
 # the command was first tracked.
 #   tools/faults.sh [--robot stride_quad|stride_humanoid] [--runs N] [--out DIR]
-#                   [--flood RATE | --forged-flood RATE | --replay | --rival | --kill-sim |
+#                   [--flood RATE | --forged-flood RATE | --future RATE | --replay | --rival | --kill-sim |
 #                    --pause D]
 #   --robot NAME   stride_quad (default: trots at 0.5 m/s) or stride_humanoid (walks at 0.2 m/s)
 #   --runs N       kills (or runs with the other fault), one run each (default 10)
 #   --out DIR      each run's demo folder (default build/faults/ROBOT, build/flood/ROBOT,
 #                  build/rival/ROBOT, build/sim-restart/ROBOT, build/pause/ROBOT,
-#                  build/forged-flood/ROBOT, build/replay/ROBOT)
+#                  build/forged-flood/ROBOT, build/future/ROBOT, build/replay/ROBOT)
 # Exit status: 0 no fall and control back in every run; 4 the robot fell in some run; 6 control
 # did not come back in some run; 1 another failure.
 set -euo pipefail
@@ -47,6 +52,7 @@ while [ $# -gt 0 ]; do
     --out) out="$2"; shift 2 ;;
     --flood) flood="$2" fault=flood; shift 2 ;;
     --forged-flood) flood="$2" fault=forged-flood; shift 2 ;;
+    --future) flood="$2" fault=future; shift 2 ;;
     --replay) fault=replay; shift ;;
     --rival) fault=rival; shift ;;
     --kill-sim) fault=kill-sim; shift ;;
@@ -64,6 +70,7 @@ case "$fault" in
   kill) out="${out:-$build/faults/$robot}" ;;
   flood) out="${out:-$build/flood/$robot}" ;;
   forged-flood) out="${out:-$build/forged-flood/$robot}" ;;
+  future) out="${out:-$build/future/$robot}" ;;
   replay) out="${out:-$build/replay/$robot}" ;;
   rival) out="${out:-$build/rival/$robot}" ;;
   kill-sim) out="${out:-$build/sim-restart/$robot}" ;;
@@ -95,6 +102,7 @@ for ((i = 0; i < runs; i++)); do
     kill) args=(--kill-controller "$kill_at") ;;
     flood) args=(--flood "$flood") ;;
     forged-flood) args=(--forged-flood "$flood") ;;
+    future) args=(--future-junk "$flood") ;;
     replay)
       # The recording: the same walk, signed with the key the attacked runs use.
       if [ ! -f "$out/recorded/session.lcmlog" ]; then
@@ -146,7 +154,7 @@ line = ("tilt max %.1f deg, base %.3f..%.3f m, walked %.2f m; %d stand-downs (%d
         % (s["max_tilt_deg"], s["base_height_min_m"], s["base_height_max_m"], s["distance_m"],
            s["stand_downs"], s["stand_down_steps"], s["exhausted_steps"], s["source_switches"],
            s["policies"], s["policies_wrong_model"], s["policies_unauthenticated"]))
-if fault in ("forged-flood", "replay"):
+if fault in ("forged-flood", "future", "replay"):
     m = load("mpc.json")
     u = m.get("unauthenticated") or {}
     line += ("; the robot refused %d policies of another run; the controller refused %s, and %d "
@@ -167,6 +175,7 @@ EOF
     kill) echo "faults: $robot run $i, stride-mpc killed at $kill_at s: $line" ;;
     flood) echo "faults: $robot run $i, $flood foreign policies/s: $line" ;;
     forged-flood) echo "faults: $robot run $i, $flood forged 60 kB frames/s: $line" ;;
+    future) echo "faults: $robot run $i, $flood signed junk policies/s from the future: $line" ;;
     replay) echo "faults: $robot run $i, a recorded session replayed: $line" ;;
     rival) echo "faults: $robot run $i, a rival stride-mpc: $line" ;;
     kill-sim) echo "faults: $robot run $i, stride-sim killed at $kill_at s: $line" ;;
@@ -177,6 +186,7 @@ case "$fault" in
   kill) what="kills and restarts" ;;
   flood) what="runs under $flood foreign policies/s" ;;
   forged-flood) what="runs under $flood forged frames/s" ;;
+  future) what="runs under $flood signed junk policies/s from the future" ;;
   replay) what="runs with a recorded session replayed" ;;
   rival) what="runs with a rival controller" ;;
   kill-sim) what="mock-robot kills and restarts" ;;

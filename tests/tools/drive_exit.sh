@@ -38,9 +38,9 @@ python3 -c "import json,sys; assert json.load(open(sys.argv[1]))['fell']" "$work
 run 4 "$work/stand.yaml" --duration 3 --push 1:0.1:0,3000,0 --check-tracking
 echo "fell: 4"
 
-run 1 "$work/miss.yaml" --duration 4 --check-tracking
+run 1 "$work/miss.yaml" --duration 2.5 --check-tracking
 grep -q "segment 0: vx 0.000, commanded 0.300" "$work/out.txt" || fail "no miss said"
-run 0 "$work/miss.yaml" --duration 4
+run 0 "$work/miss.yaml" --duration 2.5
 echo "missed: 1 with --check-tracking, 0 without"
 
 # A script gait the robot does not have: refused before the drive, naming the entry and the gaits.

@@ -364,8 +364,9 @@ TEST(LogSummary, MalformedMessagesInALogAreRefusedAndCounted) {
       write(log, "STRIDE_STATE", standing(utime), utime);
       if (i == 50) {
         std::vector<unsigned char> lie = encoded(standing(utime + 1));
-        // ncontacts (after the hash, utime, model_hash, nq, nv, q[7], v[6]) says 2^30 flags
-        const std::size_t at = 8 + 8 + 8 + 4 + 4 + 8 * 13;
+        // ncontacts (after the hash, utime, model_hash, session, nq, nv, q[7], v[6]) says 2^30
+        // flags
+        const std::size_t at = 8 + 8 + 8 + 8 + 4 + 4 + 8 * 13;
         lie[at] = 0x40;
         writeBytes(log, "STRIDE_STATE", lie, utime + 1);
         stride::robot_state_t nan = standing(utime + 2);

@@ -9,8 +9,15 @@
 // key must refuse them without hashing them (a size no message of the channel has, the new
 // senders' budget), and the robot walk on. --channel takes several channels, comma-separated,
 // sent in turn.
+// With --future KEY_FILE (issue 44), what a holder of the key with a wrong clock, or a compromised
+// one, can send: junk policies of the robot's model (a NaN gain, no run's session) signed with
+// the key under the live controller's sender id (read from the policy channel's trailers),
+// stamped in turn INT64_MAX, an hour ahead and 0.3 s ahead. The first two are outside every
+// receiver's window and refused unread; the third is read and refused as of another run. None may
+// change the replay table, so the live controller keeps the robot.
 //   stride-flood [--url URL] [--channel STRIDE_POLICY] [--rate 1000] [--duration S]
 //                [--nq 20] [--nv 19] [--nu 13] [--knots 10] [--forged KEY_FILE --size 60000]
+//                [--future KEY_FILE]
 // Exit status: 0 after --duration (or SIGINT/SIGTERM); 1 LCM could not start; 2 bad arguments.
 #include <CLI/CLI.hpp>
 
@@ -22,6 +29,7 @@
 #include <cstring>
 #include <ctime>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -36,6 +44,26 @@ volatile std::sig_atomic_t g_stop = 0;
 void onSignal(int) {
   g_stop = 1;
 }
+
+std::int64_t wallMicros() {
+  timespec wall{};
+  clock_gettime(CLOCK_REALTIME, &wall);
+  return static_cast<std::int64_t>(wall.tv_sec) * 1000000 + wall.tv_nsec / 1000;
+}
+
+// The live controller as the policy channel shows it: its sender id (the trailer's) and its
+// robot's model (the policy's own claim).
+struct LiveSender {
+  std::uint32_t sender = 0;
+  stride::msg::WireClaim claim;
+  void onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    const auto* b = static_cast<const std::uint8_t*>(rbuf->data);
+    const int n = static_cast<int>(rbuf->data_size);
+    if (n < stride::msg::kSignatureSize || !stride::msg::readPolicyClaim(b, n, claim)) return;
+    const std::uint8_t* s = b + n - stride::msg::kSignatureSize + 4;
+    sender = std::uint32_t(s[0]) << 24 | std::uint32_t(s[1]) << 16 | std::uint32_t(s[2]) << 8 | s[3];
+  }
+};
 
 void addNanos(timespec& t, long long ns) {
   t.tv_nsec += ns;
@@ -71,6 +99,11 @@ int main(int argc, char** argv) {
                  "not used)");
   app.add_option("--size", forged_size, "bytes of a forged frame's payload (60000)")
       ->check(CLI::Range(1, 1 << 24));
+  std::string future_key;
+  app.add_option("--future", future_key,
+                 "send junk policies signed with this key file's key, under the live "
+                 "controller's sender id, stamped far ahead, instead")
+      ->excludes("--forged");
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
   url = stride::lcmUrl(url);
   if (url.empty()) return stride::noLcmUrl("stride-flood", "pass --url");
@@ -105,6 +138,19 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "stride-flood: --channel names no channel\n");
     return 2;
   }
+  stride::msg::Key future{};
+  if (!future_key.empty()) {
+    try {
+      future = stride::msg::loadKeyFile(future_key);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "stride-flood: %s\n", e.what());
+      return 2;
+    }
+    if (channels.size() != 1) {
+      std::fprintf(stderr, "stride-flood: --future takes one policy channel\n");
+      return 2;
+    }
+  }
 
   lcm::LCM lcm(url);
   if (!lcm.good()) {
@@ -115,7 +161,14 @@ int main(int argc, char** argv) {
   sa.sa_handler = onSignal;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
-  if (forged_key.empty())
+  LiveSender live;
+  if (!future_key.empty()) {
+    lcm.subscribe(channels[0], &LiveSender::onPolicy, &live);
+    std::printf(
+        "stride-flood: %.0f junk policies/s signed with key %08x under the live controller's "
+        "sender id, stamped INT64_MAX, +1 h and +0.3 s in turn, on '%s'\n",
+        rate, future.id, channels[0].c_str());
+  } else if (forged_key.empty())
     std::printf(
         "stride-flood: %.0f policies/s of %zu bytes (nq %d, nv %d, nu %d, %d knots, model "
         "hash 0x5eed) on '%s'\n",
@@ -131,9 +184,34 @@ int main(int argc, char** argv) {
   timespec start, next;
   clock_gettime(CLOCK_MONOTONIC, &start);
   next = start;
-  long long sent = 0, failed = 0;
+  long long sent = 0, failed = 0, waited = 0;
   while (!g_stop) {
-    if (!forged_key.empty()) {
+    if (!future_key.empty()) {
+      // Read what the bus brought meanwhile (the live sender), then sign one junk policy.
+      while (lcm.handleTimeout(0) > 0) {
+      }
+      if (live.sender == 0) {
+        ++waited;  // no signed policy seen yet: nothing to claim
+      } else {
+        stride::policy_t junk;
+        stride::msg::shape(junk, 8, live.claim.nq, live.claim.nv, live.claim.nv - 6);
+        junk.model_hash = live.claim.hash;
+        junk.dt = 0.01;
+        junk.K[0][0] = std::numeric_limits<double>::quiet_NaN();
+        bytes.assign(static_cast<std::size_t>(junk.getEncodedSize()) + stride::msg::kSignatureSize,
+                     0);
+        const int n = junk.encode(bytes.data(), 0, junk.getEncodedSize());
+        const std::int64_t ahead[3] = {std::numeric_limits<std::int64_t>::max(),
+                                       wallMicros() + 3600LL * 1000000, wallMicros() + 300000};
+        const stride::msg::Signer signer(future, live.sender);
+        const int size = signer.signAt(channels[0].c_str(), bytes.data(), n,
+                                       static_cast<int>(bytes.size()), ahead[sent % 3]);
+        if (lcm.publish(channels[0], bytes.data(), static_cast<unsigned>(size)) == 0)
+          ++sent;
+        else
+          ++failed;
+      }
+    } else if (!forged_key.empty()) {
       // The trailer: key id, a new sender, now, a made-up mac, the magic (big-endian fields).
       unsigned char* t = bytes.data() + bytes.size() - stride::msg::kSignatureSize;
       timespec wall{};
@@ -147,11 +225,13 @@ int main(int argc, char** argv) {
       for (int i = 0; i < 16; ++i) t[16 + i] = static_cast<unsigned char>(std::rand());
       std::memcpy(t + 32, stride::msg::kSignatureMagic.data(), 4);
     }
-    const std::string& to = channels[static_cast<std::size_t>(sent + failed) % channels.size()];
-    if (lcm.publish(to, bytes.data(), static_cast<unsigned>(bytes.size())) == 0)
-      ++sent;
-    else
-      ++failed;
+    if (future_key.empty()) {
+      const std::string& to = channels[static_cast<std::size_t>(sent + failed) % channels.size()];
+      if (lcm.publish(to, bytes.data(), static_cast<unsigned>(bytes.size())) == 0)
+        ++sent;
+      else
+        ++failed;
+    }
     addNanos(next, period_ns);
     // Behind by more than a period (the host kept it off the CPU): no burst to catch up.
     timespec now;
@@ -170,8 +250,13 @@ int main(int argc, char** argv) {
   clock_gettime(CLOCK_MONOTONIC, &end);
   const double elapsed = static_cast<double>(end.tv_sec - start.tv_sec) +
                          1e-9 * static_cast<double>(end.tv_nsec - start.tv_nsec);
-  std::printf("stride-flood: %lld %s sent in %.1f s (%.0f/s), %lld failed to send\n", sent,
-              forged_key.empty() ? "policies" : "forged frames", elapsed,
-              elapsed > 0.0 ? sent / elapsed : 0.0, failed);
+  std::printf("stride-flood: %lld %s sent in %.1f s (%.0f/s), %lld failed to send", sent,
+              !future_key.empty()   ? "junk policies from the future"
+              : forged_key.empty() ? "policies"
+                                   : "forged frames",
+              elapsed, elapsed > 0.0 ? sent / elapsed : 0.0, failed);
+  if (!future_key.empty())
+    std::printf(", %lld not sent before a signed policy was seen", waited);
+  std::printf("\n");
   return 0;
 }
