@@ -443,4 +443,10 @@ std::int64_t unsignedPayloadSize(const std::uint8_t* buf, int size) {
   return endsWithMagic(buf, size) ? size - kSignatureSize : size;
 }
 
+bool readSignatureTimestamp(const std::uint8_t* buf, int size, std::int64_t& timestamp) {
+  if (!endsWithMagic(buf, size)) return false;
+  timestamp = static_cast<std::int64_t>(getBe64(buf + size - kSignatureSize + kTimestampAt));
+  return true;
+}
+
 }  // namespace stride::msg

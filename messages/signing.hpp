@@ -195,6 +195,10 @@ class Verifier {
 // For receivers without a key (viewers, log summaries): the payload's size when the buffer ends
 // with a signature trailer (size - kSignatureSize), else size. Nothing is verified.
 std::int64_t unsignedPayloadSize(const std::uint8_t* buf, int size);
+// For readers without a key that judge freshness as the receivers do (log summaries: the logger's
+// receive time is the receiver's clock): true, with the trailer's timestamp as claimed (nothing
+// is verified), when the buffer ends with a signature trailer.
+bool readSignatureTimestamp(const std::uint8_t* buf, int size, std::int64_t& timestamp);
 
 namespace detail {
 // SHA-256 by OpenSSL's libcrypto (SHA256_Init/Update/Final: no allocation, SHA extensions).

@@ -401,3 +401,51 @@ TEST(LogSummary, MalformedMessagesInALogAreRefusedAndCounted) {
   EXPECT_EQ(r.json["max_tilt_deg"], 0.0);
   EXPECT_NEAR(r.json["duration_s"].get<double>(), 1.99, 1e-9);
 }
+
+namespace {
+
+// A signed state, stamped `stamp` by its sender, logged at `logged` (the logger's clock).
+void writeSignedAt(lcm::LogFile& log, const stride::msg::Signer& signer,
+                   const stride::robot_state_t& s, std::int64_t stamp, std::int64_t logged) {
+  std::vector<unsigned char> bytes(s.getEncodedSize() + stride::msg::kSignatureSize);
+  const int n = s.encode(bytes.data(), 0, s.getEncodedSize());
+  bytes.resize(
+      signer.signAt("STRIDE_STATE", bytes.data(), n, static_cast<int>(bytes.size()), stamp));
+  writeBytes(log, "STRIDE_STATE", std::move(bytes), logged);
+}
+
+}  // namespace
+
+// Issue 44: a recording of an earlier signed session replayed on the bus during a live one, as
+// lcm-logger (stamping each event with its wall clock on receipt) logs it. The receivers refused
+// the recording as stale; the summary refuses it the same way (the trailer's stamp against the
+// logger's clock, the receivers' window), so the session is the live robot's alone: standing at
+// the origin, not walking to where the recording's robot stood. A sender 0.3 s ahead is within
+// the window and read.
+TEST(LogSummary, ARecordingReplayedOnTheBusIsRefusedAsTheReceiversRefuseIt) {
+  const std::string path = testing::TempDir() + "/replayed.lcmlog";
+  const stride::msg::Key key = stride::msg::makeKey({4, 5, 6});
+  const stride::msg::Signer live(key, 7), recorded(key, 8);
+  const std::int64_t wall0 = 1'800'000'000'000'000;  // µs on the wall clock (2027)
+  {
+    lcm::LogFile log(path, "w");
+    ASSERT_TRUE(log.good());
+    for (int i = 0; i < 200; ++i) {
+      const std::int64_t utime = 7000000 + 10000L * i, logged = wall0 + 10000L * i;
+      writeSignedAt(log, live, standing(utime), logged + (i % 2 == 0 ? 0 : 300000), logged);
+      stride::robot_state_t old = standing(utime);
+      old.session = 2;
+      old.q[0] = 5.0 + 0.01 * i;  // the recording's robot, elsewhere and walking
+      writeSignedAt(log, recorded, old, logged - 30'000'000, logged + 1);
+    }
+  }
+  const Summary r = summarize(path, "");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(r.json["stale_signed"], 200) << r.json.dump(2);
+  EXPECT_EQ(r.json["distance_m"], 0.0);
+  EXPECT_EQ(r.json["final_base"][0], 0.0);
+  EXPECT_NE(r.output.find("log: 200 signed messages stamped more than 0.5 s from the logger's "
+                          "clock refused"),
+            std::string::npos)
+      << r.output;
+}

@@ -61,7 +61,8 @@ struct LiveSender {
     const int n = static_cast<int>(rbuf->data_size);
     if (n < stride::msg::kSignatureSize || !stride::msg::readPolicyClaim(b, n, claim)) return;
     const std::uint8_t* s = b + n - stride::msg::kSignatureSize + 4;
-    sender = std::uint32_t(s[0]) << 24 | std::uint32_t(s[1]) << 16 | std::uint32_t(s[2]) << 8 | s[3];
+    sender =
+        std::uint32_t(s[0]) << 24 | std::uint32_t(s[1]) << 16 | std::uint32_t(s[2]) << 8 | s[3];
   }
 };
 
@@ -251,12 +252,11 @@ int main(int argc, char** argv) {
   const double elapsed = static_cast<double>(end.tv_sec - start.tv_sec) +
                          1e-9 * static_cast<double>(end.tv_nsec - start.tv_nsec);
   std::printf("stride-flood: %lld %s sent in %.1f s (%.0f/s), %lld failed to send", sent,
-              !future_key.empty()   ? "junk policies from the future"
+              !future_key.empty()  ? "junk policies from the future"
               : forged_key.empty() ? "policies"
                                    : "forged frames",
               elapsed, elapsed > 0.0 ? sent / elapsed : 0.0, failed);
-  if (!future_key.empty())
-    std::printf(", %lld not sent before a signed policy was seen", waited);
+  if (!future_key.empty()) std::printf(", %lld not sent before a signed policy was seen", waited);
   std::printf("\n");
   return 0;
 }

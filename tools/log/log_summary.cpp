@@ -22,6 +22,7 @@
 
 #include "config/command_line.hpp"
 #include "controller/statistics.hpp"
+#include "messages/signing.hpp"
 #include "tools/log/segments.hpp"
 #include "tools/log/session_reader.hpp"
 
@@ -379,6 +380,12 @@ int main(int argc, char** argv) {
   if (s.command_rejects > 0)
     std::printf("commands: %ld rejected (wrong size, non-finite or stamps not increasing)\n",
                 s.command_rejects);
+  if (s.stale_signed > 0)
+    std::printf(
+        "log: %ld signed messages stamped more than %.1f s from the logger's clock refused, as "
+        "the receivers refuse them (a recording replayed on the bus, or a host whose clock is "
+        "off)\n",
+        s.stale_signed, 1e-6 * static_cast<double>(stride::msg::kFreshnessWindowMicros));
   if (!summary_path.empty()) {
     // Without a state estimate (a replay's output) the robot's side has no data: null; without a
     // status, the controller's counters.
@@ -419,6 +426,7 @@ int main(int argc, char** argv) {
     j["line_search"] = {{"full", s.full_steps}, {"shorter", s.short_steps}, {"none", s.no_steps}};
     j["commands"] = commands.size();
     j["command_rejects"] = s.command_rejects;
+    j["stale_signed"] = s.stale_signed;
     j["segments"] = segmentsJson(segments);
     j["tracked"] = tracked;
     j["lost"] = {{"statuses", s.lost_statuses}, {"states", s.missing_states}};

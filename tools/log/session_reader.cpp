@@ -132,6 +132,21 @@ bool readMap(const lcm::LogEvent& e, terrain::ElevationMap& map, Session& s) {
   return true;
 }
 
+// A signed message outside the receivers' freshness window around the logger's receive time
+// (the log event's timestamp, the same wall clock the receivers judge by): refused as they refuse
+// it. Only for a logger on the wall clock (lcm-logger's, the demo's): stride-drive stamps its log
+// with the robot's clock, from 0, where no freshness can be judged (and no one else is on its
+// in-process bus). In double: a timestamp near either end of int64 minus the clock would overflow.
+bool outsideWindow(const lcm::LogEvent& e) {
+  constexpr std::int64_t kWallClockSince = 1'000'000'000'000'000;  // µs: 2001-09-09
+  if (e.timestamp < kWallClockSince) return false;
+  std::int64_t stamp = 0;
+  if (!msg::readSignatureTimestamp(static_cast<const std::uint8_t*>(e.data), e.datalen, stamp))
+    return false;
+  return std::abs(static_cast<double>(stamp) - static_cast<double>(e.timestamp)) >
+         static_cast<double>(msg::kFreshnessWindowMicros);
+}
+
 }  // namespace
 
 bool readSession(const std::string& path, const SessionChannels& channels, double window,
@@ -150,6 +165,12 @@ bool readSession(const std::string& path, const SessionChannels& channels, doubl
   terrain::ElevationMap map;
   std::vector<std::int64_t> command_utimes, state_gaps_us;
   for (const lcm::LogEvent* e = log.readNextEvent(); e != nullptr; e = log.readNextEvent()) {
+    const bool ours = e->channel == channels.state || e->channel == channels.terrain ||
+                      e->channel == channels.command || e->channel == channels.status;
+    if (ours && outsideWindow(*e)) {
+      ++s.stale_signed;
+      continue;
+    }
     if (e->channel == channels.state) {
       if (!state_reader.read(*e)) continue;
       const robot_state_t& st = state_reader.state();

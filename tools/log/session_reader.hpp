@@ -76,6 +76,11 @@ struct Session {
   // Commands accepted as the controller accepts them, t on the first state's clock.
   std::vector<CommandSample> commands;
   long command_rejects = 0;
+  // Signed messages stamped further from the logger's clock than the receivers' freshness window
+  // (msg::kFreshnessWindowMicros): a recording replayed on the bus, or a host whose clock is off.
+  // The live receivers refused them as stale or from the future; so does the summary, on every
+  // channel it reads, before anything else.
+  long stale_signed = 0;
   // Lost messages: each status carries its tick number (+1 per tick; a restarted controller
   // starts again from 1), and the estimator publishes at a fixed rate (its period: the median
   // interval between stamps), so a missing tick or a stamp gap of n periods is a message the log
