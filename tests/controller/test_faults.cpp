@@ -12,6 +12,7 @@
 #include <limits>
 
 #include "controller_cases.hpp"
+#include "drive_cases.hpp"
 #include "tools/drive/closed_loop.hpp"
 #include "tools/log/segments.hpp"
 
@@ -22,15 +23,7 @@ using drive::tiltDeg;
 
 // Stand, trot from 1 s, forward at 0.5 m/s from 2 s, for `duration` seconds.
 drive::Options trotForward(double duration) {
-  drive::Options o;
-  o.duration = duration;
-  o.script.resize(3);
-  o.script[1].at = 1.0;
-  o.script[1].gait = "trot";
-  o.script[2] = o.script[1];
-  o.script[2].at = 2.0;
-  o.script[2].vx = 0.5;
-  return o;
+  return drive_cases::trotForward(duration, 1.0, 2.0);
 }
 
 // Issue 33: surviving is not recovering. trotForward, then from 2 s after the fault's end a turn

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "controller_cases.hpp"
+#include "drive_cases.hpp"
 #include "messages/signing.hpp"
 #include "tools/drive/closed_loop.hpp"
 
@@ -36,15 +37,7 @@ std::string newKeyFile() {
 
 // Stand, trot from 0.5 s, forward at 0.5 m/s from 1 s.
 drive::Options trotForward(double duration) {
-  drive::Options o;
-  o.duration = duration;
-  o.script.resize(3);
-  o.script[1].at = 0.5;
-  o.script[1].gait = "trot";
-  o.script[2] = o.script[1];
-  o.script[2].at = 1.0;
-  o.script[2].vx = 0.5;
-  return o;
+  return drive_cases::trotForward(duration, 0.5, 1.0);
 }
 
 double walked(const drive::Run& r) {
