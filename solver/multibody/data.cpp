@@ -16,6 +16,9 @@ Data::Data(const Model& model) {
   nle = Eigen::VectorXd::Zero(nv);
   g = Eigen::VectorXd::Zero(nv);
   J = Matrix6Xd::Zero(6, nv);
+  // A first factorization, so that a copied or moved Data never reads the LLT's unset
+  // ComputationInfo (GCC's UBSan reports it as an invalid enum load); ABA factors it anew.
+  rootLLT.compute(Matrix6d::Identity());
   oYcrb.assign(n, Inertia::Zero());
   oYbody.assign(n, Inertia::Zero());
   ov.assign(n, Vector6d::Zero());

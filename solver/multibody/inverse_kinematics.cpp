@@ -63,7 +63,10 @@ InverseKinematics::InverseKinematics(const Model& model, std::vector<IkTarget> t
   dq_.setZero(n);
   dv_.setZero(nv);
   q_next_.setZero(model.nq);
-  ldlt_ = Eigen::LDLT<Eigen::MatrixXd>(rows_);
+  // The factorization's storage at its size, by a first factorization (of the identity): moving
+  // a sized but never computed LDLT in (LDLT(rows_)) read its unset ComputationInfo, which GCC's
+  // UBSan reports as an invalid enum load.
+  ldlt_.compute(Eigen::MatrixXd::Identity(rows_, rows_));
 }
 
 std::vector<int> InverseKinematics::jointColumns(const Model& model) {
