@@ -443,9 +443,12 @@ std::int64_t unsignedPayloadSize(const std::uint8_t* buf, int size) {
   return endsWithMagic(buf, size) ? size - kSignatureSize : size;
 }
 
-bool readSignatureTimestamp(const std::uint8_t* buf, int size, std::int64_t& timestamp) {
+bool readSignatureClaim(const std::uint8_t* buf, int size, SignatureClaim& claim) {
   if (!endsWithMagic(buf, size)) return false;
-  timestamp = static_cast<std::int64_t>(getBe64(buf + size - kSignatureSize + kTimestampAt));
+  const std::uint8_t* trailer = buf + size - kSignatureSize;
+  claim.key_id = getBe32(trailer + kKeyIdAt);
+  claim.sender = getBe32(trailer + kSenderAt);
+  claim.timestamp = static_cast<std::int64_t>(getBe64(trailer + kTimestampAt));
   return true;
 }
 

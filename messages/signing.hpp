@@ -195,10 +195,15 @@ class Verifier {
 // For receivers without a key (viewers, log summaries): the payload's size when the buffer ends
 // with a signature trailer (size - kSignatureSize), else size. Nothing is verified.
 std::int64_t unsignedPayloadSize(const std::uint8_t* buf, int size);
-// For readers without a key that judge freshness as the receivers do (log summaries: the logger's
-// receive time is the receiver's clock): true, with the trailer's timestamp as claimed (nothing
-// is verified), when the buffer ends with a signature trailer.
-bool readSignatureTimestamp(const std::uint8_t* buf, int size, std::int64_t& timestamp);
+// A trailer's fields as claimed (nothing is verified): for readers without the key that judge
+// freshness as the receivers do (log summaries: the logger's receive time is the receiver's
+// clock), and for the fault tools that claim a live sender's id. False when the buffer does not
+// end with a signature trailer.
+struct SignatureClaim {
+  std::uint32_t key_id = 0, sender = 0;
+  std::int64_t timestamp = 0;
+};
+bool readSignatureClaim(const std::uint8_t* buf, int size, SignatureClaim& claim);
 
 namespace detail {
 // SHA-256 by OpenSSL's libcrypto (SHA256_Init/Update/Final: no allocation, SHA extensions).

@@ -229,10 +229,9 @@ TEST_F(SignedReplay, AJunkMessageFromTheFutureLocksNobodyOut) {
     void onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string&) {
       const auto* b = static_cast<const std::uint8_t*>(rbuf->data);
       const int n = static_cast<int>(rbuf->data_size);
-      if (n < msg::kSignatureSize || !msg::readPolicyClaim(b, n, claim)) return;
-      const std::uint8_t* s = b + n - msg::kSignatureSize + 4;
-      live =
-          std::uint32_t(s[0]) << 24 | std::uint32_t(s[1]) << 16 | std::uint32_t(s[2]) << 8 | s[3];
+      msg::SignatureClaim signature;
+      if (!msg::readSignatureClaim(b, n, signature) || !msg::readPolicyClaim(b, n, claim)) return;
+      live = signature.sender;
     }
   };
   auto attacker = std::make_shared<Attacker>();

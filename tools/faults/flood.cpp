@@ -59,10 +59,11 @@ struct LiveSender {
   void onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     const auto* b = static_cast<const std::uint8_t*>(rbuf->data);
     const int n = static_cast<int>(rbuf->data_size);
-    if (n < stride::msg::kSignatureSize || !stride::msg::readPolicyClaim(b, n, claim)) return;
-    const std::uint8_t* s = b + n - stride::msg::kSignatureSize + 4;
-    sender =
-        std::uint32_t(s[0]) << 24 | std::uint32_t(s[1]) << 16 | std::uint32_t(s[2]) << 8 | s[3];
+    stride::msg::SignatureClaim signature;
+    if (!stride::msg::readSignatureClaim(b, n, signature) ||
+        !stride::msg::readPolicyClaim(b, n, claim))
+      return;
+    sender = signature.sender;
   }
 };
 

@@ -140,10 +140,10 @@ bool readMap(const lcm::LogEvent& e, terrain::ElevationMap& map, Session& s) {
 bool outsideWindow(const lcm::LogEvent& e) {
   constexpr std::int64_t kWallClockSince = 1'000'000'000'000'000;  // µs: 2001-09-09
   if (e.timestamp < kWallClockSince) return false;
-  std::int64_t stamp = 0;
-  if (!msg::readSignatureTimestamp(static_cast<const std::uint8_t*>(e.data), e.datalen, stamp))
+  msg::SignatureClaim claim;
+  if (!msg::readSignatureClaim(static_cast<const std::uint8_t*>(e.data), e.datalen, claim))
     return false;
-  return std::abs(static_cast<double>(stamp) - static_cast<double>(e.timestamp)) >
+  return std::abs(static_cast<double>(claim.timestamp) - static_cast<double>(e.timestamp)) >
          static_cast<double>(msg::kFreshnessWindowMicros);
 }
 
