@@ -129,6 +129,10 @@ class Mpc {
   // The robot's clock moved by offset_us and stays there (MpcNode: a clock offset or a new
   // robot): every time kept on that clock moves with it, so the plan time goes on where it was.
   void shiftClock(std::int64_t offset_us);
+  // The states come from another run of the robot (MpcNode: its session changed): the next tick
+  // builds the problem again and makes the start-up solve from that robot as it stands
+  // (Planner::newRobotRun), as a controller started on it would.
+  void newRobotRun() { planner_.newRobotRun(); }
   // The body command in force (the node's CommandFilter smooths it toward the one received), and
   // the gait asked for (an index into gaits()). Takes effect at the next tick's re-planning.
   void setCommand(const BodyCommand& command, int gait) { planner_.setCommand(command, gait); }

@@ -269,7 +269,8 @@ bool MpcNode::followSession(std::int64_t arrival_us, const std::string& channel)
   char theirs[17], ours[17];
   msg::formatHash(incoming_.session, theirs);
   msg::formatHash(session_, ours);
-  if (silent) {  // the robot (or its estimator) restarted: its new run is followed
+  if (silent) {  // the robot (or its estimator) restarted: its new run is followed, from scratch
+    mpc_.newRobotRun();
     if (++session_switches_ <= 4)
       std::fprintf(stderr, "stride-mpc: following the robot's run %s on '%s' (%s went silent)\n",
                    theirs, channel.c_str(), ours);

@@ -96,6 +96,10 @@ class Planner {
   // The robot's clock moved by offset_us and stays there: the plan's start and the map's stamp
   // move with it, so the plan time goes on where it was.
   void shiftClock(std::int64_t offset_us);
+  // Another run of the robot (restarted, elsewhere, standing): nothing planned for the one before
+  // holds for it (its footholds, its gait's phase), so the next tick builds again, as at the start:
+  // needsBuild() until the next build(). A plan goes on at its plan time.
+  void newRobotRun() { plan_pending_ = true; }
 
   // ---- Build (allocates: the first state, or the first after setPlan) ----
   // Before the first build, and after a new plan.

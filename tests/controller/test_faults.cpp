@@ -5,14 +5,18 @@
 // say the fault was seen. The controller killed and restarted: test_controller_loss.cpp; a rival
 // controller: test_closed_loop.cpp; drops, delay and noise: ClosedLoop.QuadrupedTrotsWith...
 #include <gtest/gtest.h>
-
-#include <cstdio>
+#include <stdlib.h>
+#include <time.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <memory>
+#include <vector>
 
 #include "controller_cases.hpp"
 #include "drive_cases.hpp"
+#include "messages/signing.hpp"
 #include "tools/drive/closed_loop.hpp"
 #include "tools/log/segments.hpp"
 
@@ -164,6 +168,141 @@ TEST(Faults, TheMockRobotRestartedIsTakenOverByTheController) {
   EXPECT_LT(maxTilt(r), 15.0);
   EXPECT_GT(progress(r, 6.0, 8.0), 0.8) << "the new robot trots forward";
   expectRecovered(r, 4.0);
+}
+
+// Every fault of the lock-step closed loops in turn, in one drive with a key (issue 43): the
+// controller killed and restarted (a stand-down, a new sender taken), bad states (NaN, stamps
+// going back), an unsigned controller's and a keyed rival's policies, junk signed with the live
+// controller's id from the future, a gap in the states (a stand-down), the mock robot restarted
+// (another run of the robot, taken from scratch), the commands stopping (the deadman). Each
+// fault's own test, with its own claims, runs in Release; the sanitized stage runs this drive in
+// their place: the paths they take in 7 s of robot time instead of seven drives of 2-10 s each
+// (tests/README.md, "Sanitizers").
+TEST(Faults, EveryFaultInTurnInOneSignedDrive) {
+  char dir[] = "/tmp/stride-tour-XXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  ControllerConfig keyed = quad();
+  keyed.key_file = std::string(dir) + "/key";
+  msg::writeNewKeyFile(keyed.key_file);
+  const msg::Key key = msg::loadKeyFile(keyed.key_file);
+
+  // Trot from 0.5 s, forward at 0.5 m/s from 1 s; the commands stop at 6 s.
+  drive::Options o = drive_cases::trotForward(7.0, 0.5, 1.0);
+  o.commands_until = 6.0;
+  o.controller_lost_at = 1.5;
+  o.controller_back_after = 0.5;
+  o.sim_lost_at = 5.0;
+  o.sim_back_after = 0.3;
+  int spoiled = 0, old = 0;
+  // On the run's clock (the state's stamp: a restarted mock robot's own time starts at 0).
+  const std::int64_t base = o.sim.utime_base;
+  o.state_fault = [&spoiled, &old, base, n = 0](robot_state_t& m, double) mutable {
+    const double t = (m.utime - base) * 1e-6;
+    if (t >= 2.5 && t < 3.0 && n++ % 3 == 0) {
+      m.v[4] = std::numeric_limits<double>::quiet_NaN();
+      ++spoiled;
+    } else if (t >= 3.0 && t < 3.4 && n++ % 4 == 0) {
+      m.utime -= 50000;
+      ++old;
+    }
+    return !(t >= 3.6 && t < 4.3);  // a gap of 0.7 s: the policy runs out
+  };
+
+  // The attacker: from 3.2 s to 3.4 s the live controller's newest policy again, once unsigned
+  // (an unkeyed controller's) and once from another source signed with the key (a keyed rival's);
+  // at 3.2 s and 3.5 s three junk policies under the live sender's id, stamped far ahead and
+  // 0.3 s ahead.
+  struct Attacker {
+    lcm::Subscription* sub = nullptr;
+    std::vector<std::uint8_t> last;  // the live controller's newest policy as sent
+    std::uint32_t rival = 0;         // the sender id the rival signs with
+    int unsigned_sent = 0, rival_sent = 0, junk_sent = 0;
+    void onPolicy(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      const auto* b = static_cast<const std::uint8_t*>(rbuf->data);
+      const int n = static_cast<int>(rbuf->data_size);
+      // Not the attacker's own: unsigned, the rival's, or junk (of no run).
+      msg::SignatureClaim claim;
+      policy_t p;
+      if (!msg::readSignatureClaim(b, n, claim) || claim.sender == rival) return;
+      const int payload = n - msg::kSignatureSize;
+      if (p.decode(b, 0, payload) == payload && p.session != 0) last.assign(b, b + n);
+    }
+  };
+  auto attacker = std::make_shared<Attacker>();
+  const std::string channel = keyed.policy_channel;
+  o.on_bus = [attacker, key, channel](lcm::LCM& bus, double t) {
+    if (attacker->sub == nullptr)
+      attacker->sub = bus.subscribe(channel, &Attacker::onPolicy, attacker.get());
+    msg::SignatureClaim live;
+    const int size = static_cast<int>(attacker->last.size());
+    if (!msg::readSignatureClaim(attacker->last.data(), size, live)) return;
+    const int payload = size - msg::kSignatureSize;
+    policy_t p;
+    if (p.decode(attacker->last.data(), 0, payload) != payload) return;
+    std::vector<std::uint8_t> b(size);
+    if (t >= 3.2 && t < 3.4) {
+      bus.publish(channel, attacker->last.data(), static_cast<unsigned>(payload));
+      ++attacker->unsigned_sent;
+      policy_t rival = p;
+      rival.source_id += 1;
+      const int n = rival.encode(b.data(), 0, payload);
+      if (attacker->rival == 0) attacker->rival = live.sender + 1;
+      msg::Signer signer(key, attacker->rival);
+      const int signed_size = signer.sign(channel.c_str(), b.data(), n, size);
+      bus.publish(channel, b.data(), static_cast<unsigned>(signed_size));
+      ++attacker->rival_sent;
+    }
+    if (attacker->junk_sent < 6 && t + 1e-9 >= (attacker->junk_sent == 0 ? 3.2 : 3.5)) {
+      p.session = 0;  // of no run of the robot, with NaN gains: junk only a key holder can sign
+      p.K[0][0] = std::numeric_limits<double>::quiet_NaN();
+      const int n = p.encode(b.data(), 0, payload);
+      const msg::Signer forger(key, live.sender);
+      timespec wall{};
+      clock_gettime(CLOCK_REALTIME, &wall);
+      const std::int64_t now =
+          static_cast<std::int64_t>(wall.tv_sec) * 1000000 + wall.tv_nsec / 1000;
+      for (const std::int64_t at : {std::numeric_limits<std::int64_t>::max(),
+                                    std::int64_t{now + 3600LL * 1000000}, now + 300000}) {
+        bus.publish(channel, b.data(),
+                    static_cast<unsigned>(forger.signAt(channel.c_str(), b.data(), n, size, at)));
+        ++attacker->junk_sent;
+      }
+    }
+  };
+
+  const drive::Run r = drive::run(keyed, o);
+  const sim::SimNodeStats& first = r.sim_before_restart;
+  std::printf(
+      "%d NaN and %d old states; %d unsigned, %d rival and %d junk policies; the first robot "
+      "refused %lld unread, %lld of a rival, %lld of another run, stood down %lld times; %.3f m "
+      "walked by the restarted robot in 5.5-6.5 s\n",
+      spoiled, old, attacker->unsigned_sent, attacker->rival_sent, attacker->junk_sent,
+      static_cast<long long>(first.policies_unauthenticated),
+      static_cast<long long>(first.policies_rival),
+      static_cast<long long>(first.policies_other_session),
+      static_cast<long long>(first.stand_downs), progress(r, 5.5, 6.5));
+  EXPECT_FALSE(first.fell);
+  EXPECT_FALSE(r.fell());
+  EXPECT_LT(maxTilt(r), 15.0);
+  EXPECT_EQ(r.controller_starts, 2);
+  EXPECT_EQ(r.sim_starts, 2);
+  EXPECT_GT(spoiled, 30);
+  EXPECT_GT(old, 15);
+  // The restarted controller's refusals: the bad states, the attacker's policies refused unread,
+  // and the new robot's first states (of another run until the one followed went silent).
+  EXPECT_EQ(r.rejected - r.mpc_unauthenticated - r.mpc_other_session, spoiled + old)
+      << "each bad state refused, no other";
+  EXPECT_GT(attacker->unsigned_sent, 30);
+  EXPECT_EQ(attacker->rival_sent, attacker->unsigned_sent);
+  EXPECT_EQ(attacker->junk_sent, 6);
+  // The first robot: the unsigned and the far-ahead junk refused unread, the junk inside the window
+  // by its content (no run of the robot), the keyed rival by the source rule.
+  EXPECT_EQ(first.policies_unauthenticated, attacker->unsigned_sent + 4);
+  EXPECT_EQ(first.policies_other_session, 2);
+  EXPECT_EQ(first.policies_rival, attacker->rival_sent);
+  EXPECT_EQ(first.stand_downs, 2) << "the controller's death and the gap";
+  EXPECT_EQ(r.command_counters.timeouts, 1) << "the deadman, once";
+  EXPECT_GT(progress(r, 5.5, 6.5), 0.3) << "the new robot trots forward under the controller";
 }
 
 }  // namespace

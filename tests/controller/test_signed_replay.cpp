@@ -94,28 +94,31 @@ class SignedReplay : public ::testing::Test {
     config_ =
         new ControllerConfig(loadControllerConfig(controller_cases::configPath("stride_quad")));
     config_->key_file = newKeyFile();
-    // The recording: a keyed session trotting forward 2.5 s (states, commands, policies signed).
-    char dir[] = "/tmp/stride-replay-log-XXXXXX";
-    ASSERT_NE(mkdtemp(dir), nullptr);
-    log_ = std::string(dir) + "/session.lcmlog";
-    drive::Options o = trotForward(2.5);
-    o.log = log_;
-    const drive::Run recorded = drive::run(*config_, o);
-    recorded_walk_ = walked(recorded);
-    std::printf("the recorded session walked %.3f m\n", recorded_walk_);
-    events_ = new std::vector<Event>(readLog(log_));
   }
   static void TearDownTestSuite() {
     delete config_;
     delete events_;
   }
+  // The recording, made by the first test that replays it (ctest runs each test in its own
+  // process: the others make none): a keyed session trotting forward 2.5 s (states, commands,
+  // policies signed).
+  static const std::vector<Event>& recording() {
+    if (events_ == nullptr) {
+      char dir[] = "/tmp/stride-replay-log-XXXXXX";
+      if (mkdtemp(dir) == nullptr) throw std::runtime_error("mkdtemp");
+      drive::Options o = trotForward(2.5);
+      o.log = std::string(dir) + "/session.lcmlog";
+      recorded_walk_ = walked(drive::run(*config_, o));
+      std::printf("the recorded session walked %.3f m\n", recorded_walk_);
+      events_ = new std::vector<Event>(readLog(o.log));
+    }
+    return *events_;
+  }
   static ControllerConfig* config_;
-  static std::string log_;
   static std::vector<Event>* events_;
   static double recorded_walk_;
 };
 ControllerConfig* SignedReplay::config_ = nullptr;
-std::string SignedReplay::log_;
 std::vector<Event>* SignedReplay::events_ = nullptr;
 double SignedReplay::recorded_walk_ = 0.0;
 
@@ -124,6 +127,7 @@ double SignedReplay::recorded_walk_ = 0.0;
 // is refused as stale and the robot does not move; at a new controller beside a standing robot,
 // every command and state of the recording is refused as stale, the robot does not walk.
 TEST_F(SignedReplay, ARecordingIsStaleAtEveryRestartedReceiver) {
+  const std::vector<Event>& events = recording();
   ASSERT_GT(recorded_walk_, 0.5);
   std::this_thread::sleep_for(
       std::chrono::microseconds(msg::kFreshnessWindowMicros + 100000));  // the recording ages
@@ -133,7 +137,7 @@ TEST_F(SignedReplay, ARecordingIsStaleAtEveryRestartedReceiver) {
   drive::Options alone;
   alone.duration = 2.5;
   alone.controller = false;
-  alone.on_bus = replay(*events_, {policy}, &sent);
+  alone.on_bus = replay(events, {policy}, &sent);
   const drive::Run robot = drive::run(*config_, alone);
   std::printf("robot alone: %ld policies replayed, %lld taken, %lld refused (%s), walked %.4f m\n",
               sent[policy], static_cast<long long>(robot.sim.policies),
@@ -148,7 +152,7 @@ TEST_F(SignedReplay, ARecordingIsStaleAtEveryRestartedReceiver) {
   drive::Options beside;  // a new controller, its robot standing: no command of its own
   beside.duration = 2.5;
   beside.on_bus =
-      replay(*events_, {config_->state_channel, config_->command_channel, policy}, &to_controller);
+      replay(events, {config_->state_channel, config_->command_channel, policy}, &to_controller);
   const drive::Run controller = drive::run(*config_, beside);
   std::printf(
       "new controller: %ld messages replayed (%ld commands); %lld commands accepted; %lld "
@@ -170,6 +174,7 @@ TEST_F(SignedReplay, ARecordingIsStaleAtEveryRestartedReceiver) {
 // refused as made for another run of the robot, every state as another run's, and the robot with
 // its own controller does exactly what it does without the replay.
 TEST_F(SignedReplay, AnotherRunsMessagesWithinTheWindowAreRefusedBySession) {
+  const std::vector<Event>& events = recording();
   ControllerConfig wide = *config_;
   wide.signature_window = 60.0;
   Sent replayed;
@@ -177,7 +182,7 @@ TEST_F(SignedReplay, AnotherRunsMessagesWithinTheWindowAreRefusedBySession) {
   alone.duration = 2.5;
   alone.controller = false;
   alone.sim.signature_window = 60.0;
-  alone.on_bus = replay(*events_, {config_->policy_channel}, &replayed);
+  alone.on_bus = replay(events, {config_->policy_channel}, &replayed);
   const drive::Run robot = drive::run(wide, alone);
   const long sent = replayed[config_->policy_channel];
   std::printf(
@@ -195,7 +200,7 @@ TEST_F(SignedReplay, AnotherRunsMessagesWithinTheWindowAreRefusedBySession) {
   own.sim.signature_window = 60.0;
   const drive::Run clean = drive::run(wide, own);
   Sent both;
-  own.on_bus = replay(*events_, {config_->state_channel, config_->policy_channel}, &both);
+  own.on_bus = replay(events, {config_->state_channel, config_->policy_channel}, &both);
   const drive::Run attacked = drive::run(wide, own);
   std::printf(
       "with its controller: %ld replayed; %lld states of another run refused, %lld "
