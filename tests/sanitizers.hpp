@@ -14,7 +14,7 @@
 #include <sanitizer/allocator_interface.h>
 #endif
 
-namespace stride::testing {
+namespace stride::test_support {
 
 #ifdef STRIDE_ADDRESS_SANITIZER
 constexpr bool kAddressSanitizer = true;
@@ -39,4 +39,4 @@ inline long heldMemoryKb(long resident_kb) {
 }
 constexpr const char* kHeldMemory = kAddressSanitizer ? "heap in use" : "VmRSS";
 
-}  // namespace stride::testing
+}  // namespace stride::test_support

@@ -20,7 +20,7 @@
 #include "solver/multibody/urdf.hpp"
 
 namespace stride {
-namespace {
+namespace test_robot_config {
 
 namespace fs = std::filesystem;
 
@@ -756,5 +756,5 @@ TEST(RobotConfig, DescribeModel) {
   EXPECT_NE(text.find("-1.6000 rad"), std::string::npos) << text;
 }
 
-}  // namespace
+}  // namespace test_robot_config
 }  // namespace stride

@@ -20,7 +20,7 @@
 #include "solver/multibody/urdf.hpp"
 
 namespace stride {
-namespace {
+namespace test_contact_dynamics {
 
 constexpr double kStep = 1e-6;
 constexpr double kTol = 1e-6;
@@ -595,5 +595,5 @@ TEST(ContactDynamics, MasslessBodyIsReportedAsSuch) {
   EXPECT_TRUE(cd.ddq.allFinite());
 }
 
-}  // namespace
+}  // namespace test_contact_dynamics
 }  // namespace stride

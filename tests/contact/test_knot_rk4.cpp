@@ -21,9 +21,9 @@
 #include "solver/multibody/urdf.hpp"
 
 namespace stride {
-namespace {
+namespace test_knot_rk4 {
 
-using testing::allocations;
+using test_support::allocations;
 
 // The Euler knot's tolerance (test_contact_dynamics.cpp, kContactTol), with a step ten times
 // longer: RK4's later stages run at v + dt a, and with random states and ±5 N m on solo12's
@@ -461,5 +461,5 @@ TEST(KnotRk4, DoesNotAllocate) {
 
 // ---- Cost (printed, not asserted: the machine is shared) ----
 
-}  // namespace
+}  // namespace test_knot_rk4
 }  // namespace stride

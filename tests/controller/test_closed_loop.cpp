@@ -9,7 +9,7 @@
 #include "tools/drive/closed_loop.hpp"
 
 namespace stride {
-namespace {
+namespace test_closed_loop {
 
 using drive::tiltDeg;
 
@@ -154,11 +154,11 @@ TEST(ClosedLoop, WithSigningARivalWithoutTheKeyCannotTakeTheRobot) {
   EXPECT_GT(lifted, 20) << "with the key and no rule, the second controller moves the feet";
 }
 
-}  // namespace
+}  // namespace test_closed_loop
 }  // namespace stride
 
 namespace stride {
-namespace {
+namespace test_closed_loop {
 
 // The humanoid stands, then walks forward at 0.2 m/s on its soles (lock-step, memq).
 TEST(ClosedLoop, HumanoidStandsAndSteps) {
@@ -218,5 +218,5 @@ TEST(ClosedLoop, ARivalControllerChangesNothingOnTheRobot) {
   EXPECT_GT(lifted, 20) << "without the rule the rival's plan moves the feet";
 }
 
-}  // namespace
+}  // namespace test_closed_loop
 }  // namespace stride

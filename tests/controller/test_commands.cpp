@@ -29,10 +29,10 @@
 #include "tools/drive/closed_loop.hpp"
 
 namespace stride {
-namespace {
+namespace test_commands {
 
 using controller_cases::configPath;
-using testing::allocations;
+using test_support::allocations;
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -675,5 +675,5 @@ TEST(CommandsClosedLoop, MalformedCommandsInTheLoop) {
   EXPECT_LT(rise, 0.021);
 }
 
-}  // namespace
+}  // namespace test_commands
 }  // namespace stride

@@ -13,7 +13,7 @@
 #include "tools/log/segments.hpp"
 
 namespace stride {
-namespace {
+namespace test_controller_loss {
 
 using drive::tiltDeg;
 
@@ -157,5 +157,5 @@ TEST(ControllerLoss, HumanoidWalkingSurvivesTenKillsAndRestarts) {
   kills(10, "stride_humanoid", "walk", 0.2, 0.2, 1.0, 1.0, 4.5, 0.3, 10.0);
 }
 
-}  // namespace
+}  // namespace test_controller_loss
 }  // namespace stride

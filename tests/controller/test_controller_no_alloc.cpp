@@ -19,16 +19,16 @@
 #include "messages/signing.hpp"
 
 namespace stride {
-namespace {
+namespace test_controller_no_alloc {
 
-using testing::allocations;
+using test_support::allocations;
 
 // The test's wall-clock budgets (a tick's deadline, the state's age) are a release build's: the
 // sanitizers (tools/test.sh --sanitize) make a tick several times slower, so they scale with it.
 // A tick given kTickBudget must not be shed: 40 ms, ten times a humanoid tick's time here, so that
 // a loaded host (a CI run beside other builds) that takes the core away for a few ms does not make
 // it late (4 ms did: HumanoidTicks shed 5 ticks instead of 3 in a clean-clone CI run).
-constexpr int kSlowdown = testing::kSanitizerSlowdown;
+constexpr int kSlowdown = test_support::kSanitizerSlowdown;
 constexpr auto kTickBudget = std::chrono::milliseconds(40 * kSlowdown);
 
 struct Sink : Publisher {
@@ -256,5 +256,5 @@ TEST(ControllerNoAllocation, QuadrupedTicksSigned) {
   tickNoAllocation("stride_quad", 30, key);
 }
 
-}  // namespace
+}  // namespace test_controller_no_alloc
 }  // namespace stride

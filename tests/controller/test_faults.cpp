@@ -21,7 +21,7 @@
 #include "tools/log/segments.hpp"
 
 namespace stride {
-namespace {
+namespace test_faults {
 
 using drive::tiltDeg;
 
@@ -305,5 +305,5 @@ TEST(Faults, EveryFaultInTurnInOneSignedDrive) {
   EXPECT_GT(progress(r, 5.5, 6.5), 0.3) << "the new robot trots forward under the controller";
 }
 
-}  // namespace
+}  // namespace test_faults
 }  // namespace stride

@@ -16,7 +16,7 @@
 #include "messages/signing.hpp"
 
 namespace stride {
-namespace {
+namespace test_messages {
 
 using controller_cases::configPath;
 using controller_cases::standingState;
@@ -722,5 +722,5 @@ TEST_F(NodeInput, MalformedPlansAreRejected) {
   EXPECT_EQ(node_.planUpdates(), 1);
 }
 
-}  // namespace
+}  // namespace test_messages
 }  // namespace stride

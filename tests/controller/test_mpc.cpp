@@ -12,7 +12,7 @@
 #include "sanitizers.hpp"
 
 namespace stride {
-namespace {
+namespace test_mpc {
 
 using controller_cases::configPath;
 using controller_cases::standingState;
@@ -363,7 +363,7 @@ TEST(Mpc, AControllerStoppedLongerThanItsHorizonDrivesAgain) {
                  static_cast<int>(std::find(gaits.begin(), gaits.end(), "trot") - gaits.begin()));
   robot_state_t s = standingState(mpc.robot(), 1000000);
   // The wall-clock budgets, longer under the sanitizers (the work is slower there, not the robot).
-  constexpr int kSlow = testing::kSanitizerSlowdown;
+  constexpr int kSlow = test_support::kSanitizerSlowdown;
   const auto period = std::chrono::microseconds(5000 * kSlow);
   const auto tickRealTime = [&](std::int64_t dt_us) {
     s.utime += dt_us;
@@ -480,7 +480,8 @@ TEST(Mpc, ALongStartUpSolveIsMadeAgainOnTheNewestState) {
     if (mpc.policy().utime != s.utime) {
       // A host too slow for any start-up solve within half a policy (the sanitizers' 3-10x): the
       // last one is withheld too, and the next tick, a regular one, answers.
-      EXPECT_TRUE(testing::kAddressSanitizer) << "at this host's speed a start-up solve answers";
+      EXPECT_TRUE(test_support::kAddressSanitizer)
+          << "at this host's speed a start-up solve answers";
       EXPECT_EQ(ticks, Mpc::kMaxStartupResolves + 1);
       s.utime += 5000;
       ASSERT_TRUE(mpc.tick(&s, 0.0, Mpc::Clock::time_point::max()));
@@ -557,5 +558,5 @@ TEST(Mpc, FallbacksOnStaleStates) {
   EXPECT_EQ(mpc.policy().status, kPolicySolved);
 }
 
-}  // namespace
+}  // namespace test_mpc
 }  // namespace stride

@@ -12,7 +12,7 @@
 #include "messages/validate.hpp"
 
 namespace stride {
-namespace {
+namespace test_mpc_terrain {
 
 using controller_cases::configPath;
 using controller_cases::standingState;
@@ -132,5 +132,5 @@ TEST(TerrainMap, FootholdsLandOnTheMapsStepAwayFromItsEdge) {
   EXPECT_GT(on_step, 0);
 }
 
-}  // namespace
+}  // namespace test_mpc_terrain
 }  // namespace stride

@@ -14,7 +14,7 @@
 #include "controller_cases.hpp"
 
 namespace stride {
-namespace {
+namespace test_replay {
 
 // A 1 kHz session of the quadruped swaying on its feet, with the faults a real log has: a
 // repeated stamp and a NaN estimate (both must be rejected, not crash the replay). other_robot:
@@ -190,5 +190,5 @@ TEST(Replay, MissingLogIsAClearError) {
   EXPECT_EQ(WEXITSTATUS(rc), 1);
 }
 
-}  // namespace
+}  // namespace test_replay
 }  // namespace stride

@@ -25,7 +25,7 @@
 #include "tools/drive/closed_loop.hpp"
 
 namespace stride {
-namespace {
+namespace test_signed_replay {
 
 std::string newKeyFile() {
   char dir[] = "/tmp/stride-replay-XXXXXX";
@@ -321,5 +321,5 @@ TEST_F(SignedReplay, ARestartedSenderIsTakenAtOnce) {
   }
 }
 
-}  // namespace
+}  // namespace test_signed_replay
 }  // namespace stride

@@ -11,7 +11,7 @@
 #include "controller/statistics.hpp"
 
 namespace stride {
-namespace {
+namespace test_statistics {
 
 TEST(Statistics, PercentileIsTheNearestRank) {
   const std::vector<double> v = {5.0, 1.0, 4.0, 2.0, 3.0};  // not sorted: the function sorts
@@ -64,5 +64,5 @@ TEST(Statistics, PercentilesAgreeWithPercentile) {
   EXPECT_EQ(p.max, *std::max_element(v.begin(), v.end()));
 }
 
-}  // namespace
+}  // namespace test_statistics
 }  // namespace stride

@@ -12,7 +12,7 @@
 #include "tools/log/segments.hpp"
 
 namespace stride {
-namespace {
+namespace test_terrain_walk {
 
 // Stand, the stepping gait, forward at vx from 2 s to 7 s, stand.
 std::vector<ScriptedCommand> forward(const std::string& gait, double vx) {
@@ -151,5 +151,5 @@ TEST(TerrainBlind, Solo12CrossesTheRoughPatch) {
   EXPECT_EQ(r.mpc.fallbacks, 0);
 }
 
-}  // namespace
+}  // namespace test_terrain_walk
 }  // namespace stride

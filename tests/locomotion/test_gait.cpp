@@ -11,7 +11,7 @@
 #include "locomotion/gait.hpp"
 
 namespace stride {
-namespace {
+namespace test_gait {
 
 TEST(Gait, Patterns) {
   const Robot quad =
@@ -75,5 +75,5 @@ TEST(Gait, PlanFile) {
   EXPECT_THROW(loadContactPlan("/nonexistent/plan.yaml"), ConfigError);
 }
 
-}  // namespace
+}  // namespace test_gait
 }  // namespace stride

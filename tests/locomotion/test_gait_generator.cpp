@@ -26,7 +26,7 @@
 #include "terrain/steppability.hpp"
 
 namespace stride {
-namespace {
+namespace test_gait_generator {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kNever = ContactTimeline::kNever;
@@ -90,9 +90,9 @@ ContactPlan stand() {
 
 struct Timeline {
   ContactTimeline tl{quad().contacts};
-  int trot = tl.addPattern(stride::trot());
-  int stand = tl.addPattern(stride::stand());
-  int pace = tl.addPattern(stride::pace());
+  int trot = tl.addPattern(test_gait_generator::trot());
+  int stand = tl.addPattern(test_gait_generator::stand());
+  int pace = tl.addPattern(test_gait_generator::pace());
 };
 
 TEST(ContactTimeline, TrotQueries) {
@@ -258,7 +258,7 @@ TEST(ContactTimeline, RefusesPatternsThatDoNotStartWithAllFeetDown) {
   EXPECT_EQ(tl.patternAt(0.2), T.trot);
   EXPECT_EQ(tl.mask(0.5), 0xfu);
   // The trot started one phase late (its swing first) is refused alike.
-  ContactPlan late = stride::trot();
+  ContactPlan late = test_gait_generator::trot();
   std::rotate(late.phases.begin(), late.phases.begin() + 1, late.phases.end());
   EXPECT_EQ(tl.switchTo(tl.addPattern(late), 0.2), kNever);
   EXPECT_EQ(tl.switchTo(99, 0.2), kNever);  // no such pattern
@@ -356,11 +356,11 @@ struct Generator {
   std::unique_ptr<GaitGenerator> gen;
   int trot = 0, stand = 0;
   explicit Generator(const GaitGeneratorOptions& o = hand(),
-                     const ContactPlan& gait = stride::trot()) {
+                     const ContactPlan& gait = test_gait_generator::trot()) {
     const Quad& r = quad();
     gen = std::make_unique<GaitGenerator>(r.robot.model, r.contacts, r.x_nominal, o);
     trot = gen->timeline().addPattern(gait);
-    stand = gen->timeline().addPattern(stride::stand());
+    stand = gen->timeline().addPattern(test_gait_generator::stand());
     gen->timeline().reset(trot, 0.0);
   }
   GaitGenerator* operator->() { return gen.get(); }
@@ -724,7 +724,7 @@ TEST(GaitGenerator, TheGroundTheFeetFeel) {
   // Standing (all feet down) on a floor that rises by 4 cm at 0.05: after one plan 0.2 s later the
   // filter has gone dt / (tau + dt) = 1/2 of the way (2 cm, 1.5 cm past the dead band).
   GaitGeneratorOptions standing = o;
-  Generator step(standing, stride::stand());
+  Generator step(standing, test_gait_generator::stand());
   ASSERT_TRUE(step->plan(0.0, lowered(0.0), 0.0, 1.0));
   ASSERT_TRUE(step->plan(0.2, lowered(0.04), 0.2, 1.2));
   EXPECT_NEAR(step->ground(), 0.015, 1e-12);
@@ -1141,5 +1141,5 @@ TEST(GaitGenerator, OnAMapAFootholdAcrossAnUnsafeBandIsKeptWhenTheBodyLags) {
   EXPECT_EQ(fl(&box, true, 0.02), across);              // again: kept
 }
 
-}  // namespace
+}  // namespace test_gait_generator
 }  // namespace stride

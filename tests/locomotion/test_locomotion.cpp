@@ -21,7 +21,7 @@
 #include "terrain/steppability.hpp"
 
 namespace stride {
-namespace {
+namespace test_locomotion {
 
 using loco_cases::Case;
 using loco_cases::Problem;
@@ -790,5 +790,5 @@ TEST(LocomotionSolvers, PreparedIterationMatchesAFullOneAtTheNewState) {
   EXPECT_LE(d.norm(), (1.0 - step) * d_old.norm() + 1e-9) << "step " << step;
 }
 
-}  // namespace
+}  // namespace test_locomotion
 }  // namespace stride

@@ -24,10 +24,10 @@
 #include "solver/ddp/solver.hpp"
 
 namespace stride {
-namespace {
+namespace test_locomotion_no_alloc {
 
-using testing::AllocationCounter;
-using testing::allocations;
+using test_support::AllocationCounter;
+using test_support::allocations;
 
 TEST(LocomotionNoAllocation, CounterSeesAllocations) {
   EXPECT_GE(allocations([] {
@@ -216,5 +216,5 @@ TEST(LocomotionNoAllocation, PlannerTicks) {
   EXPECT_TRUE(std::isfinite(checksum));
 }
 
-}  // namespace
+}  // namespace test_locomotion_no_alloc
 }  // namespace stride

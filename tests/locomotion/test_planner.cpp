@@ -15,7 +15,7 @@
 #include "solver/ddp/solver.hpp"
 
 namespace stride {
-namespace {
+namespace test_planner {
 
 constexpr unsigned kAllFeet = 0xF;
 
@@ -175,5 +175,5 @@ TEST(Planner, TouchDownsAfterTheStateByContactThenTime) {
   EXPECT_EQ(n, 3);
 }
 
-}  // namespace
+}  // namespace test_planner
 }  // namespace stride

@@ -34,7 +34,7 @@ void PrintTo(Verdict verdict, std::ostream* os) {
   *os << describe(verdict);
 }
 
-namespace {
+namespace test_signing {
 
 using Bytes = std::vector<std::uint8_t>;
 
@@ -643,7 +643,7 @@ TEST(Signing, RandomSenderIds) {
 // (9) No allocation in sign() and check(), on every path, from the first call.
 TEST(Signing, NoAllocation) {
   // The counter counts (so that the zeros below mean something).
-  EXPECT_EQ(stride::testing::allocations([] {
+  EXPECT_EQ(stride::test_support::allocations([] {
               void* volatile p = std::malloc(100);
               std::free(p);
             }),
@@ -664,7 +664,7 @@ TEST(Signing, NoAllocation) {
     int signed_size = 0, payload_size = 0;
     std::array<Verdict, 7> verdicts{};
     std::int64_t unsigned_size = 0;
-    const long allocations = stride::testing::allocations([&] {
+    const long allocations = stride::test_support::allocations([&] {
       signed_size = signer.sign(kPolicyChannel, buf.data(), size, static_cast<int>(buf.size()));
       verdicts[0] = verifier.check(kPolicyChannel, buf.data(), signed_size, now, payload_size);
       verifier.accept();
@@ -723,5 +723,5 @@ TEST(Signing, TimestampsStrictlyIncrease) {
   EXPECT_EQ(signer.lastTimestamp(), previous);
 }
 
-}  // namespace
+}  // namespace test_signing
 }  // namespace stride::msg

@@ -13,7 +13,7 @@
 #include "stride/terrain_t.hpp"
 
 namespace stride::msg {
-namespace {
+namespace test_terrain_checks {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -180,5 +180,5 @@ TEST(ValidateTerrain, ShapeSizesEveryRowAndMarksEveryCellUnknown) {
   EXPECT_EQ(static_cast<long>(encode(m).size()), terrainWireSize(3, 7));
 }
 
-}  // namespace
+}  // namespace test_terrain_checks
 }  // namespace stride::msg

@@ -17,7 +17,7 @@
 #include "multibody/random_tree.hpp"
 
 namespace stride {
-namespace {
+namespace test_dynamics {
 
 struct Case {
   std::string name;
@@ -268,5 +268,5 @@ TEST(Simulation, CentroidalMomentumIsConservedOnFloatingBases) {
   EXPECT_EQ(floating, 5);
 }
 
-}  // namespace
+}  // namespace test_dynamics
 }  // namespace stride

@@ -19,7 +19,7 @@
 #include "solver/multibody/urdf.hpp"
 
 namespace stride {
-namespace {
+namespace test_inverse_kinematics {
 
 const std::string kShared = STRIDE_SHARED_DIR;
 
@@ -230,7 +230,7 @@ TEST(InverseKinematics, StepAndSolveAllocateNothing) {
   long count;
   IkResult result;
   {
-    testing::AllocationCounter counter;
+    test_support::AllocationCounter counter;
     ik.stepFromKinematics(data, dv);
     result = ik.solve(q);
     count = counter.stop();
@@ -239,5 +239,5 @@ TEST(InverseKinematics, StepAndSolveAllocateNothing) {
   EXPECT_EQ(count, 0);
 }
 
-}  // namespace
+}  // namespace test_inverse_kinematics
 }  // namespace stride

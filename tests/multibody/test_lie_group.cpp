@@ -17,7 +17,7 @@
 #include "solver/multibody/lie_group.hpp"
 
 namespace stride {
-namespace {
+namespace test_lie_group {
 
 constexpr double kPi = M_PI;
 
@@ -543,5 +543,5 @@ TEST(Configuration, NormalizeRestoresUnitQuaternion) {
   }
 }
 
-}  // namespace
+}  // namespace test_lie_group
 }  // namespace stride

@@ -26,10 +26,10 @@
 #include "solver/multibody/urdf.hpp"
 
 namespace stride {
-namespace {
+namespace test_no_alloc {
 
-using testing::AllocationCounter;
-using testing::allocations;
+using test_support::AllocationCounter;
+using test_support::allocations;
 
 void runAllAlgorithms(const Model& model, Data& data, const Eigen::VectorXd& q,
                       const Eigen::VectorXd& v, const Eigen::VectorXd& a, Matrix6Xd& J,
@@ -154,5 +154,5 @@ TEST(NoAllocation, DerivativesContactsAndKnots) {
   }
 }
 
-}  // namespace
+}  // namespace test_no_alloc
 }  // namespace stride

@@ -13,7 +13,7 @@
 #include "multibody/random_tree.hpp"
 
 namespace stride {
-namespace {
+namespace test_random_trees {
 
 struct TreeCase {
   std::string name;
@@ -144,5 +144,5 @@ TEST(RandomTrees, CentroidalMapTimesVelocityIsMomentum) {
   forEachSample(checks::centroidalMapMatchesMomentum);
 }
 
-}  // namespace
+}  // namespace test_random_trees
 }  // namespace stride

@@ -18,7 +18,7 @@
 #include "solver/multibody/urdf.hpp"
 
 namespace stride {
-namespace {
+namespace test_urdf {
 
 // A small arm: continuous shoulder, revolute elbow, prismatic slide, and fixed links around them.
 // Sibling joints "b_joint" and "a_joint" are listed out of name order on purpose.
@@ -484,5 +484,5 @@ TEST(Srdf, BadInput) {
   }
 }
 
-}  // namespace
+}  // namespace test_urdf
 }  // namespace stride

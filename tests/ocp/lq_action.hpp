@@ -7,7 +7,7 @@
 
 #include "solver/ocp/action.hpp"
 
-namespace stride::testing {
+namespace stride::test_support {
 
 struct LqKnot : ActionModel {
   LqKnot(int nx, int nu, bool terminal) : ActionModel(StateSpace(nx), nu), terminal(terminal) {}
@@ -66,4 +66,4 @@ struct LqKnot : ActionModel {
   }
 };
 
-}  // namespace stride::testing
+}  // namespace stride::test_support

@@ -19,7 +19,7 @@
 #include "solver/ocp/knot.hpp"
 
 namespace stride {
-namespace {
+namespace test_knot {
 
 using ocp_test::makeTerms;
 using ocp_test::randomState;
@@ -343,5 +343,5 @@ TEST(KnotModelRk4, DataOfTheOtherIntegratorIsRefused) {
   EXPECT_STREQ(toString(Integrator::Euler), "euler");
 }
 
-}  // namespace
+}  // namespace test_knot
 }  // namespace stride

@@ -16,10 +16,10 @@
 #include "solver/ocp/cost.hpp"
 
 namespace stride {
-namespace {
+namespace test_ocp_no_alloc {
 
-using testing::AllocationCounter;
-using testing::allocations;
+using test_support::AllocationCounter;
+using test_support::allocations;
 
 using ocp_test::Knot;
 using ocp_test::makeTerms;
@@ -104,5 +104,5 @@ TEST(OcpNoAllocation, ResidualsAndCost) {
   }
 }
 
-}  // namespace
+}  // namespace test_ocp_no_alloc
 }  // namespace stride

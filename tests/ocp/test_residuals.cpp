@@ -16,7 +16,7 @@
 #include "solver/ocp/cost.hpp"
 
 namespace stride {
-namespace {
+namespace test_residuals {
 
 using ocp_test::Knot;
 using ocp_test::makeTerms;
@@ -613,5 +613,5 @@ TEST(Residuals, ReferencesAndBadArguments) {
   EXPECT_EQ(lim.lower.tail(nu), -m.velocityLimit.tail(nu));
 }
 
-}  // namespace
+}  // namespace test_residuals
 }  // namespace stride

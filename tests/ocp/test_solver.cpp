@@ -16,9 +16,9 @@
 #include "solver/ocp/residual_state.hpp"
 
 namespace stride {
-namespace {
+namespace test_solver {
 
-using testing::LqKnot;
+using test_support::LqKnot;
 
 struct LqProblem {
   std::vector<const LqKnot*> knots;  // T running + terminal
@@ -454,5 +454,5 @@ TEST(Solver, WarmStartRejectsBadSizesAndNaN) {
                std::invalid_argument);
 }
 
-}  // namespace
+}  // namespace test_solver
 }  // namespace stride

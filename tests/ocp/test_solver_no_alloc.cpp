@@ -23,10 +23,10 @@
 #include "solver/ddp/solver.hpp"
 
 namespace stride {
-namespace {
+namespace test_solver_no_alloc {
 
-using testing::AllocationCounter;
-using testing::allocations;
+using test_support::AllocationCounter;
+using test_support::allocations;
 
 TEST(SolverNoAllocation, CounterSeesAllocations) {
   EXPECT_GE(allocations([] {
@@ -155,5 +155,5 @@ TEST(SolverNoAllocation, ShiftAndReconfigureInPlace) {
   EXPECT_GT(solver.iterations(), 0);
 }
 
-}  // namespace
+}  // namespace test_solver_no_alloc
 }  // namespace stride

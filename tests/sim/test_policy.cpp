@@ -14,7 +14,7 @@
 #include "solver/multibody/lie_group.hpp"
 
 namespace stride {
-namespace {
+namespace test_policy {
 
 using msg::Policy;
 using msg::PolicyEvaluator;
@@ -410,5 +410,5 @@ TEST(Disturbances, PushScheduleSumsActivePushes) {
   EXPECT_DOUBLE_EQ(s.activeUntil(2.0), 2.0);
 }
 
-}  // namespace
+}  // namespace test_policy
 }  // namespace stride

@@ -14,7 +14,7 @@
 #include "sim_cases.hpp"
 
 namespace stride {
-namespace {
+namespace test_sensing {
 
 const Robot& quad() {
   return sim_test::robot("stride_quad");
@@ -408,5 +408,5 @@ TEST(Plant, MassScaleText) {
     EXPECT_FALSE(sim::parseMassScale(bad, s)) << bad;
 }
 
-}  // namespace
+}  // namespace test_sensing
 }  // namespace stride

@@ -22,9 +22,9 @@
 #include "solver/multibody/lie_group.hpp"
 
 namespace stride {
-namespace {
+namespace test_sim_no_alloc {
 
-using testing::allocations;
+using test_support::allocations;
 
 TEST(SimNoAllocation, CounterSeesAllocations) {
   EXPECT_GE(allocations([] {
@@ -174,5 +174,5 @@ TEST(SimNoAllocation, SignedStatesAndPolicies) {
   EXPECT_EQ(node.stats().policies_unauthenticated, 0);
 }
 
-}  // namespace
+}  // namespace test_sim_no_alloc
 }  // namespace stride

@@ -19,7 +19,7 @@
 #include "tools/log/segments.hpp"
 
 namespace stride {
-namespace {
+namespace test_sim_node {
 
 struct Sink : Publisher {
   robot_state_t state;
@@ -435,5 +435,5 @@ TEST(SimNode, AHeavierRobotIsTheSameRobotOnTheWire) {
   EXPECT_LT(z[1], z[0] - 1e-3);
 }
 
-}  // namespace
+}  // namespace test_sim_node
 }  // namespace stride

@@ -12,7 +12,7 @@
 #include "solver/multibody/lie_group.hpp"
 
 namespace stride {
-namespace {
+namespace test_simulator {
 
 using sim::SimOptions;
 using sim::Simulator;
@@ -452,5 +452,5 @@ TEST(GroundContact, CandidatePointsFromTheRobotConfig) {
   for (const auto& c : raised.pointContacts()) EXPECT_TRUE(c.in_contact);
 }
 
-}  // namespace
+}  // namespace test_simulator
 }  // namespace stride

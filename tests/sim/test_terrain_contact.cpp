@@ -21,7 +21,7 @@
 #include "terrain/terrain.hpp"
 
 namespace stride {
-namespace {
+namespace test_terrain_contact {
 
 using sim::SimOptions;
 using sim::Simulator;
@@ -359,7 +359,7 @@ Sweep sweepPuck(std::shared_ptr<const Terrain> world, double push, double speed,
     }
   };
   if (allocations)
-    *allocations = testing::allocations(run);
+    *allocations = test_support::allocations(run);
   else
     run();
   sweep.final_x = sim.q()[0];
@@ -676,7 +676,7 @@ TEST(TerrainContact, StepAllocatesNothingOnStairsAndRoughGround) {
     const sim::HoldPolicy hold = sim_test::holdDefault(r);
     Eigen::VectorXd tau(sim.nu());
     double most_force = 0.0;
-    const long allocations = testing::allocations([&] {
+    const long allocations = test_support::allocations([&] {
       for (int i = 0; i < 600; ++i) {
         hold.torque(r.model, sim.q(), sim.v(), tau);
         sim.step(tau);
@@ -689,5 +689,5 @@ TEST(TerrainContact, StepAllocatesNothingOnStairsAndRoughGround) {
   }
 }
 
-}  // namespace
+}  // namespace test_terrain_contact
 }  // namespace stride

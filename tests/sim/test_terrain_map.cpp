@@ -15,7 +15,7 @@
 #include "terrain/terrain.hpp"
 
 namespace stride {
-namespace {
+namespace test_terrain_map {
 
 using sim::TerrainMapOptions;
 using sim::TerrainMapper;
@@ -177,12 +177,12 @@ TEST(TerrainMap, AStepAllocatesNothing) {
   LastMap out;
   out.keep(false);  // decoding the message would allocate: the sink only counts
   for (int i = 1; i <= 200; ++i) mapper.step(i * 1e-3, 0, 0.001 * i, 0.0, out);
-  const long n = testing::allocations([&] {
+  const long n = test_support::allocations([&] {
     for (int i = 201; i <= 1200; ++i) mapper.step(i * 1e-3, 0, 0.001 * i, 0.0, out);
   });
   EXPECT_EQ(n, 0);
   EXPECT_GE(out.count_, 11);
 }
 
-}  // namespace
+}  // namespace test_terrain_map
 }  // namespace stride

@@ -17,7 +17,7 @@
 #include "terrain/terrain.hpp"
 
 namespace stride::terrain {
-namespace {
+namespace test_terrain {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kTol = 1e-12;
@@ -614,5 +614,5 @@ TEST(ElevationMap, SampledOverABox) {
   EXPECT_FLOAT_EQ(map.heightAt(0.5, 0.2), 0.15f);
 }
 
-}  // namespace
+}  // namespace test_terrain
 }  // namespace stride::terrain

@@ -19,7 +19,7 @@
 #include "terrain/terrain_file.hpp"
 
 namespace stride::terrain {
-namespace {
+namespace test_terrain_file {
 
 namespace fs = std::filesystem;
 
@@ -257,5 +257,5 @@ TEST(TerrainFile, ShippedFilesLoad) {
   }
 }
 
-}  // namespace
+}  // namespace test_terrain_file
 }  // namespace stride::terrain

@@ -17,9 +17,9 @@
 #include "terrain/steppability.hpp"
 
 namespace stride::terrain {
-namespace {
+namespace test_terrain_planning {
 
-using stride::testing::allocations;
+using stride::test_support::allocations;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kRes = 0.02;
@@ -532,5 +532,5 @@ TEST(TerrainPlanningNoAllocation, PerCallFunctions) {
   EXPECT_TRUE(std::isfinite(sink));
 }
 
-}  // namespace
+}  // namespace test_terrain_planning
 }  // namespace stride::terrain

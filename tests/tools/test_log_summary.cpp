@@ -20,7 +20,7 @@
 #include "stride/robot_state_t.hpp"
 #include "stride/terrain_t.hpp"
 
-namespace {
+namespace test_log_summary {
 
 enum class Robot { Tracks, SlowInSegment1, FallsInSegment2 };
 
@@ -186,9 +186,6 @@ TEST(LogSummary, AFallIsItsOwnExitStatusWithOrWithoutCheckTracking) {
   EXPECT_EQ(fallen["fell"], true);
 }
 
-}  // namespace
-
-namespace {
 // A free-flying base at rest 0.3 m up, of no robot in particular (model hash 0).
 stride::robot_state_t standing(std::int64_t utime) {
   stride::robot_state_t s;
@@ -223,7 +220,6 @@ std::string writeLossySession() {
   }
   return path;
 }
-}  // namespace
 
 TEST(LogSummary, LostMessagesAreCountedAndCanFailTheRun) {
   const std::string log = writeLossySession();
@@ -335,16 +331,12 @@ TEST(LogSummary, ASignedSessionReadsAsThePlainOne) {
   EXPECT_EQ(r.json["distance_m"], plain.json["distance_m"]);
 }
 
-namespace {
-
 template <typename Message>
 std::vector<unsigned char> encoded(const Message& m) {
   std::vector<unsigned char> b(m.getEncodedSize());
   m.encode(b.data(), 0, static_cast<int>(b.size()));
   return b;
 }
-
-}  // namespace
 
 // A log with malformed messages (issue 43): the summary reads them through the live receivers'
 // checks (messages/validate.hpp), so each is refused and counted by reason, never decoded on
@@ -402,8 +394,6 @@ TEST(LogSummary, MalformedMessagesInALogAreRefusedAndCounted) {
   EXPECT_NEAR(r.json["duration_s"].get<double>(), 1.99, 1e-9);
 }
 
-namespace {
-
 // A signed state, stamped `stamp` by its sender, logged at `logged` (the logger's clock).
 void writeSignedAt(lcm::LogFile& log, const stride::msg::Signer& signer,
                    const stride::robot_state_t& s, std::int64_t stamp, std::int64_t logged) {
@@ -413,8 +403,6 @@ void writeSignedAt(lcm::LogFile& log, const stride::msg::Signer& signer,
       signer.signAt("STRIDE_STATE", bytes.data(), n, static_cast<int>(bytes.size()), stamp));
   writeBytes(log, "STRIDE_STATE", std::move(bytes), logged);
 }
-
-}  // namespace
 
 // Issue 44: a recording of an earlier signed session replayed on the bus during a live one, as
 // lcm-logger (stamping each event with its wall clock on receipt) logs it. The receivers refused
@@ -449,3 +437,5 @@ TEST(LogSummary, ARecordingReplayedOnTheBusIsRefusedAsTheReceiversRefuseIt) {
             std::string::npos)
       << r.output;
 }
+
+}  // namespace test_log_summary

@@ -8,7 +8,7 @@
 #include "tools/log/segments.hpp"
 
 namespace stride::logs {
-namespace {
+namespace test_segments {
 
 // q of a base at (x, y, z) turned by yaw about z, then pitched by pitch about its own y axis.
 std::array<double, 7> pose(double x, double y, double z, double yaw, double pitch = 0.0) {
@@ -314,5 +314,5 @@ TEST(Recovery, NoSegmentAfterTheFaultJudgesNothing) {
   EXPECT_NEAR(r.time_to_tracking, 0.0, 1e-9) << "the sidestep tracks from the fault's end on";
 }
 
-}  // namespace
+}  // namespace test_segments
 }  // namespace stride::logs

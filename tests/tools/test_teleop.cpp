@@ -9,7 +9,7 @@
 #include "tools/teleop/script_player.hpp"
 
 namespace stride::teleop {
-namespace {
+namespace test_teleop {
 
 using Event = KeyboardCommand::Event;
 
@@ -290,5 +290,5 @@ TEST(ScriptPlayer, RejectsAnEmptyScriptAndABadRate) {
   EXPECT_THROW(ScriptPlayer(demoScript(), {0.0, 1.0, 0.0}), std::invalid_argument);
 }
 
-}  // namespace
+}  // namespace test_teleop
 }  // namespace stride::teleop

@@ -7,7 +7,7 @@
 #include "viz/server/client_queue.hpp"
 
 namespace stride::viz {
-namespace {
+namespace test_client_queue {
 
 FrameText frame(int i, std::size_t size) {
   std::string text = std::to_string(i);
@@ -93,5 +93,5 @@ TEST(ClientQueue, DrainedItPassesEveryFrameInOrder) {
   EXPECT_EQ(queue.dropped(), 0u);
 }
 
-}  // namespace
+}  // namespace test_client_queue
 }  // namespace stride::viz

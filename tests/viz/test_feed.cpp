@@ -23,7 +23,7 @@
 #include "viz_cases.hpp"
 
 namespace stride::viz {
-namespace {
+namespace test_feed {
 
 using namespace stride::viz::test;
 
@@ -663,5 +663,5 @@ TEST(RobotFiles, ANameFromTheWireNeverLeavesTheConfigFolders) {
   EXPECT_TRUE(tried.empty());  // refused before looking anywhere
 }
 
-}  // namespace
+}  // namespace test_feed
 }  // namespace stride::viz

@@ -27,7 +27,7 @@
 #include "viz_cases.hpp"
 
 namespace stride::viz {
-namespace {
+namespace test_force_estimate {
 
 using namespace stride::viz::test;
 
@@ -354,5 +354,5 @@ TEST(ForceEstimate, TheFeedUsesThePolicyTheRobotApplied) {
   EXPECT_LT(r.error[Held].rms(), 0.2);
 }
 
-}  // namespace
+}  // namespace test_force_estimate
 }  // namespace stride::viz

@@ -21,7 +21,7 @@
 #include "viz_cases.hpp"
 
 namespace stride::viz {
-namespace {
+namespace test_viz_server {
 
 using namespace stride::viz::test;
 namespace fs = std::filesystem;
@@ -275,7 +275,7 @@ TEST_F(Live, ABrowserThatNeverReadsCostsBoundedMemory) {
   };
   run_for(1.5);  // the socket's buffers fill, the queue reaches its limits
   // VmRSS, or under AddressSanitizer the heap in use (tests/sanitizers.hpp).
-  using stride::testing::heldMemoryKb, stride::testing::kHeldMemory;
+  using stride::test_support::heldMemoryKb, stride::test_support::kHeldMemory;
   const long rss0 = heldMemoryKb(vmRssKb());
   const Json info0 = info();
   const auto droppedSince = [&info0](const Json& now, const char* what) {
@@ -412,5 +412,5 @@ TEST_F(Live, MapsReachTheBrowserTwiceASecondAndLaterBrowsersGetTheNewest) {
   ::close(late);
 }
 
-}  // namespace
+}  // namespace test_viz_server
 }  // namespace stride::viz
