@@ -366,8 +366,11 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   if (c.max_previous_ticks < 0) r.fail("safety.max_previous_ticks", "must be non-negative");
 
   const YAML::Node terrain = root["terrain"];
+  // "jump" is a motion since issue 45: the map's height step that makes an edge was jump_height.
+  if (terrain && terrain.IsMap() && terrain["jump_height"])
+    r.fail("terrain.jump_height", "is named terrain.edge_height now (the height step of an edge)");
   r.onlyKeys(terrain, "terrain",
-             {"max_map_age_ms", "max_cells", "max_slope_deg", "jump_height", "min_edge_distance",
+             {"max_map_age_ms", "max_cells", "max_slope_deg", "edge_height", "min_edge_distance",
               "edge_search_radius", "max_foothold_shift", "swing_clearance", "max_swing_height"});
   if (terrain) {
     double age_ms = c.terrain.max_map_age * 1e3;
@@ -383,8 +386,8 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     if (!(slope_deg > 0.0 && slope_deg < 90.0))
       r.fail("terrain.max_slope_deg", "must be in (0, 90)");
     st.max_slope = slope_deg * M_PI / 180.0;
-    r.get(terrain, "jump_height", "terrain", st.jump_height);
-    r.positive(st.jump_height, "terrain.jump_height");
+    r.get(terrain, "edge_height", "terrain", st.edge_height);
+    r.positive(st.edge_height, "terrain.edge_height");
     r.get(terrain, "min_edge_distance", "terrain", st.min_edge_distance);
     r.nonNegative(st.min_edge_distance, "terrain.min_edge_distance");
     st.edge_search_radius = std::max(st.edge_search_radius, st.min_edge_distance);

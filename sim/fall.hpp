@@ -5,7 +5,7 @@
 //
 // Fallen: the base's height above the terrain under it below `height_fraction` of its height
 // above the terrain at the start, or the base tilted more than `max_tilt_deg`. Low over the ground
-// under the base, not low in the world: a robot on a lower floor or down a flight of stairs is
+// under the base, not low in the world: a robot on a lower floor or down a staircase is
 // upright.
 //
 // Header-only, no Stride include: tools/log (which links nothing heavy) uses it without linking

@@ -40,7 +40,7 @@ std::string footholdText(const SimCounters& c, const SimOptions& o) {
                     "%lld footholds (touch-downs), %lld closer than %g cm to an edge of more "
                     "than %g cm, ",
                     static_cast<long long>(c.footholds), static_cast<long long>(c.edge_footholds),
-                    100.0 * o.edge_distance, 100.0 * o.edge_jump);
+                    100.0 * o.edge_distance, 100.0 * o.edge_rise);
   n = std::max(0, std::min(n, static_cast<int>(sizeof text) - 1));
   if (std::isfinite(c.min_edge_distance))
     n += std::snprintf(text + n, sizeof text - n, "nearest %.3f m", c.min_edge_distance);
@@ -75,7 +75,7 @@ void checkOptions(const SimOptions& o) {
   if (!(o.max_velocity > 0.0)) fail("max_velocity must be > 0");
   if (!(o.foothold_lift >= 0.0) || !std::isfinite(o.foothold_lift))
     fail("foothold_lift must be >= 0");
-  if (!(o.edge_jump >= 0.0) || !std::isfinite(o.edge_jump)) fail("edge_jump must be >= 0");
+  if (!(o.edge_rise >= 0.0) || !std::isfinite(o.edge_rise)) fail("edge_rise must be >= 0");
   if (!(o.edge_distance >= 0.0) || !std::isfinite(o.edge_distance))
     fail("edge_distance must be >= 0");
   if (!(o.edge_search_radius >= o.edge_distance) || !std::isfinite(o.edge_search_radius))
@@ -119,7 +119,7 @@ Simulator::Simulator(const Model& model, std::vector<ContactPoint> points,
   contacts_.assign(np, PointContact{});
   on_wall_.assign(np, 0);
   touching_wall_.assign(np, 0);
-  airborne_.assign(np, 1);
+  swung_.assign(np, 1);
   touching_support_.assign(np, 0);
   // A contact's points are consecutive (contactPointsFromRobot).
   for (int i = 0; i < np;) {
@@ -150,7 +150,7 @@ void Simulator::reset(const Eigen::Ref<const Eigen::VectorXd>& q,
   forces_.setZero();
   for (PointContact& c : contacts_) c = PointContact{};
   std::fill(on_wall_.begin(), on_wall_.end(), 0);
-  std::fill(airborne_.begin(), airborne_.end(), 1);  // the points standing now are footholds
+  std::fill(swung_.begin(), swung_.end(), 1);  // the points standing now are footholds
   last_status_ = StepStatus::Ok;
 }
 
@@ -297,13 +297,13 @@ StepStatus Simulator::substep(double h) {
   // (the point under it on flat ground) is measured against the true terrain's edges.
   for (int i = 0; i < np; ++i) {
     if (!touching_support_[i]) {
-      if (contacts_[i].height > options_.foothold_lift) airborne_[i] = 1;
-    } else if (airborne_[i]) {
-      airborne_[i] = 0;
+      if (contacts_[i].height > options_.foothold_lift) swung_[i] = 1;
+    } else if (swung_[i]) {
+      swung_[i] = 0;
       ++counters_.footholds;
       const Eigen::Vector3d& at = geometry_.constraint[kConstraintsPerPoint * i].point;
       const double d =
-          terrain_.edgeDistance(at.x(), at.y(), options_.edge_jump, options_.edge_search_radius);
+          terrain_.edgeDistance(at.x(), at.y(), options_.edge_rise, options_.edge_search_radius);
       counters_.min_edge_distance = std::min(counters_.min_edge_distance, d);
       if (d < options_.edge_distance) ++counters_.edge_footholds;
     }

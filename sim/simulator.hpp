@@ -55,12 +55,12 @@ struct SimOptions {
   double max_velocity = 1e3;
   // Footholds (SimCounters::footholds): a touch-down is an edge foothold when its contact point is
   // closer than `edge_distance` horizontally to a line where the terrain's height jumps by more
-  // than `edge_jump`, looked for within `edge_search_radius` (terrain::Terrain::edgeDistance; the
+  // than `edge_rise`, looked for within `edge_search_radius` (terrain::Terrain::edgeDistance; the
   // steppability of terrain/README.md asks the same 2 cm of a map). A touch-down is one after a
   // swing: the point rose more than `foothold_lift` above its support since it last loaded it (a
   // foot bouncing or rocking in place, up to ~1 cm on the light PD legs, is not a new foothold).
   double foothold_lift = 0.02;
-  double edge_jump = 0.02;
+  double edge_rise = 0.02;
   double edge_distance = 0.02;
   double edge_search_radius = 0.05;
   // A sole down is flat when every corner is this close to the terrain under it
@@ -93,7 +93,7 @@ struct SimCounters {
   // the true terrain at the point's place on its support.
   std::int64_t footholds = 0;
   // Touch-downs closer than SimOptions::edge_distance (horizontally) to an edge of the terrain: a
-  // height jump of more than edge_jump, at the top of a drop or at the foot of a wall.
+  // height step of more than edge_rise, at the top of a drop or at the foot of a wall.
   std::int64_t edge_footholds = 0;
   // The smallest distance of a touch-down to an edge [m]; +infinity while no touch-down had one
   // within SimOptions::edge_search_radius (always on flat ground).
@@ -204,9 +204,9 @@ class Simulator {
   Eigen::Matrix3Xd impulse_sum_;  // 3 x P: impulses summed over the substeps of this step
   Eigen::Matrix3Xd forces_;       // 3 x P
   std::vector<PointContact> contacts_;
-  std::vector<char> on_wall_, touching_wall_;      // per point: pushing on a face (trips)
-  std::vector<char> airborne_, touching_support_;  // per point: swung, loading its support
-  std::vector<std::pair<int, int>> soles_;         // first point and count of each sole
+  std::vector<char> on_wall_, touching_wall_;   // per point: pushing on a face (trips)
+  std::vector<char> swung_, touching_support_;  // per point: swung, loading its support
+  std::vector<std::pair<int, int>> soles_;      // first point and count of each sole
 
   SimCounters counters_;
   StepStatus last_status_ = StepStatus::Ok;

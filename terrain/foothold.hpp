@@ -48,7 +48,7 @@ struct Foothold {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // the fitted plane's, up when unknown
   double shift = 0.0;                                 // [m] horizontal distance from the nominal
-  // [m] Nominal, Moved: from the nearest jump, as far as edge_search_radius looks (+inf: none
+  // [m] Nominal, Moved: from the nearest edge, as far as edge_search_radius looks (+inf: none
   // within it); else +inf.
   double edge_distance = std::numeric_limits<double>::infinity();
   int row = -1, col = -1;  // the cell stepped on (the nominal's for Unreachable), -1 when none
@@ -56,10 +56,10 @@ struct Foothold {
 
 // The safe foothold on `map` that costs least, a place's cost being its squared distance from
 // `nominal` (the part against reach.forward counted twice) plus the square of how much nearer
-// than edge_search_radius it is to a jump (within the radius, a metre clearer of an edge is worth
+// than edge_search_radius it is to an edge (within the radius, a metre clearer of an edge is worth
 // a metre of shift):
 // - Nominal when the nominal's cell is steppable, the point itself is at least min_edge_distance
-//   from every jump (Steppability::edgeDistanceAt) and within the hip's reach, and no cell is
+//   from every edge (Steppability::edgeDistanceAt) and within the hip's reach, and no cell is
 //   cheaper;
 // - otherwise Moved to the centre of the cheapest steppable cell within the reach, the kept
 //   cell's reach being kept_max_shift (ties: the kept cell, then the lowest row, then the lowest

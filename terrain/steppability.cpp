@@ -18,7 +18,7 @@ constexpr double kDistanceSlack = 1e-6, kSlopeSlack = 1e-9;
 
 Steppability::Steppability(const SteppabilityOptions& options, int max_cells) : options_(options) {
   const auto nonneg = [](double v) { return v >= 0.0 && std::isfinite(v); };
-  if (!nonneg(options.max_slope) || !nonneg(options.jump_height) ||
+  if (!nonneg(options.max_slope) || !nonneg(options.edge_height) ||
       !nonneg(options.min_edge_distance) || !nonneg(options.edge_search_radius))
     throw std::invalid_argument("steppability: thresholds must be finite and >= 0");
   if (options.edge_search_radius < options.min_edge_distance)
@@ -50,13 +50,13 @@ bool Steppability::known(int r, int c) const {
   return r >= 0 && r < map_.rows && c >= 0 && c < map_.cols && !std::isnan(map_.at(r, c));
 }
 
-bool Steppability::isJump(int r0, int c0, int r1, int c1) const {
+bool Steppability::isEdge(int r0, int c0, int r1, int c1) const {
   const bool k0 = known(r0, c0), k1 = known(r1, c1);
-  if (k0 && k1) return std::abs(map_.at(r0, c0) - map_.at(r1, c1)) > options_.jump_height;
+  if (k0 && k1) return std::abs(map_.at(r0, c0) - map_.at(r1, c1)) > options_.edge_height;
   return (k0 || k1) && options_.unknown_is_edge;
 }
 
-double Steppability::nearestJump(double u, double v) const {
+double Steppability::nearestEdge(double u, double v) const {
   const int rows = map_.rows, cols = map_.cols;
   const double reach = options_.edge_search_radius / map_.resolution;  // in cells
   const auto lo = [](double x) { return static_cast<int>(std::ceil(x)); };
@@ -67,7 +67,7 @@ double Steppability::nearestJump(double u, double v) const {
   const int xc0 = std::max(0, lo(u + 0.5 - reach)), xc1 = std::min(cols, hi(u + 0.5 + reach));
   const int yr0 = std::max(0, lo(v + 0.5 - reach)), yr1 = std::min(rows, hi(v + 0.5 + reach));
   const int yc0 = std::max(0, lo(u - reach - 0.5)), yc1 = std::min(cols - 1, hi(u + reach + 0.5));
-  // When no cell beside those sides touches a jump there is nothing to look at (most cells of a
+  // When no cell beside those sides touches an edge there is nothing to look at (most cells of a
   // flat or ramped map): the integral image says so at once.
   const int r0 = std::max(0, std::min(xr0, yr0 - 1)), r1 = std::min(rows, std::max(xr1, yr1) + 1);
   const int c0 = std::max(0, std::min(xc0 - 1, yc0)), c1 = std::min(cols, std::max(xc1, yc1) + 1);
@@ -109,7 +109,7 @@ void Steppability::fitPlane(int r, int c) {
     for (int dc = -1; dc <= 1; ++dc) {
       if (!known(r + dr, c + dc)) continue;
       const double dz = map_.at(r + dr, c + dc) - h0;
-      if (std::abs(dz) > options_.jump_height) continue;  // another surface, beyond a face
+      if (std::abs(dz) > options_.edge_height) continue;  // another surface, beyond a face
       const Eigen::Vector3d phi(1.0, dc, dr);
       A.noalias() += phi * phi.transpose();
       b.noalias() += phi * dz;
@@ -155,10 +155,10 @@ bool Steppability::update(const ElevationMap& map) {
 
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c <= cols; ++c)
-      jx_[static_cast<std::size_t>(r) * (cols + 1) + c] = isJump(r, c - 1, r, c);
+      jx_[static_cast<std::size_t>(r) * (cols + 1) + c] = isEdge(r, c - 1, r, c);
   for (int r = 0; r <= rows; ++r)
     for (int c = 0; c < cols; ++c)
-      jy_[static_cast<std::size_t>(r) * cols + c] = isJump(r - 1, c, r, c);
+      jy_[static_cast<std::size_t>(r) * cols + c] = isEdge(r - 1, c, r, c);
   const auto touch_at = [&](int r, int c) -> int& {
     return touch_sum_[static_cast<std::size_t>(r) * (cols + 1) + c];
   };
@@ -187,7 +187,7 @@ bool Steppability::update(const ElevationMap& map) {
         continue;
       }
       fitPlane(r, c);
-      double d = nearestJump(c, r) * map_.resolution;
+      double d = nearestEdge(c, r) * map_.resolution;
       if (d > radius) d = kInf;
       edge_distance_[i] = static_cast<float>(d);
       const bool ok = slope_[i] <= options_.max_slope + kSlopeSlack &&
@@ -229,7 +229,7 @@ double Steppability::edgeDistanceAt(double x, double y) const {
   if (!cellOf(x, y, r, c) || std::isnan(map_.at(r, c))) return 0.0;
   const double radius = options_.edge_search_radius;
   const double u = (x - map_.origin_x) / map_.resolution, v = (y - map_.origin_y) / map_.resolution;
-  const double d = nearestJump(u, v) * map_.resolution;
+  const double d = nearestEdge(u, v) * map_.resolution;
   return d > radius ? kInf : d;
 }
 

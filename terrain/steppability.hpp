@@ -1,18 +1,18 @@
 #pragma once
 // Where a foot may stand on an elevation map (issue 31): per cell, the local slope and the distance
-// to the nearest height jump, and whether both are within the thresholds. The controller reads it
+// to the nearest height edge, and whether both are within the thresholds. The controller reads it
 // to pick footholds (foothold.hpp); it knows nothing of robots.
 //
 // Definitions (terrain/README.md, "Planning on a map"):
-// - A **jump** is the side shared by two neighbouring cells (4-neighbours) whose heights differ by
-//   more than `jump_height`, or, with `unknown_is_edge`, by a known cell and an unknown one (NaN,
+// - An **edge** is the side shared by two neighbouring cells (4-neighbours) whose heights differ by
+//   more than `edge_height`, or, with `unknown_is_edge`, by a known cell and an unknown one (NaN,
 //   or outside the map: what the map does not show may be a hole). It is a vertical face on the
 //   line between the two cells, one resolution long.
-// - A cell's **edge distance** is the distance in metres from its centre to the nearest point of a
-//   jump, searched within `edge_search_radius` (+inf when there is none that near).
+// - A cell's **edge distance** is the distance in metres from its centre to the nearest point of
+//   an edge, searched within `edge_search_radius` (+inf when there is none that near).
 // - A cell's **slope** is that of the least-squares plane z = h + gx dx + gy dy through its own
-//   height and those of its known 3x3 neighbours on the same side of every jump (a neighbour more
-//   than `jump_height` away from it is another surface: the edge distance accounts for it). NaN
+//   height and those of its known 3x3 neighbours on the same side of every edge (a neighbour more
+//   than `edge_height` away from it is another surface: the edge distance accounts for it). NaN
 //   when the points do not span a plane.
 // - A cell is **steppable** when known, its slope <= `max_slope` and its edge distance >=
 //   `min_edge_distance`.
@@ -30,7 +30,7 @@ namespace stride::terrain {
 
 struct SteppabilityOptions {
   double max_slope = 0.5235987755982988;  // [rad] 30 degrees
-  double jump_height = 0.02;              // [m] a larger difference between neighbours is a face
+  double edge_height = 0.02;              // [m] a larger difference between neighbours is a face
   // [m] no foothold nearer an edge. Issue 31 asks for 2 cm; a map of 2 cm cells places an edge
   // only to within 1 cm (half a cell), and a foot lands up to about 1 cm off its foothold.
   double min_edge_distance = 0.04;
@@ -68,7 +68,7 @@ class Steppability {
   bool steppable(int r, int c) const { return steppable_[index(r, c)] != 0; }
   // The plane's inclination [rad]: NaN for an unknown cell or one whose points span no plane.
   double slope(int r, int c) const { return slope_[index(r, c)]; }
-  // [m] from the cell's centre to the nearest jump; +inf when none within the search radius, 0 for
+  // [m] from the cell's centre to the nearest edge; +inf when none within the search radius, 0 for
   // an unknown cell.
   double edgeDistance(int r, int c) const { return edge_distance_[index(r, c)]; }
   double height(int r, int c) const { return map_.at(r, c); }
@@ -80,19 +80,19 @@ class Steppability {
   // The cell holding (x, y); false outside the map.
   bool cellOf(double x, double y, int& r, int& c) const;
   Eigen::Vector2d cellCenter(int r, int c) const;
-  // [m] from the point (x, y) itself (not its cell's centre) to the nearest jump within the search
+  // [m] from the point (x, y) itself (not its cell's centre) to the nearest edge within the search
   // radius (+inf when none; 0 outside the map or on an unknown cell). Bounded work, no allocation.
   double edgeDistanceAt(double x, double y) const;
 
  private:
   std::size_t index(int r, int c) const { return static_cast<std::size_t>(r) * map_.cols + c; }
   bool known(int r, int c) const;
-  // Whether the side between two cells is a jump (either may be outside the map).
-  bool isJump(int r0, int c0, int r1, int c1) const;
+  // Whether the side between two cells is an edge (either may be outside the map).
+  bool isEdge(int r0, int c0, int r1, int c1) const;
   // Distance in cells from the point (u along columns, v along rows, in cell units from cell
-  // (0, 0)'s centre) to the nearest jump, looked for within the search radius; +inf when none (a
+  // (0, 0)'s centre) to the nearest edge, looked for within the search radius; +inf when none (a
   // result beyond the radius is possible: the callers cut it).
-  double nearestJump(double u, double v) const;
+  double nearestEdge(double u, double v) const;
   void fitPlane(int r, int c);
 
   SteppabilityOptions options_;
@@ -106,8 +106,8 @@ class Steppability {
   // between (r - 1, c) and (r, c) for r in [0, rows] ((rows + 1) x cols); index 0 and the last are
   // the map's border.
   std::vector<std::uint8_t> jx_, jy_;
-  // Integral image ((rows + 1) x (cols + 1)) of the cells touching a jump, so that a cell with no
-  // jump near it skips the search (most of a flat or ramped map).
+  // Integral image ((rows + 1) x (cols + 1)) of the cells touching an edge, so that a cell with no
+  // edge near it skips the search (most of a flat or ramped map).
   std::vector<int> touch_sum_;
 };
 

@@ -60,7 +60,8 @@ Terrain::Terrain(double ground) {
 
 Terrain::Terrain(const TerrainSpec& spec) : Terrain(spec.ground) {
   spec_ = spec;
-  // Rough patches first: they replace the ground, and a flight standing on one starts on its cell.
+  // Rough patches first: they replace the ground, and a staircase standing on one starts on its
+  // cell.
   for (const RoughSpec& r : spec.rough) {
     if (!finite2(r.min) || !finite2(r.max) || !(r.max.array() > r.min.array()).all())
       fail("a rough patch needs max > min");
@@ -111,12 +112,12 @@ Terrain::Terrain(const TerrainSpec& spec) : Terrain(spec.ground) {
   }
   for (const StairsSpec& s : spec.stairs) {
     if (!finite2(s.start) || !std::isfinite(s.yaw) || !std::isfinite(s.rise))
-      fail("a flight needs finite numbers");
-    if (s.steps < 1) fail("a flight needs steps >= 1");
-    if (!positive(s.run) || !positive(s.width)) fail("a flight needs run and width > 0");
-    if (!(std::isfinite(s.landing) && s.landing >= 0.0)) fail("a flight's landing must be >= 0");
+      fail("stairs need finite numbers");
+    if (s.steps < 1) fail("stairs need steps >= 1");
+    if (!positive(s.run) || !positive(s.width)) fail("stairs need run and width > 0");
+    if (!(std::isfinite(s.landing) && s.landing >= 0.0)) fail("the stairs' landing must be >= 0");
     Piece p;
-    p.kind = PieceKind::Flight;
+    p.kind = PieceKind::Stairs;
     p.u = axis(s.yaw);
     p.w = {-p.u.y(), p.u.x()};
     const double length = s.steps * s.run + s.landing;
@@ -127,7 +128,7 @@ Terrain::Terrain(const TerrainSpec& spec) : Terrain(spec.ground) {
     p.rise = s.rise;
     p.run = s.run;
     // On the surface under its start: what the pieces before it make there, read just before the
-    // first riser (the flight itself is not built yet).
+    // first riser (the staircase itself is not built yet).
     int below = -1;
     p.base = heightAndPiece(s.start - kSide * p.u, below);
     pieces_.push_back(p);
@@ -184,7 +185,7 @@ double Terrain::top(const Piece& piece, const Eigen::Vector2d& c) const {
   switch (piece.kind) {
     case PieceKind::Block:
       return piece.z0 + piece.slope * (c.x() - piece.half_u);
-    case PieceKind::Flight: {
+    case PieceKind::Stairs: {
       int k0;
       const int k = index(c.x(), piece.run, piece.steps - 1, k0);
       const int higher = piece.rise > 0.0 ? std::max(k, k0) : std::min(k, k0);
@@ -357,8 +358,8 @@ int Terrain::contacts(const Eigen::Vector3d& p, double reach, Contact* out, int 
     line(lu, lw, 0, lw);
     line(0, lw, 0, 0);
     if (piece.kind == PieceKind::Block) continue;
-    // Interior lines within reach: a flight's risers, a rough patch's cell edges.
-    const int last_u = piece.kind == PieceKind::Flight ? piece.steps - 1 : piece.cells_u - 1;
+    // Interior lines within reach: a staircase's risers, a rough patch's cell edges.
+    const int last_u = piece.kind == PieceKind::Stairs ? piece.steps - 1 : piece.cells_u - 1;
     const int i0 = std::max(1, static_cast<int>(std::ceil((c.x() - search) / piece.run)));
     const int i1 = std::min(last_u, static_cast<int>(std::floor((c.x() + search) / piece.run)));
     for (int i = i0; i <= i1; ++i) line(i * piece.run, 0, i * piece.run, lw);
@@ -382,8 +383,8 @@ int Terrain::contacts(const Eigen::Vector3d& p, double reach, Contact* out, int 
   return 1 + n;
 }
 
-double Terrain::edgeDistance(double x, double y, double min_jump, double radius) const {
-  // The walk along a line where the jump changes, and the bisection's tolerance [m].
+double Terrain::edgeDistance(double x, double y, double min_rise, double radius) const {
+  // The walk along a line where the step changes, and the bisection's tolerance [m].
   constexpr double kWalk = 1e-3, kLocate = 1e-6;
   double best = std::numeric_limits<double>::infinity();
   if (pieces_.empty() || !std::isfinite(x) || !std::isfinite(y) || !(radius >= 0.0) ||
@@ -393,7 +394,7 @@ double Terrain::edgeDistance(double x, double y, double min_jump, double radius)
   auto edgeAt = [&](const Eigen::Vector2d& e, const Eigen::Vector2d& m) {
     int wa, wb;
     return std::abs(heightAndPiece(e + kSide * m, wa) - heightAndPiece(e - kSide * m, wb)) >
-           min_jump;
+           min_rise;
   };
   // One line segment [a, b]: its nearest edge point within min(best, radius).
   auto line = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
@@ -441,7 +442,7 @@ double Terrain::edgeDistance(double x, double y, double min_jump, double radius)
     line(at(lu, lw), at(0, lw));
     line(at(0, lw), at(0, 0));
     if (piece.kind == PieceKind::Block) continue;
-    const int last_u = piece.kind == PieceKind::Flight ? piece.steps - 1 : piece.cells_u - 1;
+    const int last_u = piece.kind == PieceKind::Stairs ? piece.steps - 1 : piece.cells_u - 1;
     const int i0 = std::max(1, static_cast<int>(std::ceil((c.x() - radius) / piece.run)));
     const int i1 = std::min(last_u, static_cast<int>(std::floor((c.x() + radius) / piece.run)));
     for (int i = i0; i <= i1; ++i) line(at(i * piece.run, 0), at(i * piece.run, lw));

@@ -1,10 +1,10 @@
 #pragma once
 // The world the robot walks in: a height field made of a flat ground and pieces standing on it
-// (boxes, ramps, flights of stairs, rough patches), read by the mock robot, the controller and the
+// (boxes, ramps, staircases, rough patches), read by the mock robot, the controller and the
 // viewer alike (ARCHITECTURE.md §2; the file format and the contact model: terrain/README.md).
 //
 // Every piece is a vertical prism: an oriented rectangle on the ground, solid from below up to its
-// top surface (a plane for boxes and ramps, steps for a flight, square cells for a rough patch).
+// top surface (a plane for boxes and ramps, steps for a staircase, square cells for a rough patch).
 // Where pieces overlap the highest top wins; a rough patch replaces the ground inside its
 // rectangle, so a cell below the ground is a hole. The surface is thus a height field H(x, y) whose
 // jumps are vertical faces (risers, box sides, a ramp's high end).
@@ -95,22 +95,22 @@ class Terrain {
   int contacts(const Eigen::Vector3d& p, double reach, Contact* out, int max) const;
 
   // The horizontal distance from (x, y) to the nearest point of an edge: a line where H jumps by
-  // more than `min_jump` (a riser, a box's side, a rough patch's cell edge or border, a ramp's
+  // more than `min_rise` (a riser, a box's side, a rough patch's cell edge or border, a ramp's
   // high end; a ramp's foot is a kink, not an edge), on either side of it (at the top of a drop or
   // at the foot of a wall), looked for within `radius` (finite, >= 0). +infinity when there is none
-  // within it, when the terrain is flat, and for a place or radius that is not finite. The jump is
+  // within it, when the terrain is flat, and for a place or radius that is not finite. The step is
   // read across each line as contacts() reads it; where it changes along a line (a ramp's side, a
   // rough patch's border, a face partly covered by a higher piece) the line is walked from its
   // point nearest (x, y) outwards in 1 mm steps and the change located by bisection (to 1 µm). What
   // the mock robot's edge_footholds count measures (sim/README.md).
-  double edgeDistance(double x, double y, double min_jump, double radius) const;
+  double edgeDistance(double x, double y, double min_rise, double radius) const;
 
   // The axis-aligned rectangle [min, max] that holds every piece (the ground's point when flat):
   // what a viewer or a map needs to cover.
   void bounds(Eigen::Vector2d& min, Eigen::Vector2d& max) const;
 
  private:
-  enum class PieceKind : std::uint8_t { Block, Flight, Rough };
+  enum class PieceKind : std::uint8_t { Block, Stairs, Rough };
   // An oriented rectangle: centre, unit axes u (length) and w (width), half extents.
   struct Piece {
     PieceKind kind = PieceKind::Block;
@@ -119,7 +119,7 @@ class Terrain {
     double half_u = 0.0, half_w = 0.0;
     // Block: top = z0 + slope * (distance along u from the centre).
     double z0 = 0.0, slope = 0.0;
-    // Flight: steps of `run` along u from the rectangle's -u edge, the last one `last_length` long;
+    // Stairs: steps of `run` along u from the rectangle's -u edge, the last one `last_length` long;
     // step k's top is base + (k + 1) * rise. Rough: square cells of `run` from the -u, -w corner,
     // heights ground + amplitude * r(seed, i, j) with r uniform in [-1, 1].
     int steps = 0;

@@ -59,6 +59,10 @@ TEST(ControllerConfig, ErrorsNameTheFileAndTheKey) {
   EXPECT_NE(configError(robot + "safety: {fallback: pray}\n").find("safety.fallback"),
             std::string::npos);
   EXPECT_NE(configError(robot + "horizon: [1, 2\n").find("malformed"), std::string::npos);
+  // Renamed when "jump" became a motion (issue 45): the old key says the new one.
+  EXPECT_NE(configError(robot + "terrain: {jump_height: 0.03}\n").find("terrain.edge_height"),
+            std::string::npos);
+  EXPECT_EQ(configError(robot + "terrain: {edge_height: 0.03}\n"), "");
   EXPECT_EQ(configError(robot), "") << "a file with only the robot is valid (defaults)";
   EXPECT_NE(configError(robot + "rate_hz: -5\n").find("stride_bad_config.yaml"), std::string::npos);
   try {

@@ -63,7 +63,7 @@ wait "$logger" || true
 printf -- '- {at: 0.0, gait: stand}\n- {at: 1.0, gait: trot, vx: 0.3}\n' > "$dir/drive.yaml"
 status=0
 STRIDE_DEMO_INSIDE=1 STRIDE_BUILD_DIR="$build" timeout $((120 * scale)) "$config/../tools/demo.sh" \
-  --robot stride_quad --lockstep --commands "$dir/drive.yaml" --duration 6 --out "$dir/demo" \
+  --robot stride_quad --lockstep --commands "$dir/drive.yaml" --duration 4.5 --out "$dir/demo" \
   --check-tracking > "$dir/demo.txt" 2>&1 || status=$?
 cat "$dir/demo.txt"
 [ "$status" = 0 ] || { echo "FAIL: tools/demo.sh exited $status"; exit 1; }

@@ -436,7 +436,7 @@ TEST(TerrainContact, EdgeDistanceOnStairsAndRamps) {
     else
       EXPECT_NEAR(d, c.expected, 1e-9);
   }
-  // Only jumps of more than min_jump: the 8 cm risers are no edge for 10 cm, and none beyond the
+  // Only steps of more than min_rise: the 8 cm risers are no edge for 10 cm, and none beyond the
   // radius.
   EXPECT_TRUE(std::isinf(flight->edgeDistance(kNosing + 0.01, 0.0, 0.1, 0.05)));
   EXPECT_TRUE(std::isinf(flight->edgeDistance(kNosing + 0.03, 0.0, 0.02, 0.0299)));

@@ -178,7 +178,7 @@ TEST(Steppability, RefusesMapsItCannotHold) {
   blind.edge_search_radius = 0.04;  // an edge 4 to 5 cm away would go unseen
   EXPECT_THROW(Steppability{blind}, std::invalid_argument);
   SteppabilityOptions negative;
-  negative.jump_height = -0.01;
+  negative.edge_height = -0.01;
   EXPECT_THROW(Steppability{negative}, std::invalid_argument);
 }
 

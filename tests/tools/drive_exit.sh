@@ -17,7 +17,7 @@ run() {  # expected-status script [options...]
 printf -- '- {at: 0.0, gait: stand}\n' > "$work/stand.yaml"
 printf -- '- {at: 0.0, gait: stand, vx: 0.3}\n' > "$work/miss.yaml"
 
-run 0 "$work/stand.yaml" --duration 3 --check-tracking
+run 0 "$work/stand.yaml" --duration 2.6 --check-tracking
 python3 - "$work/s.json" <<'PY' || fail "the summary's timing"
 import json, sys
 s = json.load(open(sys.argv[1]))
