@@ -1,7 +1,7 @@
 #pragma once
 // The gaits a commanded robot walks with, as cyclic contact patterns for its ContactTimeline
-// (locomotion/contact_timeline.hpp). Every pattern starts with a phase where every foot is down,
-// so the controller can switch between gaits there.
+// (locomotion/contact_timeline.hpp, which switches between them foot by foot). The walking gaits
+// start with a phase where every foot is down, so a switch between two of them happens there.
 //
 //   quadruped (4 contacts, YAML order front-left, front-right, hind-left, hind-right):
 //     stand;

@@ -1,7 +1,9 @@
 // The commanded robot's references, against times and positions computed by hand:
 //   ContactTimeline  a trot (support 0.1 s, swing 0.2 s) played from 0: which feet are down, when
 //                    they change, gait switches at the next all-feet-down phase (replaced,
-//                    cancelled, refused), across segment boundaries, forgetting the past;
+//                    cancelled), per foot to and from patterns that never have every foot
+//                    down (a pronk), refused when a foot could never join, across segment
+//                    boundaries, forgetting the past;
 //   GaitGenerator    on the in-house quadruped (stride_quad): the base reference of a straight
 //                    line, a pure turn, a ramp, a body height change and the joint posture that
 //                    keeps the feet in place at that height; footholds at mid-stance and
@@ -241,36 +243,89 @@ TEST(ContactTimeline, NextChangeAcrossSegments) {
   EXPECT_EQ(tl.mask(1.6), 0xfu);
 }
 
-TEST(ContactTimeline, RefusesPatternsThatDoNotStartWithAllFeetDown) {
+// Per-foot switches (issue 45): to and from patterns with no instant of every foot down, each foot
+// joining the new pattern when it is down both as it goes and in the new pattern.
+TEST(ContactTimeline, PerFootSwitchNeverCutsASwing) {
   Timeline T;
   ContactTimeline& tl = T.tl;
-  // Never every foot down: the trot without its all-feet phases.
+  // Never every foot down: the trot without its all-feet phases (FL-HR up for 0.2 s, FR-HL up).
   ContactPlan lifted;
   lifted.cyclic = true;
   lifted.phases = {{0.2, feetExcept({FL, HR})}, {0.2, feetExcept({FR, HL})}};
-  const int bad = tl.addPattern(lifted);  // compiles: it can still be played from a reset
+  const int bad = tl.addPattern(lifted);
+
+  // Into it, asked in the trot's FL-HR swing: its clock starts at the trot's next all-feet phase
+  // (0.3). FR and HL are down in both there and join at once; FL and HR, just landed, would be up
+  // in its first phase: they stay down (the trot's) and join when it puts them down, at 0.5.
+  tl.reset(T.trot, 0.0);
+  EXPECT_NEAR(tl.switchTo(bad, 0.15), 0.3, kTime);
+  EXPECT_EQ(tl.patternAt(0.35), bad);
+  EXPECT_NEAR(tl.lastJoin(FR), 0.3, kTime);
+  EXPECT_NEAR(tl.lastJoin(FL), 0.5, kTime);
+  EXPECT_FALSE(tl.closed(FL, 0.2));  // the swing in progress finishes
+  EXPECT_EQ(tl.mask(0.35), 0xfu);
+  EXPECT_EQ(tl.mask(0.45), 0xfu);  // the trot would have lifted FR-HL, the new pattern FL-HR
+  EXPECT_EQ(tl.mask(0.55), (1u << FL) | (1u << HR));
+  EXPECT_EQ(tl.mask(0.75), (1u << FR) | (1u << HL));
+  EXPECT_NEAR(tl.nextChange(FL, 0.2), 0.3, kTime);  // lands at 0.3, next lifts at 0.7
+  EXPECT_NEAR(tl.nextChange(FL, 0.3), 0.7, kTime);
+  EXPECT_NEAR(tl.nextChange(FR, 0.35), 0.5, kTime);
+  EXPECT_NEAR(tl.lastChange(FR, 0.45), 0.3, kTime);  // joined at 0.3
+  EXPECT_FALSE(tl.standsAt(10.0));
+
+  // Out of it, asked in its FL-HR swing: its next phase start (0.2; it has no all-feet phase).
+  // FL and HR land there and join the stand; FR and HL, lifted at 0.2, land at 0.4 and join.
+  tl.reset(bad, 0.0);
+  EXPECT_NEAR(tl.switchTo(T.stand, 0.05), 0.2, kTime);
+  EXPECT_EQ(tl.mask(0.1), (1u << FR) | (1u << HL));
+  EXPECT_EQ(tl.mask(0.3), (1u << FL) | (1u << HR));
+  EXPECT_FALSE(tl.standsAt(0.3));
+  for (double t = 0.4; t < 5.0; t += 0.01) EXPECT_EQ(tl.mask(t), 0xfu) << t;
+  EXPECT_TRUE(tl.standsAt(0.4));
+  EXPECT_NEAR(tl.nextChange(FR, 0.25), 0.4, kTime);
+  EXPECT_EQ(tl.nextChange(FR, 0.4), kNever);
+  EXPECT_EQ(tl.nextChange(FL, 0.05), 0.2);
+  EXPECT_EQ(tl.nextChange(FL, 0.2), kNever);
+
+  // A pronk's flight (every foot up) and back to the trot at the pronk's next all-feet phase.
+  ContactPlan pronk;
+  pronk.cyclic = true;
+  pronk.phases = {{0.1, feetExcept({})}, {0.2, feetExcept({FL, FR, HL, HR})}};
+  const int hop = tl.addPattern(pronk);
+  tl.reset(T.trot, 0.0);
+  ASSERT_NEAR(tl.switchTo(hop, 0.15), 0.3, kTime);
+  EXPECT_EQ(tl.mask(0.35), 0xfu);
+  EXPECT_EQ(tl.mask(0.45), 0u);
+  EXPECT_NEAR(tl.nextChange(HL, 0.45), 0.6, kTime);
+  EXPECT_NEAR(tl.switchTo(T.trot, 0.45), 0.6, kTime);  // lands from the flight, then trots
+  EXPECT_EQ(tl.mask(0.55), 0u);
+  EXPECT_EQ(tl.mask(0.65), 0xfu);
+  EXPECT_EQ(tl.mask(0.75), (1u << FR) | (1u << HL));
+}
+
+TEST(ContactTimeline, RefusesASwitchAFootCouldNotJoin) {
+  Timeline T;
+  ContactTimeline& tl = T.tl;
+  ContactPlan three_legs;  // FL never down
+  three_legs.cyclic = true;
+  three_legs.phases = {{0.3, feetExcept({FL})}};
+  const int limp = tl.addPattern(three_legs);  // compiles: it can still be played from a reset
   tl.reset(T.trot, 0.0);
   ASSERT_NEAR(tl.switchTo(T.stand, 0.15), 0.3, kTime);  // pending
-  EXPECT_EQ(tl.switchTo(bad, 0.2), kNever);
+  EXPECT_EQ(tl.switchTo(limp, 0.2), kNever);
   // Nothing changed: the stand is still pending at 0.3.
   EXPECT_EQ(tl.lastPattern(), T.stand);
   EXPECT_NEAR(tl.lastSwitch(), 0.3, kTime);
   EXPECT_EQ(tl.patternAt(0.2), T.trot);
   EXPECT_EQ(tl.mask(0.5), 0xfu);
-  // The trot started one phase late (its swing first) is refused alike.
-  ContactPlan late = test_gait_generator::trot();
-  std::rotate(late.phases.begin(), late.phases.begin() + 1, late.phases.end());
-  EXPECT_EQ(tl.switchTo(tl.addPattern(late), 0.2), kNever);
   EXPECT_EQ(tl.switchTo(99, 0.2), kNever);  // no such pattern
   EXPECT_EQ(tl.lastPattern(), T.stand);
 
-  // A pattern in force that never has every foot down again: no switch (kNever), no change.
-  tl.reset(bad, 0.0);
-  ASSERT_EQ(tl.lastPattern(), bad);
+  // A pattern in force that never puts FL down cannot be left either.
+  tl.reset(limp, 0.0);
   EXPECT_EQ(tl.switchTo(T.stand, 0.05), kNever);
-  EXPECT_EQ(tl.lastPattern(), bad);
-  EXPECT_DOUBLE_EQ(tl.lastSwitch(), 0.0);
-  EXPECT_EQ(tl.mask(0.05), (1u << FR) | (1u << HL));
+  EXPECT_EQ(tl.lastPattern(), limp);
+  EXPECT_EQ(tl.mask(0.05), 0xeu);
 }
 
 TEST(ContactTimeline, Forget) {
