@@ -247,21 +247,28 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.nonNegative(v, "weights");
 
   const YAML::Node gait = root["gait"];
+  static const char* const kTimed[] = {"trot",  "walk",        "pace", "pronk",
+                                       "bound", "flying_trot", "hop"};
   r.onlyKeys(gait, "gait",
-             {"trot", "walk", "pace", "foothold_gain", "max_foothold_correction", "plan_file"});
+             {"trot", "walk", "pace", "pronk", "bound", "flying_trot", "hop", "foothold_gain",
+              "max_foothold_correction", "plan_file"});
   GaitConfig& g = c.gait;
   GaitGeneratorOptions& gen = c.generator;
-  for (const char* name : {"trot", "walk", "pace"}) g.timing[name] = GaitTiming{};
+  for (const char* name : kTimed) g.timing[name] = GaitTiming{};
   if (gait) {
-    for (const char* name : {"trot", "walk", "pace"}) {
+    for (const char* name : kTimed) {
       const YAML::Node t = gait[name];
       const std::string where = std::string("gait.") + name;
-      r.onlyKeys(t, where, {"support", "swing"});
+      // A gait with flights is timed by its stances and flights, a walking gait by its all-feet
+      // phases and swings (locomotion/gait.hpp).
+      const char* second = hasFlight(name) ? "flight" : "swing";
+      r.onlyKeys(t, where, {"support", second});
       if (!t) continue;
+      double& other = hasFlight(name) ? g.timing[name].flight : g.timing[name].swing;
       r.get(t, "support", where, g.timing[name].support);
-      r.get(t, "swing", where, g.timing[name].swing);
+      r.get(t, second, where, other);
       r.positive(g.timing[name].support, where + ".support");
-      r.positive(g.timing[name].swing, where + ".swing");
+      r.positive(other, where + "." + second);
     }
     r.get(gait, "foothold_gain", "gait", gen.foothold_gain);
     r.get(gait, "max_foothold_correction", "gait", gen.max_foothold_correction);

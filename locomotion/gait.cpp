@@ -8,9 +8,13 @@
 namespace stride {
 
 std::vector<std::string> gaitNames(int contacts) {
-  if (contacts == 4) return {"stand", "trot", "walk", "pace"};
-  if (contacts == 2) return {"stand", "walk"};
+  if (contacts == 4) return {"stand", "trot", "walk", "pace", "pronk", "bound", "flying_trot"};
+  if (contacts == 2) return {"stand", "walk", "hop"};
   return {"stand"};
+}
+
+bool hasFlight(const std::string& gait) {
+  return gait == "pronk" || gait == "bound" || gait == "flying_trot" || gait == "hop";
 }
 
 ContactPlan makeGaitPattern(const std::string& gait, const GaitTiming& timing,
@@ -20,9 +24,11 @@ ContactPlan makeGaitPattern(const std::string& gait, const GaitTiming& timing,
   if (std::find(known.begin(), known.end(), gait) == known.end())
     throw ConfigError("gait '" + gait + "' is not one a robot with " + std::to_string(nc) +
                       " contacts walks with");
-  if (!(timing.support > 0.0) || !(timing.swing > 0.0) || !std::isfinite(timing.support) ||
-      !std::isfinite(timing.swing))
-    throw ConfigError("gait '" + gait + "': support and swing must be positive");
+  const double second = hasFlight(gait) ? timing.flight : timing.swing;
+  if (!(timing.support > 0.0) || !(second > 0.0) || !std::isfinite(timing.support) ||
+      !std::isfinite(second))
+    throw ConfigError("gait '" + gait + "': support and " + (hasFlight(gait) ? "flight" : "swing") +
+                      " must be positive");
   std::vector<std::string> all;
   for (const ContactSpec& c : contacts) all.push_back(c.frame);
   auto without = [&](std::initializer_list<int> lifted) {
@@ -33,9 +39,15 @@ ContactPlan makeGaitPattern(const std::string& gait, const GaitTiming& timing,
   };
   ContactPlan plan;
   plan.cyclic = true;
-  const double s = timing.support, w = timing.swing;
+  const double s = timing.support, w = timing.swing, f = timing.flight;
   if (gait == "stand") {
     plan.phases = {{s, all}};
+  } else if (gait == "pronk" || gait == "hop") {
+    plan.phases = {{s, all}, {f, {}}};
+  } else if (gait == "bound") {
+    plan.phases = {{s, without({2, 3})}, {f, {}}, {s, without({0, 1})}, {f, {}}};
+  } else if (gait == "flying_trot") {
+    plan.phases = {{s, without({1, 2})}, {f, {}}, {s, without({0, 3})}, {f, {}}};
   } else if (gait == "trot") {
     plan.phases = {{s, all}, {w, without({0, 3})}, {s, all}, {w, without({1, 2})}};
   } else if (gait == "pace") {

@@ -36,6 +36,11 @@ const Eigen::Vector2d kNoPlace =
     Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
 // A base reference slower than this [m/s] has no direction of travel for the footholds.
 constexpr double kStill = 0.01;
+// On the ground next to a flight (flightLift): how long the base's vertical reference takes to go
+// from the nominal height into a take-off's crouch or back from a landing's [s], and the least
+// crouch depth [m].
+constexpr double kPushTime = 0.2;
+constexpr double kMinCrouch = 0.04;
 // Feet a generator plans for: the contact limit (the ground plane's fit takes them on the stack).
 constexpr int kMaxFeet = kMaxContacts;
 
@@ -455,7 +460,113 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
     }
     n_stances_[c] = count;
   }
+  planFlights(t_from, t_end);
   return true;
+}
+
+void GaitGenerator::planFlights(double t_from, double t_end) {
+  // The flights that ended within a landing's braking and return before t_from stay (the landing
+  // in progress needs its speed); those still ahead are found again (a gait switch may have moved
+  // them).
+  int kept = 0;
+  for (int k = 0; k < n_flights_; ++k)
+    if (flights_[k].touch_down <= t_from + kPlanTimeEpsilon &&
+        flights_[k].touch_down > t_from - 2.0 * kPushTime)
+      flights_[kept++] = flights_[k];
+  n_flights_ = kept;
+  // A flight starts when the last foot lifts: at some foot's lift-off (or before t_from, when the
+  // robot is in the air there), and ends at the first touch-down after it.
+  auto add = [&](double lift_off) {
+    double touch_down = ContactTimeline::kNever;
+    for (int c = 0; c < nc_; ++c)
+      touch_down = std::min(touch_down, timeline_.nextChange(c, lift_off));
+    for (int k = 0; k < n_flights_; ++k)
+      if (std::abs(flights_[k].lift_off - lift_off) < kPlanTimeEpsilon) return;
+    if (n_flights_ == kMaxFlights || touch_down == ContactTimeline::kNever) return;
+    // In time order (a handful: insertion).
+    int k = n_flights_++;
+    for (; k > 0 && flights_[k - 1].lift_off > lift_off; --k) flights_[k] = flights_[k - 1];
+    flights_[k] = {lift_off, touch_down};
+  };
+  if (timeline_.mask(t_from) == 0u) {
+    double lift_off = -ContactTimeline::kNever;
+    for (int c = 0; c < nc_; ++c) lift_off = std::max(lift_off, timeline_.lastChange(c, t_from));
+    add(lift_off);
+  }
+  for (int c = 0; c < nc_; ++c)
+    for (int i = 0; i < n_stances_[c]; ++i) {
+      const double lift_off = stances_[c][i].lift_off;
+      if (lift_off > t_from && lift_off <= t_end + kLookahead &&
+          lift_off < ContactTimeline::kNever && timeline_.mask(lift_off) == 0u)
+        add(lift_off);
+    }
+}
+
+double GaitGenerator::flightLift(double t, double& vz) const {
+  vz = 0.0;
+  if (n_flights_ == 0) return 0.0;
+  // The robot leaves the ground and meets it with its legs stretched as far as the body-height
+  // postures reach (max_height above the nominal): a take-off from the nominal crouch pushed the
+  // base through less than the legs have, and the torque-limited quadrupeds rose no higher than
+  // they stand.
+  const double e = options_.max_height;
+  // In flight the base follows the ballistic arc from take-off to touch-down: z = e + ½ g (t - a)
+  // (b - t), vz = ½ g (a + b - 2t).
+  int next = 0;  // the first flight that has not ended by t
+  while (next < n_flights_ && flights_[next].touch_down <= t) ++next;
+  if (next < n_flights_ && flights_[next].lift_off < t) {
+    const double a = flights_[next].lift_off, b = flights_[next].touch_down;
+    vz = 0.5 * kGravity * (a + b - 2.0 * t);
+    return e + 0.5 * kGravity * (t - a) * (b - t);
+  }
+  // On the ground between a touch-down at `a` and a take-off at `b` (either may be missing): the
+  // landing brakes from the speed the robot fell at, ½ g (flight time), to rest at a constant
+  // deceleration over a crouch of depth D, the take-off pushes from rest to the next flight's
+  // speed at a constant acceleration over the same depth, and in between the base moves between
+  // those crouches (or back to its level on a longer stance) on smooth cubics of kPushTime. The
+  // depth is the posture range, 2 max_height (at least kMinCrouch), or less when the stance is too
+  // short for both at that depth (then S v / 4 for equal speeds: a constant force, a pronk's
+  // spring). A stance-long cubic from the landing's speed to the take-off's, tried first, crouched
+  // by S v / 4 on every stance: 9 cm for a 0.3 s stance at 1.2 m/s, beyond the legs' torque.
+  const bool has_in = next > 0, has_out = next < n_flights_;
+  const double a = has_in ? flights_[next - 1].touch_down : -ContactTimeline::kNever;
+  const double b = has_out ? flights_[next].lift_off : ContactTimeline::kNever;
+  const double v_in =
+      has_in ? 0.5 * kGravity * (flights_[next - 1].touch_down - flights_[next - 1].lift_off) : 0.0;
+  const double v_out =
+      has_out ? 0.5 * kGravity * (flights_[next].touch_down - flights_[next].lift_off) : 0.0;
+  const double depth = std::max(2.0 * options_.max_height, kMinCrouch);
+  // (A slow landing or take-off, a short flight's, crouches less: at most kPushTime at rest.)
+  double d_in = has_in ? std::min(depth, 0.5 * v_in * kPushTime) : 0.0;
+  double d_out = has_out ? std::min(depth, 0.5 * v_out * kPushTime) : 0.0;
+  double tau_in = d_in > 0.0 ? 2.0 * d_in / v_in : 0.0;
+  double tau_out = d_out > 0.0 ? 2.0 * d_out / v_out : 0.0;
+  if (has_in && has_out && tau_in + tau_out > b - a) {
+    const double k = (b - a) / (tau_in + tau_out);
+    d_in *= k, d_out *= k, tau_in *= k, tau_out *= k;
+  }
+  if (tau_in > 0.0 && t < a + tau_in) {  // braking
+    const double u = t - a, acc = v_in / tau_in;
+    vz = -v_in + acc * u;
+    return e - v_in * u + 0.5 * acc * u * u;
+  }
+  if (tau_out > 0.0 && t > b - tau_out) {  // pushing
+    const double u = t - (b - tau_out), acc = v_out / tau_out;
+    vz = acc * u;
+    return e - d_out + 0.5 * acc * u * u;
+  }
+  // Between the crouches: z0 at t0 to z1 at t1, at rest at both ends.
+  auto smooth = [&vz](double t, double t0, double t1, double z0, double z1) {
+    const double span = t1 - t0, u = std::clamp((t - t0) / span, 0.0, 1.0);
+    vz = (z1 - z0) * 6.0 * u * (1.0 - u) / span;
+    return z0 + (z1 - z0) * u * u * (3.0 - 2.0 * u);
+  };
+  const double from = a + tau_in, to = b - tau_out;  // (infinite without a flight on that side)
+  const double z_from = has_in ? e - d_in : 0.0, z_to = has_out ? e - d_out : 0.0;
+  if (to - from <= 2.0 * kPushTime) return to > from ? smooth(t, from, to, z_from, z_to) : z_to;
+  if (t < from + kPushTime) return smooth(t, from, from + kPushTime, z_from, 0.0);
+  if (t > to - kPushTime) return smooth(t, to - kPushTime, to, 0.0, z_to);
+  return 0.0;
 }
 
 int GaitGenerator::stanceAt(int contact, double t, double& s) const {
@@ -552,7 +663,9 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
   x_ref[0] = s.x;
   x_ref[1] = s.y;
   const Ground ground = groundAt(t);
-  x_ref[2] = z_nominal_ + s.height + ground.height;
+  double vz = 0.0;
+  const double lift = flightLift(t, vz);
+  x_ref[2] = z_nominal_ + s.height + ground.height + lift;
   // The body tilts with the ground under the feet (flat: exactly the nominal tilt).
   const Eigen::Quaterniond o = Eigen::Quaterniond(alignZ(ground.normal)) *
                                Eigen::AngleAxisd(s.yaw, Eigen::Vector3d::UnitZ()) * tilt_;
@@ -560,23 +673,25 @@ void GaitGenerator::state(double t, Eigen::Ref<Eigen::VectorXd> x_ref) const {
   // The joints of the posture for the commanded height (interpolated between the solved ones).
   const int n = static_cast<int>(crouch_.size());
   if (n > 1) {
-    const PostureBlend b = postureBlend(s.height, options_.max_height, n);
+    const PostureBlend b = postureBlend(s.height + lift, options_.max_height, n);
     x_ref.segment(7, nq - 7) =
         (1.0 - b.weight) * crouch_[b.lower] + b.weight * crouch_[b.lower + 1];
   }
   // The twist in the base frame: the heading frame's, seen through the nominal tilt.
   const Eigen::Matrix3d untilt = tilt_.conjugate().toRotationMatrix();
-  x_ref.segment<3>(nq) = untilt * Eigen::Vector3d(s.vx, s.vy, 0.0);
+  x_ref.segment<3>(nq) = untilt * Eigen::Vector3d(s.vx, s.vy, vz);
   x_ref.segment<3>(nq + 3) = untilt * Eigen::Vector3d(0.0, 0.0, s.wz);
 }
 
 Eigen::Vector3d GaitGenerator::basePosition(double t) const {
   const Sample s = baseAt(t);
-  return {s.x, s.y, z_nominal_ + s.height + groundAt(t).height};
+  double vz;
+  return {s.x, s.y, z_nominal_ + s.height + groundAt(t).height + flightLift(t, vz)};
 }
 
 double GaitGenerator::height(double t) const {
-  return baseAt(t).height;
+  double vz;
+  return baseAt(t).height + flightLift(t, vz);
 }
 
 double GaitGenerator::baseYaw(double t) const {
@@ -587,7 +702,9 @@ Eigen::Vector3d GaitGenerator::com(double t) const {
   const Sample s = baseAt(t);
   const Eigen::Vector2d xy =
       Eigen::Vector2d(s.x, s.y) + rotate(s.yaw, com_offset_.x(), com_offset_.y());
-  return {xy.x(), xy.y(), z_nominal_ + s.height + groundAt(t).height + com_offset_.z()};
+  double vz;
+  return {xy.x(), xy.y(),
+          z_nominal_ + s.height + groundAt(t).height + com_offset_.z() + flightLift(t, vz)};
 }
 
 }  // namespace stride

@@ -18,7 +18,11 @@
 // command changed: the swing costs of the warm start jumped 100-fold, one iteration per tick left
 // gaps for several ticks, and the torque-limited quadruped fell in 11 of 81 perturbed starts and
 // reversals that this passes; controller/README.md, "Commands".) Height and tilt are the nominal
-// posture's (plus the height offset); the base velocity reference is the command.
+// posture's (plus the height offset); the base velocity reference is the command. In a flight
+// (every foot in the air, issue 45) the height follows the ballistic arc between take-off and
+// touch-down and the vertical velocity its slope, and on the ground next to a flight it brakes the
+// landing and pushes for the take-off (flightLift): a level reference would have the state cost
+// fight the arc that the momentum, conserved in flight, makes anyway.
 //
 // Footholds (Raibert's heuristic, on the reference instead of the hip's current position): a
 // touch-down at t_td that lasts until lift-off t_lo lands under the foot's nominal stance position
@@ -196,9 +200,10 @@ class GaitGenerator {
   Eigen::Vector3d com(double t) const;
   // The base reference at t: position, yaw.
   Eigen::Vector3d basePosition(double t) const;
-  // The body height offset commanded at t (the command's, over the ground under the feet; the
-  // base's reference height is the nominal one plus it plus the ground's): the posture the joints'
-  // and the control's references hold (postureBlend).
+  // The body height offset at t: the command's, plus the vertical profile next to and in a
+  // flight (flightLift), over the ground under the feet (the base's reference height is the
+  // nominal one plus it plus the ground's): the posture the joints' and the control's references
+  // hold (postureBlend; in flight the highest, the legs stretched for the landing).
   double height(double t) const;
   // The ground the feet feel, blind (options.ground_time_constant), beyond the dead bands: its
   // height at the centroid of the feet down [m] and its slope (dz/dx, dz/dy); every blind
@@ -224,6 +229,17 @@ class GaitGenerator {
     bool near_edge = false;
   };
   int stances(int contact) const { return n_stances_[contact]; }
+  // The flights planned (every foot in the air) from the window's start: take-off, touch-down.
+  struct Flight {
+    double lift_off, touch_down;
+  };
+  static constexpr int kMaxFlights = 16;
+  int flights() const { return n_flights_; }
+  const Flight& flight(int i) const { return flights_[i]; }
+  // The base's height above its level reference at t, and its vertical velocity: on a flight's
+  // ballistic arc, and on the ground next to one a landing's braking and a take-off's push (0 away
+  // from flights).
+  double flightLift(double t, double& vz) const;
   const Stance& stance(int contact, int i) const { return stances_[contact][i]; }
   // A foot's nominal stance position relative to the base, in the heading frame.
   const Eigen::Vector3d& stanceOffset(int contact) const { return offset_[contact]; }
@@ -257,6 +273,7 @@ class GaitGenerator {
   // The stance in force (or last lifted from) at t, and how far along the swing to the next one
   // t is (0 while down, 1 when landed; -1 when no next stance is known).
   int stanceAt(int contact, double t, double& s) const;
+  void planFlights(double t_from, double t_end);
 
   const Model& model_;
   ContactTimeline timeline_;
@@ -308,6 +325,8 @@ class GaitGenerator {
   int n_samples_ = 0;
   std::vector<std::vector<Stance>> stances_;
   std::vector<int> n_stances_;
+  Flight flights_[kMaxFlights];
+  int n_flights_ = 0;
 };
 
 }  // namespace stride

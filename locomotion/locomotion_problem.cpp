@@ -55,7 +55,10 @@ void checkOptions(const Model& model, const Eigen::VectorXd& x_nominal,
 
 // The torques that hold posture q still on each contact mask: g(q) = Sᵀ u + Jcᵀ λ at rest; the
 // base rows fix λ (minimum norm among the forces that carry the weight), the joint rows then give
-// u.
+// u. With no contact closed (flight) the body falls as one in the uniform gravity field, and the
+// torque that holds a posture is zero: a free-floating base's g(q) = -M a_g for the base's
+// spatial acceleration a_g = -g, so M v̇ + g(q) = Sᵀ u holds with v̇ = a_g and u = 0. (The
+// fixed-base gravity torques g(q)'s joint rows would fling the legs in flight: issue 45.)
 std::vector<Eigen::VectorXd> holdingTorques(const Model& model, const ContactSet& contacts,
                                             const Eigen::VectorXd& q) {
   const int nv = model.nv, nu = actuatedDimension(model), nc = contacts.size();
@@ -69,6 +72,7 @@ std::vector<Eigen::VectorXd> holdingTorques(const Model& model, const ContactSet
   for (unsigned mask = 0; mask < (1u << nc); ++mask) {
     for (int c = 0; c < nc; ++c) set.setActive(c, (mask >> c) & 1u);
     Eigen::VectorXd u = g.tail(nu);
+    if (na > 0 && set.nc() == 0) u.setZero();
     if (na > 0 && set.nc() > 0 &&
         contactDynamics(model, data, set, cd, q, zero, zero) == ContactStatus::Ok) {
       const Eigen::MatrixXd Jc = cd.Jc.topRows(set.nc());

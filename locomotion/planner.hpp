@@ -35,7 +35,7 @@ class Solver;  // solver/ddp/solver.hpp: replan() carries its warm start onto th
 // How the robot steps: the timing of each gait (locomotion/gait.hpp), or a planner's plan file.
 // Times in s.
 struct GaitConfig {
-  std::map<std::string, GaitTiming> timing;  // by gait name: trot, walk, pace
+  std::map<std::string, GaitTiming> timing;  // by gait name: trot, walk, pace, pronk, ...
   std::string plan_file;  // a contact plan file instead of the gaits (resolved path)
 };
 

@@ -45,7 +45,7 @@
 #                     `--commands none`: no command source, the robot stands until you send
 #                     commands yourself (the demo prints how; default duration 60 s)
 #   --teleop          drive from the keyboard instead (real time, no time limit): arrows / WASD,
-#                     Q/E turn, space stands, 1-4 gaits, x or Ctrl-C quits and ends the demo
+#                     Q/E turn, space stands, 1-7 gaits, x or Ctrl-C quits and ends the demo
 #   --duration S      seconds of robot time (default: the script's last entry + 4 s)
 #   --realtime        wall clock: the sim at 1 kHz, the controller at its rate, each on its own
 #                     core (the default for every robot)

@@ -85,6 +85,15 @@ inline ContactPlan soloTrot(double support = 0.1, double swing = 0.2) {
   return plan;
 }
 
+// Two pronk jumps (issue 45): standing 0.3 s, 0.2 s in the air, 0.3 s down, 0.2 s in the air,
+// then down.
+inline ContactPlan soloPronk() {
+  const std::vector<std::string> all = {"FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"};
+  ContactPlan plan;
+  plan.phases = {{0.3, all}, {0.2, {}}, {0.3, all}, {0.2, {}}, {1.0, all}};
+  return plan;
+}
+
 // One step of the left foot: double support, single support on the right sole, double support.
 inline ContactPlan talosStep() {
   ContactPlan plan;
@@ -152,13 +161,15 @@ struct Case {
   }
 };
 
-enum class Problem { SoloStand, SoloTrot, TalosStand, TalosStep };
+enum class Problem { SoloStand, SoloTrot, SoloPronk, TalosStand, TalosStep };
 inline const char* name(Problem p) {
   switch (p) {
     case Problem::SoloStand:
       return "solo12_stand";
     case Problem::SoloTrot:
       return "solo12_trot";
+    case Problem::SoloPronk:
+      return "solo12_pronk";
     case Problem::TalosStand:
       return "talos_stand";
     case Problem::TalosStep:
@@ -171,7 +182,7 @@ inline const char* name(Problem p) {
 inline Case make(Problem p, const std::string& shared,
                  const std::function<void(LocomotionOptions&)>& adjust = {}) {
   Case c;
-  const bool solo = p == Problem::SoloStand || p == Problem::SoloTrot;
+  const bool solo = p == Problem::SoloStand || p == Problem::SoloTrot || p == Problem::SoloPronk;
   c.robot = solo ? solo12(shared) : talos(shared);
   LocomotionOptions o = solo ? soloOptions() : talosOptions();
   ContactPlan plan;
@@ -181,6 +192,9 @@ inline Case make(Problem p, const std::string& shared,
       break;
     case Problem::SoloTrot:
       plan = soloTrot();
+      break;
+    case Problem::SoloPronk:
+      plan = soloPronk();
       break;
     case Problem::TalosStand:
       o.knots = 50;

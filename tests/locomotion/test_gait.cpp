@@ -1,6 +1,6 @@
 // The gaits as contact patterns (locomotion/gait.hpp): each gait's phases for a quadruped and a
-// biped, the gaits refused for the contacts or the timing; a contact plan file and its errors.
-// What the controller makes of a plan file: tests/controller/test_mpc.cpp.
+// biped (with flights too), the gaits refused for the contacts or the timing; a contact plan file
+// and its errors. What the controller makes of a plan file: tests/controller/test_mpc.cpp.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -16,10 +16,11 @@ namespace test_gait {
 TEST(Gait, Patterns) {
   const Robot quad =
       loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_quad/stride_quad.yaml");
-  EXPECT_EQ(gaitNames(4), (std::vector<std::string>{"stand", "trot", "walk", "pace"}));
-  EXPECT_EQ(gaitNames(2), (std::vector<std::string>{"stand", "walk"}));
+  EXPECT_EQ(gaitNames(4), (std::vector<std::string>{"stand", "trot", "walk", "pace", "pronk",
+                                                    "bound", "flying_trot"}));
+  EXPECT_EQ(gaitNames(2), (std::vector<std::string>{"stand", "walk", "hop"}));
   EXPECT_EQ(gaitNames(3), (std::vector<std::string>{"stand"}));
-  const GaitTiming timing{0.1, 0.2};
+  const GaitTiming timing{0.1, 0.2, 0.15};
   auto lifted = [&](const ContactPlan& plan, double t) {
     std::string up;
     for (const auto& c : quad.contacts)
@@ -44,6 +45,22 @@ TEST(Gait, Patterns) {
   EXPECT_EQ(lifted(walk, 1.05), "FR ");
   const ContactPlan stand = makeGaitPattern("stand", timing, quad.contacts);
   EXPECT_EQ(lifted(stand, 12.3), "");
+  // With flights (issue 45): stances of `support`, flights of `flight`.
+  const ContactPlan pronk = makeGaitPattern("pronk", timing, quad.contacts);
+  EXPECT_DOUBLE_EQ(pronk.duration(), 0.25);
+  EXPECT_EQ(lifted(pronk, 0.05), "");
+  EXPECT_EQ(lifted(pronk, 0.2), "FL FR HL HR ");
+  const ContactPlan bound = makeGaitPattern("bound", timing, quad.contacts);
+  EXPECT_DOUBLE_EQ(bound.duration(), 0.5);
+  EXPECT_EQ(lifted(bound, 0.05), "HL HR ");  // the front pair down
+  EXPECT_EQ(lifted(bound, 0.2), "FL FR HL HR ");
+  EXPECT_EQ(lifted(bound, 0.3), "FL FR ");
+  EXPECT_EQ(lifted(bound, 0.45), "FL FR HL HR ");
+  const ContactPlan flying = makeGaitPattern("flying_trot", timing, quad.contacts);
+  EXPECT_EQ(lifted(flying, 0.05), "FR HL ");  // the FL-HR pair down
+  EXPECT_EQ(lifted(flying, 0.2), "FL FR HL HR ");
+  EXPECT_EQ(lifted(flying, 0.3), "FL HR ");
+  EXPECT_THROW(makeGaitPattern("pronk", GaitTiming{0.1, 0.2, 0.0}, quad.contacts), ConfigError);
 
   const Robot biped =
       loadRobot(std::string(STRIDE_CONFIG_DIR) + "/robots/stride_humanoid/stride_humanoid.yaml");
@@ -51,7 +68,12 @@ TEST(Gait, Patterns) {
   EXPECT_TRUE(steps.isClosed("R_sole", 0.15));
   EXPECT_FALSE(steps.isClosed("L_sole", 0.15));
   EXPECT_FALSE(steps.isClosed("R_sole", 0.45));
+  const ContactPlan hop = makeGaitPattern("hop", timing, biped.contacts);
+  EXPECT_TRUE(hop.isClosed("L_sole", 0.05) && hop.isClosed("R_sole", 0.05));
+  EXPECT_FALSE(hop.isClosed("L_sole", 0.2) || hop.isClosed("R_sole", 0.2));
   EXPECT_THROW(makeGaitPattern("trot", timing, biped.contacts), ConfigError);
+  EXPECT_THROW(makeGaitPattern("bound", timing, biped.contacts), ConfigError);
+  EXPECT_THROW(makeGaitPattern("hop", timing, quad.contacts), ConfigError);
   EXPECT_THROW(makeGaitPattern("gallop", timing, quad.contacts), ConfigError);
   EXPECT_THROW(makeGaitPattern("trot", GaitTiming{0.0, 0.2}, quad.contacts), ConfigError);
 }

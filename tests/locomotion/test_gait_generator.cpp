@@ -617,6 +617,64 @@ TEST(GaitGenerator, TheHorizonHoldsTheCommandInForce) {
   EXPECT_NEAR(g->basePosition(0.8).x(), 0.16, 1e-12);
 }
 
+// A pronk (issue 45): 0.3 s on all feet, 0.2 s in the air. The base reference takes off and lands
+// with the legs stretched (max_height above the nominal height), follows the ballistic arc in the
+// air and, on the ground, brakes the landing to rest at a constant deceleration over a crouch of
+// 2 max_height (at least 4 cm), and pushes from that crouch to the next take-off's speed alike;
+// its vertical velocity is the height's derivative throughout (continuous at take-off and
+// touch-down). Before the first flight it crouches from its level in 0.2 s, then pushes.
+TEST(GaitGenerator, FlightsFollowTheBallisticArc) {
+  GaitGeneratorOptions o = hand();
+  o.max_height = 0.02;
+  ContactPlan pronk;
+  pronk.cyclic = true;
+  pronk.phases = {{0.3, feetExcept({})}, {0.2, feetExcept({FL, FR, HL, HR})}};
+  Generator g(o, pronk);
+  const Quad& r = quad();
+  ASSERT_TRUE(g->plan(0.0, r.x_nominal, 0.0, 1.0));
+  ASSERT_GE(g->flights(), 2);
+  EXPECT_NEAR(g->flight(0).lift_off, 0.3, kTime);
+  EXPECT_NEAR(g->flight(0).touch_down, 0.5, kTime);
+  EXPECT_NEAR(g->flight(1).lift_off, 0.8, kTime);
+  const double z0 = r.x_nominal[2], e = 0.02, grav = 9.81, v = 0.5 * grav * 0.2;
+  const int nq = r.robot.model.nq;
+  Eigen::VectorXd x(r.x_nominal.size());
+  auto z = [&](double t) {
+    g->state(t, x);
+    return x[2];
+  };
+  auto vz = [&](double t) {
+    g->state(t, x);
+    return x[nq + 2];  // the nominal tilt is level: the base frame's z is the world's
+  };
+  // The crouch: 4 cm below the take-off height, reached at rest 2 (4 cm) / v after a touch-down.
+  const double crouch = e - 0.04, brake = 2.0 * 0.04 / v;
+  EXPECT_NEAR(z(0.01), z0, 1e-12);  // standing, before the crouch (from 0.3 - brake - 0.2)
+  EXPECT_NEAR(vz(0.01), 0.0, 1e-12);
+  EXPECT_NEAR(z(0.3 - brake), z0 + crouch, 1e-9);  // the push starts from it
+  EXPECT_NEAR(z(0.5 + brake), z0 + crouch, 1e-9);  // the landing's braking ends in it
+  EXPECT_NEAR(vz(0.5 + brake), 0.0, 1e-9);
+  EXPECT_NEAR(z(0.3), z0 + e, 1e-9);                           // take-off
+  EXPECT_NEAR(z(0.4), z0 + e + 0.5 * grav * 0.1 * 0.1, 1e-9);  // the apex
+  EXPECT_NEAR(vz(0.4), 0.0, 1e-9);
+  EXPECT_NEAR(vz(0.3 + 1e-9), v, 1e-6);  // the take-off speed, on both sides
+  EXPECT_NEAR(vz(0.3 - 1e-9), v, 1e-6);
+  EXPECT_NEAR(vz(0.5 - 1e-9), -v, 1e-6);  // landing
+  EXPECT_NEAR(vz(0.5 + 1e-9), -v, 1e-6);
+  EXPECT_NEAR(z(0.65), z0 + crouch, 1e-9);  // held between the flights
+  // The braking's deceleration is v² / (2 (4 cm)), constant.
+  EXPECT_NEAR((vz(0.52) - vz(0.51)) / 0.01, v * v / 0.08, 1e-6);
+  // The vertical velocity is the height's slope everywhere but at the phase boundaries.
+  for (double t = 0.013; t < 1.0; t += 0.01) {
+    const double h = 1e-6, slope = (z(t + h) - z(t - h)) / (2.0 * h);
+    EXPECT_NEAR(vz(t), slope, 1e-5) << t;
+  }
+  // The posture follows (postureBlend clamps it to the range): in the air the highest body
+  // height's (the legs stretched), standing before the crouch the nominal one.
+  EXPECT_NEAR(g->height(0.4), e + 0.5 * grav * 0.1 * 0.1, 1e-9);
+  EXPECT_NEAR(g->height(0.01), 0.0, 1e-12);
+}
+
 TEST(GaitGenerator, BodyHeightOfTheCommandInForce) {
   const Nominal n;
   const Quad& r = quad();

@@ -16,6 +16,9 @@
 #include "locomotion_cases.hpp"
 #include "solver/contact/contact_dynamics.hpp"
 #include "solver/ddp/solver.hpp"
+#include "solver/multibody/aba.hpp"
+#include "solver/multibody/centroidal.hpp"
+#include "solver/multibody/lie_group.hpp"
 #include "solver/ocp/residual_frame.hpp"
 #include "solver/ocp/residual_state.hpp"
 #include "terrain/steppability.hpp"
@@ -341,6 +344,28 @@ TEST(LocomotionProblem, OnStairsTheControlReferenceHoldsTheCommandedHeight) {
 // A non-uniform grid (LocomotionOptions::grid): the first segment's knots from t0, then each
 // longer segment from its first boundary on the plan clock, so the long knots sit at fixed plan
 // times from tick to tick; weights scale with the duration; impulse knots take no time.
+// In flight (no contact closed) the torque that holds a posture is zero (issue 45): the whole body
+// then falls at g with every joint still (ABA of the posture at rest, u = 0), where the fixed-base
+// gravity torques the table held before swung the legs.
+TEST(LocomotionProblem, FlightHoldsAPostureWithZeroTorque) {
+  Case c = loco_cases::make(Problem::SoloTrot, kShared);
+  const loco_cases::Robot& r = *c.robot;
+  const int nq = r.model.nq, nv = r.model.nv;
+  EXPECT_EQ(c.loco->holdingControl(0u).cwiseAbs().maxCoeff(), 0.0);
+  Data data(r.model);
+  const Eigen::VectorXd q = r.x_nominal.head(nq);
+  const Eigen::VectorXd a =
+      aba(r.model, data, q, Eigen::VectorXd::Zero(nv), Eigen::VectorXd::Zero(nv));
+  // The base's linear acceleration in its own frame is gravity rotated into it.
+  const Eigen::Quaterniond o(q[6], q[3], q[4], q[5]);
+  const Eigen::Vector3d g_base = o.conjugate() * Eigen::Vector3d(0.0, 0.0, -9.81);
+  EXPECT_LT((a.head<3>() - g_base).norm(), 1e-9);
+  EXPECT_LT(a.segment<3>(3).norm(), 1e-9);
+  EXPECT_LT(a.tail(nv - 6).cwiseAbs().maxCoeff(), 1e-9);
+  // With every foot down the table still holds the stance's torques (not zero).
+  EXPECT_GT(c.loco->holdingControl(0xfu).cwiseAbs().maxCoeff(), 0.1);
+}
+
 TEST(LocomotionProblem, GridKnotsSitAtFixedPlanTimes) {
   const std::vector<KnotSegment> grid = {{10, 0.01}, {10, 0.02}, {15, 0.03}};
   Case c =
@@ -561,6 +586,81 @@ TEST_P(LocomotionSolve, FddpConvergesToAFeasibleGait) {
     EXPECT_GE(m.lowest_apex, 0.5 * c.ref->options().swing_height);
     EXPECT_LT(m.max_landing, 5e-3);
   }
+}
+
+// In flight (no contact closed) the planned motion has only gravity on it (issue 45): at every
+// flight knot the rate of the centroidal momentum, from the knot's state and the acceleration its
+// dynamics gave (v_{k+1} = v_k + dt a_k, semi-implicit Euler), is the weight's, (m g, 0): the
+// linear momentum falls by m g per second and the angular momentum about the centre of mass does
+// not change. Over the flight the centre of mass follows its take-off velocity's ballistic arc, to
+// the Euler steps' first-order error.
+TEST(LocomotionSolve, FlightKnotsConserveCentroidalMomentum) {
+  Case c = loco_cases::make(Problem::SoloPronk, kShared);
+  LocomotionProblem& loco = *c.loco;
+  Solver solver(loco.problem(), SolverKind::Fddp);
+  if (std::getenv("STRIDE_DEBUG")) solver.callback = Solver::printIterationTable;
+  solveFromStanding(c, solver, 100);
+  EXPECT_LT(solver.gap(), 1e-9);
+  const Model& model = c.robot->model;
+  const int nq = model.nq, nv = model.nv, T = loco.problem().horizon();
+  const double m = model.totalMass(), g = 9.81;
+  Data data(model);
+  auto state = [&](int k, Eigen::Vector3d& com, Eigen::Vector3d& vcom) {
+    const Eigen::VectorXd& x = solver.xs()[k];
+    computeCentroidalMomentum(model, data, x.head(nq), x.tail(nv));
+    com = data.com;
+    vcom = data.vcom;
+  };
+  // dh/dt at (q, v) moving with acceleration a: central differences along the motion.
+  auto rate = [&](const Eigen::VectorXd& q, const Eigen::VectorXd& v, const Eigen::VectorXd& a) {
+    const double eps = 1e-6;
+    const Vector6d up =
+        computeCentroidalMomentum(model, data, integrate(model, q, eps * v), v + eps * a);
+    const Vector6d down =
+        computeCentroidalMomentum(model, data, integrate(model, q, -eps * v), v - eps * a);
+    return ((up - down) / (2.0 * eps)).eval();
+  };
+  Vector6d weight = Vector6d::Zero();
+  weight[2] = -m * g;
+  int flights = 0, flight_knots = 0;
+  double worst_rate = 0.0, worst_landing = 0.0, highest_rise = 0.0;
+  for (int k = 1; k < T; ++k) {
+    // A flight: contact knots with no contact closed from k on; knot `end` touches down.
+    if (loco.contactMask(k) != 0u || loco.contactMask(k - 1) == 0u) continue;
+    int end = k;
+    while (end < T && loco.contactMask(end) == 0u) ++end;
+    ++flights;
+    for (int j = k; j < end; ++j) {
+      const Eigen::VectorXd& x = solver.xs()[j];
+      const double dt = loco.knotTime(j + 1) - loco.knotTime(j);
+      const Eigen::VectorXd a = (solver.xs()[j + 1].tail(nv) - x.tail(nv)) / dt;
+      worst_rate = std::max(worst_rate, (rate(x.head(nq), x.tail(nv), a) - weight).norm());
+      ++flight_knots;
+    }
+    Eigen::Vector3d c0, v0, c1, v1;
+    state(k, c0, v0);
+    state(end, c1, v1);
+    const double t_air = loco.knotTime(end) - loco.knotTime(k);
+    const Eigen::Vector3d ballistic =
+        c0 + t_air * v0 + 0.5 * t_air * t_air * Eigen::Vector3d(0.0, 0.0, -g);
+    worst_landing = std::max(worst_landing, (c1 - ballistic).norm());
+    highest_rise = std::max(highest_rise, v0.z() * v0.z() / (2.0 * g));
+    std::printf(
+        "flight from %.3f s for %.3f s: take-off CoM velocity (%.3f %.3f %.3f) m/s, landed "
+        "%.2e m from its ballistic point\n",
+        loco.knotTime(k), t_air, v0.x(), v0.y(), v0.z(), (c1 - ballistic).norm());
+  }
+  std::printf("%d flights, %d knots: |dh/dt - (m g, 0)| <= %.2e (m g = %.2f N)\n", flights,
+              flight_knots, worst_rate, m * g);
+  EXPECT_EQ(flights, 2);
+  EXPECT_GE(flight_knots, 30);
+  // A contact force left on in flight would be of the order of m g.
+  EXPECT_LT(worst_rate, 1e-5 * m * g);
+  // The centre of mass moves by dt v_{k+1} per Euler step: off the exact arc by ½ g dt t_air,
+  // 1 cm for 0.2 s of 10 ms steps (plus the base's rotation, small here).
+  EXPECT_LT(worst_landing, 0.5 * g * 0.01 * 0.2 + 3e-3);
+  // It jumps: the take-off speed carries the centre of mass up by several centimetres.
+  EXPECT_GT(highest_rise, 0.03);
 }
 
 INSTANTIATE_TEST_SUITE_P(Problems, LocomotionSolve,

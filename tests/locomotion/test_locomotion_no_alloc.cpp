@@ -96,7 +96,7 @@ TEST(SolverNoAllocation, ShiftAndUpdate) {
 }
 
 // The commanded tick's re-planning: GaitGenerator::plan from a moving, displaced state with a
-// changing command, gait switches (trot, stand, pace) at the timeline's next all-feet-down phase,
+// changing command, gait switches (trot, stand, pace, and a pronk's flights) foot by foot,
 // LocomotionProblem::update, and every query the knots and the controller make.
 TEST(SolverNoAllocation, GaitGeneratorTicksWithGaitSwitches) {
   Trot trot;
@@ -110,7 +110,11 @@ TEST(SolverNoAllocation, GaitGeneratorTicksWithGaitSwitches) {
   pace.phases[1].contacts = {"FR_FOOT", "HR_FOOT"};
   pace.phases[3].contacts = {"FL_FOOT", "HL_FOOT"};
   const int pace_id = timeline.addPattern(pace);
-  const int patterns[] = {stand_id, pace_id, trot_id, stand_id, trot_id};
+  ContactPlan pronk;  // flights (issue 45): switched to and from foot by foot
+  pronk.cyclic = true;
+  pronk.phases = {{0.2, {"FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"}}, {0.15, {}}};
+  const int pronk_id = timeline.addPattern(pronk);
+  const int patterns[] = {stand_id, pace_id, pronk_id, trot_id, stand_id, pronk_id, trot_id};
   Eigen::VectorXd x = trot.c.robot->x_nominal, x_ref = x;
   const int nq = trot.c.robot->model.nq;
   const double dt = loco.options().dt;
@@ -133,7 +137,7 @@ TEST(SolverNoAllocation, GaitGeneratorTicksWithGaitSwitches) {
       command.height = 0.01 * (tick % 3);
       gen.setCommand(command);
       if (tick % 37 == 36) {
-        const double at = timeline.switchTo(patterns[switches % 5], t0);
+        const double at = timeline.switchTo(patterns[switches % 7], t0);
         switches += at < ContactTimeline::kNever;
       }
       EXPECT_TRUE(gen.plan(t0, x, t0, t0 + loco.span()));
@@ -147,8 +151,10 @@ TEST(SolverNoAllocation, GaitGeneratorTicksWithGaitSwitches) {
         for (int i = 0; i < gen.stances(c); ++i) checksum += gen.stance(c, i).p.x();
       }
       gen.state(t0 + 0.5, x_ref);
+      double vz = 0.0;
       checksum += x_ref.sum() + gen.com(t0 + 0.2).sum() + gen.basePosition(t0 + 0.3).sum() +
-                  gen.baseYaw(t0 + 0.4) + gen.mask(t0 + 0.1) + timeline.patternAt(t0);
+                  gen.baseYaw(t0 + 0.4) + gen.mask(t0 + 0.1) + timeline.patternAt(t0) +
+                  gen.flightLift(t0 + 0.25, vz) + vz + gen.flights();
     });
     EXPECT_EQ(n, 0) << "tick " << tick;
   }

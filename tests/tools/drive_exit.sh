@@ -49,6 +49,6 @@ status=0
 "$drive" --config "$2/controller/stride_humanoid.yaml" --commands "$work/trot.yaml" \
   > "$work/out.txt" 2>&1 || status=$?
 [ "$status" = 2 ] || { cat "$work/out.txt"; fail "a trot on a biped exited $status, not 2"; }
-grep -q "trot.yaml': entry 1 (at 1 s): gait 'trot': the robot of '.*stride_humanoid.yaml' walks with stand, walk only" \
+grep -q "trot.yaml': entry 1 (at 1 s): gait 'trot': the robot of '.*stride_humanoid.yaml' walks with stand, walk, hop only" \
   "$work/out.txt" || { cat "$work/out.txt"; fail "the refusal does not say the entry and the gaits"; }
 echo "a trot on a biped: refused"

@@ -126,7 +126,7 @@ def main():
     log = os.path.join(tmp, "ctrl_c.lcmlog")
     s = Session(log, "--gaits", "biped")
     s.wait_for("[sent")
-    s.type(b"2w3")  # biped: 2 walk, 3 is no gait
+    s.type(b"2w4")  # biped: 2 walk, 4 is no gait
     s.wait_for("walk  vx +0.10")
     time.sleep(0.2)
     s.type(b"\x03")

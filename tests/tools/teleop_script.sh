@@ -35,7 +35,7 @@ printf -- '- {at: 0.0, gait: trot}\n' > "$dir/trot.yaml"
 )
 expect_usage_error "bad.yaml': entry 1: vx must be a number" \
   "$teleop" --url memq:// --commands "$dir/bad.yaml"
-expect_usage_error "entry 0 (at 0 s): gait 'trot': a biped (--gaits biped) walks with stand, walk only" \
+expect_usage_error "entry 0 (at 0 s): gait 'trot': a biped (--gaits biped) walks with stand, walk, hop only" \
   "$teleop" --url memq:// --commands "$dir/trot.yaml" --gaits biped
 expect_usage_error "stdin is not a terminal" "$teleop" --url memq://
 expect_usage_error "rate" "$teleop" --url memq:// --rate 0

@@ -98,16 +98,23 @@ TEST(KeyboardCommand, NumberKeysChooseTheRobotsGaits) {
   EXPECT_EQ(quad.command().gait, "walk");
   quad.feed("4");
   EXPECT_EQ(quad.command().gait, "pace");
-  EXPECT_EQ(quad.feed("5"), Event::None);
+  quad.feed("5");  // the gaits with flights (issue 45)
+  EXPECT_EQ(quad.command().gait, "pronk");
+  quad.feed("6");
+  EXPECT_EQ(quad.command().gait, "bound");
+  quad.feed("7");
+  EXPECT_EQ(quad.command().gait, "flying_trot");
+  EXPECT_EQ(quad.feed("8"), Event::None);
   quad.feed("1");
   EXPECT_EQ(quad.command().gait, "stand");
 
   KeyboardCommand biped(GaitSet::Biped, {});
   EXPECT_EQ(biped.feed("2"), Event::Changed);
   EXPECT_EQ(biped.command().gait, "walk");
-  EXPECT_EQ(biped.feed("3"), Event::None);
+  EXPECT_EQ(biped.feed("3"), Event::Changed);
+  EXPECT_EQ(biped.command().gait, "hop");
   EXPECT_EQ(biped.feed("4"), Event::None);
-  EXPECT_EQ(biped.command().gait, "walk");
+  EXPECT_EQ(biped.command().gait, "hop");
 }
 
 TEST(KeyboardCommand, SpaceStopsButKeepsTheHeight) {

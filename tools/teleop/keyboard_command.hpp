@@ -6,7 +6,8 @@
 //   W / Up, S / Down      vx ± step_vx          A / D            vy ± step_vy (left positive)
 //   Q / Left, E / Right   yaw_rate ± step_yaw   R / F            body height ± step_height
 //   space                 stop: zero velocity, gait stand (the body height stays)
-//   1 2 3 4               gait: stand trot walk pace (quadruped); 1 2: stand walk (biped)
+//   1 .. 7                gait: stand trot walk pace pronk bound flying_trot (quadruped);
+//                         1 2 3: stand walk hop (biped)
 //   x, Ctrl-C             quit (the command becomes the stop command)
 // A velocity key while standing also picks the first stepping gait (trot; walk for a biped): the
 // controller would hold a stand still whatever its velocity.
