@@ -44,6 +44,14 @@ bool CommandFilter::receive(const command_t& m, double now) {
   received_.height = limit(m.body_height, config_.max_height, clamped);
   received_gait_ = gait;
   if (gait == 0) received_.vx = received_.vy = received_.yaw_rate = 0.0;  // a stand stands
+  // A jump is made once per id: a new one is an id other than the last message's (a restarted
+  // sender counts from 1 again after its first command, 0).
+  if (m.jump_id > 0 && m.jump_id != last_jump_id_) {
+    jump_pending_ = true;
+    jump_id_ = m.jump_id;
+    jump_ = {m.jump[0], m.jump[1], m.jump[2], m.jump[3]};
+  }
+  last_jump_id_ = m.jump_id;
   counters_.clamped += clamped ? 1 : 0;
   ++counters_.accepted;
   last_arrival_ = std::max(last_arrival_, now);

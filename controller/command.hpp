@@ -5,6 +5,8 @@
 //   receive  a decoded, checked message: an unknown gait is rejected; values beyond the limits are
 //            clamped (the message is counted once as clamped); the gait "stand" means zero
 //            velocity whatever the message says; "" keeps the gait.
+//            A new jump_id (other than the last message's) is a jump asked for, taken once
+//            (takeJump) whatever the velocity's limits and deadman do.
 //   update   advances the command in force to `now`: each velocity moves toward the target at most
 //            by its acceleration limit times the time elapsed (the body height at its rate). With
 //            no valid command for `timeout` seconds (or none yet), the target is zero velocity
@@ -60,6 +62,14 @@ class CommandFilter {
   bool silentAt(double now) const { return !any_ || now - last_arrival_ > config_.timeout; }
   const CommandCounters& counters() const { return counters_; }
   const CommandConfig& config() const { return config_; }
+  // A jump received since the last call (command_t.jump_id, a new id): true once per jump.
+  bool takeJump(int& id, JumpTarget& target) {
+    if (!jump_pending_) return false;
+    jump_pending_ = false;
+    id = jump_id_;
+    target = jump_;
+    return true;
+  }
 
  private:
   CommandConfig config_;
@@ -71,6 +81,9 @@ class CommandFilter {
   double last_arrival_ = 0.0, last_update_ = 0.0;
   bool any_ = false, updated_ = false, timed_out_ = true;
   CommandCounters counters_;
+  int last_jump_id_ = 0, jump_id_ = 0;
+  bool jump_pending_ = false;
+  JumpTarget jump_;
 };
 
 }  // namespace stride

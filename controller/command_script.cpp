@@ -24,8 +24,9 @@ std::vector<ScriptedCommand> loadCommandScript(const std::string& path) {
     fail(std::string("malformed YAML: ") + e.what());
   }
   if (!root.IsSequence() || root.size() == 0)
-    fail("must be a non-empty list of {at, vx, vy, yaw_rate, gait, body_height}");
-  static const std::set<std::string> keys = {"at", "vx", "vy", "yaw_rate", "gait", "body_height"};
+    fail("must be a non-empty list of {at, vx, vy, yaw_rate, gait, body_height, jump}");
+  static const std::set<std::string> keys = {"at",   "vx",          "vy",  "yaw_rate",
+                                             "gait", "body_height", "jump"};
   std::vector<ScriptedCommand> script;
   ScriptedCommand c;
   for (std::size_t i = 0; i < root.size(); ++i) {
@@ -57,12 +58,50 @@ std::vector<ScriptedCommand> loadCommandScript(const std::string& path) {
         fail(where + ": gait must be a string");
       }
     }
+    // A jump is the entry's own.
+    c.jump_id = 0;
+    c.jump = JumpTarget{};
+    if (const YAML::Node j = e["jump"]) {
+      if (!j.IsMap()) fail(where + ": jump must be a mapping {dx, dy, dz, yaw}");
+      for (const auto& kv : j) {
+        const std::string key = kv.first.as<std::string>();
+        double* field = key == "dx"    ? &c.jump.dx
+                        : key == "dy"  ? &c.jump.dy
+                        : key == "dz"  ? &c.jump.dz
+                        : key == "yaw" ? &c.jump.yaw
+                                       : nullptr;
+        if (!field) fail(where + ": jump: unknown key '" + key + "' (known: dx, dy, dz, yaw)");
+        try {
+          *field = kv.second.as<double>();
+        } catch (const YAML::Exception&) {
+          fail(where + ": jump." + key + " must be a number");
+        }
+        if (!std::isfinite(*field)) fail(where + ": jump." + key + " must be finite");
+      }
+      c.jump_id = static_cast<int>(i) + 1;
+    }
     if (c.at < 0.0) fail(where + ": at must be non-negative");
     if (!script.empty() && !(c.at > script.back().at))
       fail(where + ": at must be later than the previous entry's");
     script.push_back(c);
   }
   return script;
+}
+
+command_t toCommand(const ScriptedCommand& c, std::int64_t utime) {
+  command_t m{};
+  m.utime = utime;
+  m.vx = c.vx;
+  m.vy = c.vy;
+  m.yaw_rate = c.yaw_rate;
+  m.gait = c.gait;
+  m.body_height = c.body_height;
+  m.jump_id = c.jump_id;
+  m.jump[0] = c.jump.dx;
+  m.jump[1] = c.jump.dy;
+  m.jump[2] = c.jump.dz;
+  m.jump[3] = c.jump.yaw;
+  return m;
 }
 
 int commandAt(const std::vector<ScriptedCommand>& script, double t) {

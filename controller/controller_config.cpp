@@ -102,7 +102,7 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
   if (!root.IsMap()) r.fail("", "the top level must be a mapping");
   r.onlyKeys(root, "",
              {"robot", "rate_hz", "horizon", "policy_knots", "solver", "contacts", "weights",
-              "gait", "command", "lcm", "safety", "realtime", "terrain"});
+              "gait", "command", "jump", "lcm", "safety", "realtime", "terrain"});
 
   ControllerConfig c;
   c.path = yaml_path;
@@ -307,6 +307,35 @@ ControllerConfig loadControllerConfig(const std::string& yaml_path) {
     r.get(command, "body_height_rate", "command", cmd.height_rate);
   }
   r.nonNegative(cmd.max_height, "command.max_body_height");
+
+  // What the robot can jump (locomotion/jump.hpp); without the section it does not jump.
+  const YAML::Node jump = root["jump"];
+  r.onlyKeys(jump, "jump",
+             {"max_distance", "max_rise", "max_turn", "max_speed", "flight", "push", "landing"});
+  if (jump) {
+    JumpLimits& j = c.jump;
+    for (const char* key : {"max_distance", "max_rise", "max_turn", "max_speed", "push", "landing"})
+      if (!jump[key])
+        r.fail(std::string("jump.") + key, "missing (every limit is the robot's own)");
+    r.get(jump, "max_distance", "jump", j.max_distance);
+    r.get(jump, "max_rise", "jump", j.max_rise);
+    r.get(jump, "max_turn", "jump", j.max_turn);
+    r.get(jump, "max_speed", "jump", j.max_speed);
+    r.get(jump, "push", "jump", j.push);
+    r.get(jump, "landing", "jump", j.landing);
+    for (double v : {j.max_distance, j.max_speed, j.push, j.landing}) r.positive(v, "jump");
+    r.nonNegative(j.max_rise, "jump.max_rise");
+    r.nonNegative(j.max_turn, "jump.max_turn");
+    if (jump["flight"]) {
+      std::vector<double> f;
+      r.get(jump, "flight", "jump", f);
+      if (f.size() != 2 || !(f[0] > 0.0) || !(f[1] >= f[0]) || f[1] > 1.0)
+        r.fail("jump.flight",
+               "must be [shortest, longest] flight [s], 0 < shortest <= longest <= 1");
+      j.min_flight = f[0];
+      j.max_flight = f[1];
+    }
+  }
   for (double a : {cmd.accel_x, cmd.accel_y, cmd.accel_yaw, cmd.height_rate})
     r.positive(a, "command.acceleration / body_height_rate");
   gen.max_height = cmd.max_height;

@@ -43,6 +43,7 @@ struct ControllerConfig {
   GaitConfig gait;
   CommandConfig command;
   TerrainConfig terrain;
+  JumpLimits jump;  // the `jump:` section; none: the robot does not jump
 
   SolverKind solver = SolverKind::BoxFddp;
   int max_iterations = 1;          // per tick

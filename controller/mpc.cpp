@@ -34,6 +34,7 @@ PlannerOptions plannerOptions(const ControllerConfig& c) {
   o.generator = c.generator;
   o.gait = c.gait;
   o.terrain = c.terrain;
+  o.jump = c.jump;
   o.threads = c.threads;
   return o;
 }
@@ -304,6 +305,16 @@ bool Mpc::tick(const robot_state_t* state, double age, Clock::time_point deadlin
     case MapChoice::None:
       break;
   }
+  if (jump_pending_) {
+    planner_.requestJump(jump_id_, jump_target_, t);
+    jump_pending_ = false;
+  }
+  const JumpStatus& jump = planner_.jumpStatus();
+  status_.jump_id = jump.id;
+  status_.jump_state = static_cast<std::int8_t>(jump.state);
+  status_.jump_refusal.assign(jump.refusal);  // within the capacity reserved at start
+  status_.jumps_made = jump.made;
+  status_.jumps_refused = jump.refused;
   status_.phase = static_cast<std::int32_t>(planner_.mask(t));
   status_.gait = planner_.gaitAt(t);
   const BodyCommand& command = planner_.command();

@@ -136,6 +136,13 @@ class Mpc {
   // The body command in force (the node's CommandFilter smooths it toward the one received), and
   // the gait asked for (an index into gaits()). Takes effect at the next tick's re-planning.
   void setCommand(const BodyCommand& command, int gait) { planner_.setCommand(command, gait); }
+  // A jump asked for (a command's new jump_id): planned at the next tick with a state
+  // (Planner::requestJump), which says in the status what became of it.
+  void requestJump(int id, const JumpTarget& target) {
+    jump_pending_ = true;
+    jump_id_ = id;
+    jump_target_ = target;
+  }
   // An elevation map (validated: messages/validate.hpp checkTerrain), measured at map.utime on the
   // robot's clock: copied off the wire and handed to the planner, which computes its steppability
   // now (bounded by terrain.max_cells; no allocation after construction) and plans on it while it
@@ -270,6 +277,9 @@ class Mpc {
   Eigen::VectorXd x_;  // the state as a solver vector
   mpc_status_t status_{};
   MpcCounters counters_;
+  bool jump_pending_ = false;  // requestJump, until a tick with a state plans it
+  int jump_id_ = 0;
+  JumpTarget jump_target_;
 };
 
 }  // namespace stride

@@ -33,7 +33,7 @@ constexpr int kSessionSwitchStates = 3;
 // A rival controller's policies may have more knots than ours: any count up to this one.
 constexpr int kMaxRivalKnots = 200;
 // A command's payload: the fixed fields and a gait name of at most kMaxGaitName characters.
-constexpr int kCommandFixedBytes = 8 + 8 + 3 * 8 + 4 + 1 + 8;
+constexpr int kCommandFixedBytes = 8 + 8 + 3 * 8 + 4 + 1 + 8 + 4 + 4 * 8;
 // What the signing publisher preallocates before the node knows its messages' sizes (reserve).
 constexpr int kSignedCapacity = 1 << 12;
 }  // namespace
@@ -74,6 +74,7 @@ MpcNode::MpcNode(const ControllerConfig& config, Publisher& out, TimeSource time
   model_buffer_.resize(m.getEncodedSize());
   m.encode(model_buffer_.data(), 0, static_cast<int>(model_buffer_.size()));
   mpc_.status().wrong_model_cause.reserve(sizeof(ModelMismatch::text));
+  mpc_.status().jump_refusal.reserve(sizeof(JumpStatus::refusal));
   // Shaped with every foothold it can carry: the buffer fits the largest horizon, and writing one
   // with fewer footholds only lowers nfootholds.
   msg::shape(horizon_, mpc_.horizonKnots(), model.nq,
@@ -434,6 +435,9 @@ void MpcNode::tick(Clock::time_point deadline) {
                          : static_cast<double>(monotonicMicros() - newest_arrival_us_) * 1e-6;
   commands_.update(now());
   mpc_.setCommand(commands_.command(), commands_.gait());
+  int jump_id;
+  JumpTarget jump;
+  if (commands_.takeJump(jump_id, jump)) mpc_.requestJump(jump_id, jump);
   mpc_.setSession(newest_.session);  // the run its policy answers (policy_t.session)
   const bool publish = mpc_.tick(state, age, deadline);
   new_state_ = false;

@@ -154,7 +154,7 @@ class MpcNode {
   std::array<std::int64_t, msg::kRejectReasons> rejected_{};
   contact_plan_t plan_msg_;
   bool plan_pending_ = false;
-  command_t command_msg_;
+  command_t command_msg_{};
   terrain_t terrain_msg_;
   CommandFilter commands_;
   std::int64_t last_command_utime_ = -1, commands_malformed_ = 0;

@@ -41,6 +41,8 @@ constexpr double kStill = 0.01;
 // crouch depth [m].
 constexpr double kPushTime = 0.2;
 constexpr double kMinCrouch = 0.04;
+// A jump's horizontal speed-up before its take-off and slow-down after its touch-down [s].
+constexpr double kJumpRamp = 0.1;
 // Feet a generator plans for: the contact limit (the ground plane's fit takes them on the stack).
 constexpr int kMaxFeet = kMaxContacts;
 
@@ -174,6 +176,9 @@ void GaitGenerator::sampleBase(double t, const Eigen::Vector2d& p0, double yaw0)
   const double h = options_.sample_dt;
   t_anchor_ = t;
   n_samples_ = static_cast<int>(samples_.size());
+  // A jump flies in the heading the reference has at its take-off (held once in the air).
+  if (jump_on_ && t < jump_lift_off_)
+    jump_heading_ = yaw0 + command_.yaw_rate * (jump_lift_off_ - t);
   Eigen::Vector2d p = p0;
   for (int i = 0; i < n_samples_; ++i) {
     const double tau = i * h;
@@ -188,7 +193,54 @@ void GaitGenerator::sampleBase(double t, const Eigen::Vector2d& p0, double yaw0)
     // Midpoint rule: the heading turns while the base moves.
     const double yaw_mid = yaw0 + command_.yaw_rate * (tau + 0.5 * h);
     p += h * rotate(yaw_mid, command_.vx, command_.vy);
+    if (jump_on_) {  // on top of the command: the jump's motion (world), seen in the heading
+      const double turned = jumpYaw(t + tau) - jumpYaw(t);
+      s.yaw += turned;
+      s.wz += jumpYawRate(t + tau);
+      const Eigen::Vector2d v = jumpVelocity(t + tau);
+      const Eigen::Vector2d v_heading = rotate(-s.yaw, v.x(), v.y());
+      s.vx += v_heading.x();
+      s.vy += v_heading.y();
+      p += h * jumpVelocity(t + tau + 0.5 * h);
+      // (the command's part turns with the jump's yaw too)
+      p += h * (rotate(yaw_mid + turned, command_.vx, command_.vy) -
+                rotate(yaw_mid, command_.vx, command_.vy));
+    }
   }
+}
+
+void GaitGenerator::setJump(const JumpTarget& target, double lift_off, double touch_down) {
+  jump_on_ = true;
+  jump_landed_ = false;
+  jump_ = target;
+  jump_lift_off_ = lift_off;
+  jump_touch_down_ = touch_down;
+}
+
+Eigen::Vector2d GaitGenerator::jumpVelocity(double t) const {
+  const double a = jump_lift_off_, b = jump_touch_down_;
+  if (!jump_on_ || t <= a - kJumpRamp || t >= b + kJumpRamp) return Eigen::Vector2d::Zero();
+  // The flight and half of each ramp cover the target's distance.
+  const double share = t < a   ? (t - (a - kJumpRamp)) / kJumpRamp
+                       : t > b ? (b + kJumpRamp - t) / kJumpRamp
+                               : 1.0;
+  return share / (b - a + kJumpRamp) * rotate(jump_heading_, jump_.dx, jump_.dy);
+}
+
+double GaitGenerator::jumpYawRate(double t) const {
+  const double a = jump_lift_off_, b = jump_touch_down_;
+  return jump_on_ && t > a && t < b ? jump_.yaw / (b - a) : 0.0;
+}
+
+double GaitGenerator::jumpYaw(double t) const {
+  if (!jump_on_) return 0.0;
+  const double a = jump_lift_off_, b = jump_touch_down_;
+  return jump_.yaw * std::clamp((t - a) / (b - a), 0.0, 1.0);
+}
+
+double GaitGenerator::riseAt(double t) const {
+  return jump_on_ && !jump_landed_ && !map_ && t >= jump_touch_down_ - kPlanTimeEpsilon ? jump_.dz
+                                                                                        : 0.0;
 }
 
 GaitGenerator::Sample GaitGenerator::baseAt(double t) const {
@@ -236,9 +288,10 @@ GaitGenerator::Stance GaitGenerator::foothold(int contact, double touch_down, do
   const double n = lead.norm();
   if (n > options_.max_foothold_lead) lead *= options_.max_foothold_lead / n;
   const Eigen::Vector2d xy = on_robot + lead + correction;
-  Stance stance{touch_down, lift_off,
-                Eigen::Vector3d(xy.x(), xy.y(), off.z() + blindHeight(xy.x(), xy.y())),
-                s.yaw + foot_yaw_[contact]};
+  Stance stance{
+      touch_down, lift_off,
+      Eigen::Vector3d(xy.x(), xy.y(), off.z() + blindHeight(xy.x(), xy.y()) + riseAt(touch_down)),
+      s.yaw + foot_yaw_[contact]};
   stance.source = StanceSource::Blind;
   stance.swing_height = options_.swing_height;
   if (!map_) return stance;
@@ -368,6 +421,12 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
       if (map_ && map_->cellOf(M.p.x(), M.p.y(), row, col) && std::isfinite(map_->slope(row, col)))
         latched_normal_[c] = map_->normal(row, col);
     }
+  // Landed from a jump (blind): the ground the feet feel starts at the landing's height, which
+  // the references had as the jump's rise until now; the feet down tell it from here on.
+  if (jump_on_ && !jump_landed_ && t >= jump_touch_down_) {
+    if (!map_) ground_filtered_ += jump_.dz;
+    jump_landed_ = true;
+  }
   updateGround(t);
   // The base reference carries on from the last plan, but stays within a leash of the robot. A
   // robot that stands for good is centred over the feet it stands on instead: wherever a stop left
@@ -398,6 +457,8 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
   const Eigen::Quaterniond orientation(q[6] / n, q[3] / n, q[4] / n, q[5] / n);
   const Eigen::Vector3d v_world = orientation * x.segment<3>(nq);
   Eigen::Vector2d correction = gain_ * (v_world.head<2>() - rotate(yaw, command_.vx, command_.vy));
+  // (a jump's flight is meant: only its excess over the jump's velocity moves the landing)
+  if (jump_on_) correction -= gain_ * jumpVelocity(t);
   const double norm = correction.norm();
   if (norm > options_.max_foothold_correction)
     correction *= options_.max_foothold_correction / norm;
@@ -483,10 +544,13 @@ void GaitGenerator::planFlights(double t_from, double t_end) {
     for (int k = 0; k < n_flights_; ++k)
       if (std::abs(flights_[k].lift_off - lift_off) < kPlanTimeEpsilon) return;
     if (n_flights_ == kMaxFlights || touch_down == ContactTimeline::kNever) return;
+    // A jump's flight lands dz higher (blind: on a map the footholds' heights carry it).
+    const bool jump = jump_on_ && std::abs(lift_off - jump_lift_off_) < kPlanTimeEpsilon;
+    const double rise = jump && !map_ ? jump_.dz : 0.0;
     // In time order (a handful: insertion).
     int k = n_flights_++;
     for (; k > 0 && flights_[k - 1].lift_off > lift_off; --k) flights_[k] = flights_[k - 1];
-    flights_[k] = {lift_off, touch_down};
+    flights_[k] = {lift_off, touch_down, rise};
   };
   if (timeline_.mask(t_from) == 0u) {
     double lift_off = -ContactTimeline::kNever;
@@ -515,9 +579,12 @@ double GaitGenerator::flightLift(double t, double& vz) const {
   int next = 0;  // the first flight that has not ended by t
   while (next < n_flights_ && flights_[next].touch_down <= t) ++next;
   if (next < n_flights_ && flights_[next].lift_off < t) {
-    const double a = flights_[next].lift_off, b = flights_[next].touch_down;
-    vz = 0.5 * kGravity * (a + b - 2.0 * t);
-    return e + 0.5 * kGravity * (t - a) * (b - t);
+    // (landing `rise` higher: the take-off speed is rise / T + g T / 2)
+    const Flight& f = flights_[next];
+    const double T = f.touch_down - f.lift_off, u = t - f.lift_off;
+    const double v0 = f.rise / T + 0.5 * kGravity * T;
+    vz = v0 - kGravity * u;
+    return e + v0 * u - 0.5 * kGravity * u * u;
   }
   // On the ground between a touch-down at `a` and a take-off at `b` (either may be missing): the
   // landing brakes from the speed the robot fell at, ½ g (flight time), to rest at a constant
@@ -531,10 +598,13 @@ double GaitGenerator::flightLift(double t, double& vz) const {
   const bool has_in = next > 0, has_out = next < n_flights_;
   const double a = has_in ? flights_[next - 1].touch_down : -ContactTimeline::kNever;
   const double b = has_out ? flights_[next].lift_off : ContactTimeline::kNever;
-  const double v_in =
-      has_in ? 0.5 * kGravity * (flights_[next - 1].touch_down - flights_[next - 1].lift_off) : 0.0;
-  const double v_out =
-      has_out ? 0.5 * kGravity * (flights_[next].touch_down - flights_[next].lift_off) : 0.0;
+  // The speeds down at the touch-down and up at the take-off: g T / 2 -+ rise / T.
+  auto speed = [](const Flight& f, double sign) {
+    const double T = f.touch_down - f.lift_off;
+    return std::max(0.0, 0.5 * kGravity * T + sign * f.rise / T);
+  };
+  const double v_in = has_in ? speed(flights_[next - 1], -1.0) : 0.0;
+  const double v_out = has_out ? speed(flights_[next], 1.0) : 0.0;
   const double depth = std::max(2.0 * options_.max_height, kMinCrouch);
   // (A slow landing or take-off, a short flight's, crouches less: at most kPushTime at rest.)
   double d_in = has_in ? std::min(depth, 0.5 * v_in * kPushTime) : 0.0;
@@ -618,7 +688,8 @@ GaitGenerator::Ground GaitGenerator::groundAt(double t) const {
   if (!map_) {
     // Blind: the plane the feet feel, under the base reference.
     const Sample b = baseAt(t);
-    return {blindHeight(b.x, b.y), Eigen::Vector3d(-slope_.x(), -slope_.y(), 1.0).normalized()};
+    return {blindHeight(b.x, b.y) + riseAt(t),
+            Eigen::Vector3d(-slope_.x(), -slope_.y(), 1.0).normalized()};
   }
   // The feet's footholds at t (each foot's on the swing's ramp between them), on the ground.
   std::array<Eigen::Vector3d, kMaxFeet> feet;

@@ -47,6 +47,7 @@
 #include <vector>
 
 #include "locomotion/contact_timeline.hpp"
+#include "locomotion/jump.hpp"
 #include "solver/multibody/data.hpp"
 #include "terrain/steppability.hpp"
 
@@ -156,6 +157,16 @@ class GaitGenerator {
 
   // The command in force (the controller's smoothed command), held over the horizon.
   void setCommand(const BodyCommand& command) { command_ = command; }
+
+  // A jump (locomotion/jump.hpp) whose flight the timeline has from lift_off to touch_down: the
+  // base reference speeds up to its horizontal velocity in the last kJumpRamp of the push, flies
+  // to the target (forward, left, turning by its yaw in the air) and slows down in the first
+  // kJumpRamp after the touch-down; blind, the ground after the touch-down is dz higher (once
+  // the robot has landed, the ground it feels takes that over). For the next plan()s, until
+  // clearJump(). Allocation-free.
+  void setJump(const JumpTarget& target, double lift_off, double touch_down);
+  void clearJump() { jump_on_ = false; }
+  bool jumping() const { return jump_on_; }
   const BodyCommand& command() const { return command_; }
 
   // Re-plans from the measured state x at plan time t for the window [t_begin, t_end] (at most
@@ -232,6 +243,7 @@ class GaitGenerator {
   // The flights planned (every foot in the air) from the window's start: take-off, touch-down.
   struct Flight {
     double lift_off, touch_down;
+    double rise = 0.0;  // the landing's height above the take-off's (a jump's dz, blind)
   };
   static constexpr int kMaxFlights = 16;
   int flights() const { return n_flights_; }
@@ -274,6 +286,12 @@ class GaitGenerator {
   // t is (0 while down, 1 when landed; -1 when no next stance is known).
   int stanceAt(int contact, double t, double& s) const;
   void planFlights(double t_from, double t_end);
+  // The jump's horizontal velocity (world) and yaw rate at t, and its yaw turned by t.
+  Eigen::Vector2d jumpVelocity(double t) const;
+  double jumpYawRate(double t) const;
+  double jumpYaw(double t) const;
+  // Blind: the jump's rise of the ground from its touch-down on, until the robot has landed.
+  double riseAt(double t) const;
 
   const Model& model_;
   ContactTimeline timeline_;
@@ -327,6 +345,10 @@ class GaitGenerator {
   std::vector<int> n_stances_;
   Flight flights_[kMaxFlights];
   int n_flights_ = 0;
+  bool jump_on_ = false, jump_landed_ = false;
+  JumpTarget jump_;
+  double jump_lift_off_ = 0.0, jump_touch_down_ = 0.0;
+  double jump_heading_ = 0.0;  // the base reference's yaw at the take-off
 };
 
 }  // namespace stride

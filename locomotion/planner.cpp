@@ -1,6 +1,8 @@
 #include "locomotion/planner.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "solver/ddp/solver.hpp"
@@ -10,6 +12,8 @@ namespace stride {
 namespace {
 // The gait reported while a planner's plan replaces the gaits.
 const std::string kPlanGait = "plan";
+// The gait reported while a jump is made.
+const std::string kJumpGait = "jump";
 // Velocity-level Baumgarte term of the planning model's contacts (a + kd v = 0 at the foot): a
 // foot's drift velocity decays in 1/kd = 20 ms instead of growing over the 1 s horizon.
 constexpr double kContactDamping = 50.0;
@@ -105,6 +109,20 @@ void Planner::build(std::int64_t utime) {
   for (const std::string& g : gaits_)
     gait_pattern_.push_back(
         timeline.addPattern(makeGaitPattern(g, timingOf(options_.gait, g), robot_.contacts)));
+  // The jumps: every foot down for the push, none in the flight, every foot down after.
+  jump_pattern_.clear();
+  const JumpLimits& jl = options_.jump;
+  if (jl.max_distance > 0.0 && jl.flight_step > 0.0) {
+    std::vector<std::string> all;
+    for (const ContactSpec& c : robot_.contacts) all.push_back(c.frame);
+    for (double T = jl.min_flight; T <= jl.max_flight + 1e-9; T += jl.flight_step) {
+      ContactPlan jump;
+      jump.phases = {{jl.push, all}, {T, {}}, {jl.landing, all}};
+      jump_pattern_.push_back(timeline.addPattern(jump));
+    }
+  }
+  jump_active_ = false;
+  gen_->clearJump();
   // A plan starts at plan time 0 (the plan's start); the gaits start standing.
   timeline.reset(have_plan_ ? timeline.addPattern(plan_) : gait_pattern_[0], 0.0);
   knot_times_ = loco_->knotTimes();
@@ -112,12 +130,63 @@ void Planner::build(std::int64_t utime) {
   plan_pending_ = false;
 }
 
+bool Planner::requestJump(int id, const JumpTarget& target, double t) {
+  JumpStatus& s = jump_status_;
+  s.id = id;
+  auto refuse = [&](const char* why) {
+    std::snprintf(s.refusal, sizeof s.refusal, "%s", why);
+    s.state = JumpState::Refused;
+    ++s.refused;
+    return false;
+  };
+  JumpPlan plan;
+  if (!planJump(target, options_.jump, plan, s.refusal, sizeof s.refusal)) {
+    s.state = JumpState::Refused;
+    ++s.refused;
+    return false;
+  }
+  if (!gen_) return refuse("the controller has no state yet");
+  if (have_plan_) return refuse("a contact plan replaces the gaits");
+  if (jump_active_) return refuse("another jump is under way");
+  const JumpLimits& jl = options_.jump;
+  const long k = std::lround((plan.flight - jl.min_flight) / jl.flight_step);
+  if (k < 0 || k >= static_cast<long>(jump_pattern_.size()))
+    return refuse("its flight time is outside jump.min_flight .. jump.max_flight");
+  const double at = gen_->timeline().switchTo(jump_pattern_[k], t);
+  if (at == ContactTimeline::kNever) return refuse("the gait in force cannot be left for it");
+  jump_active_ = true;
+  jump_lift_off_ = at + jl.push;
+  jump_touch_down_ = jump_lift_off_ + plan.flight;
+  jump_end_ = jump_touch_down_ + jl.landing;
+  gen_->setJump(target, jump_lift_off_, jump_touch_down_);
+  s.state = JumpState::Accepted;
+  s.refusal[0] = '\0';
+  return true;
+}
+
 MapChoice Planner::beginTick(double t, std::int64_t utime, std::optional<unsigned> loaded) {
-  // The gait asked for: a switch at the next instant every foot is down (ContactTimeline).
   ContactTimeline& timeline = gen_->timeline();
-  if (!have_plan_ && timeline.lastPattern() != gait_pattern_[gait_])
+  // A jump under way: in the air from its take-off, landed at its touch-down, over at its end
+  // (the gait asked for comes back then).
+  if (jump_active_) {
+    if (t >= jump_lift_off_ && jump_status_.state == JumpState::Accepted)
+      jump_status_.state = JumpState::InAir;
+    if (t >= jump_touch_down_ && jump_status_.state == JumpState::InAir) {
+      jump_status_.state = JumpState::Landed;
+      ++jump_status_.made;
+    }
+    if (t >= jump_end_) {
+      jump_active_ = false;
+      gen_->clearJump();
+    }
+  }
+  // The gait asked for: switched to foot by foot (ContactTimeline), after the jump under way.
+  if (!have_plan_ && !jump_active_ && timeline.lastPattern() != gait_pattern_[gait_])
     timeline.switchTo(gait_pattern_[gait_], t);
-  gen_->setCommand(command_);
+  // The velocity command waits while a jump is under way (the jump moves the base).
+  BodyCommand command = command_;
+  if (jump_active_) command.vx = command.vy = command.yaw_rate = 0.0;
+  gen_->setCommand(command);
   // The map when it was measured at most max_map_age before the state (both stamps on the
   // robot's clock, so lock-step and replays decide the same), else blind.
   MapChoice choice = MapChoice::None;
@@ -174,7 +243,9 @@ void Planner::measuredWarmStart(const Eigen::VectorXd& x, std::vector<Eigen::Vec
 const std::string& Planner::gaitAt(double t) const {
   if (have_plan_) return kPlanGait;
   const int in_force = gen_->timeline().patternAt(t);
-  return gaits_[std::min<int>(in_force, gaits_.size() - 1)];
+  for (std::size_t g = 0; g < gait_pattern_.size(); ++g)
+    if (gait_pattern_[g] == in_force) return gaits_[g];
+  return kJumpGait;
 }
 
 }  // namespace stride

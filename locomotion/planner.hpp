@@ -57,7 +57,17 @@ struct PlannerOptions {
   GaitGeneratorOptions generator;
   GaitConfig gait;
   TerrainConfig terrain;
+  JumpLimits jump;  // what the robot can jump (none: it does not)
   int threads = 1;  // the problem's per-knot work (ShootingProblem::setThreads)
+};
+
+// What became of the last jump asked for (mpc_status_t's jump fields).
+enum class JumpState : std::int8_t { None = 0, Accepted = 1, InAir = 2, Landed = 3, Refused = 4 };
+struct JumpStatus {
+  int id = 0;  // the last jump asked for (0: none)
+  JumpState state = JumpState::None;
+  char refusal[192] = "";  // why it was refused
+  std::int64_t made = 0, refused = 0;
 };
 
 // What a tick plans on (beginTick): no map has come yet; the newest map, measured at most
@@ -100,6 +110,14 @@ class Planner {
   // holds for it (its footholds, its gait's phase), so the next tick builds again, as at the start:
   // needsBuild() until the next build(). A plan goes on at its plan time.
   void newRobotRun() { plan_pending_ = true; }
+  // A jump asked for at plan time t (a command with a new jump id; locomotion/jump.hpp): refused,
+  // the reason in jumpStatus(), when the robot cannot make it, a plan replaces the gaits, the
+  // planner is not built yet, or another jump is under way; else made from the timeline's next
+  // switch instant (the gait's next phase with every foot down): a push on every foot
+  // (jump.push), the flight, a landing on every foot (jump.landing), then the gait asked for
+  // again. The velocity command waits meanwhile. Allocation-free.
+  bool requestJump(int id, const JumpTarget& target, double t);
+  const JumpStatus& jumpStatus() const { return jump_status_; }
 
   // ---- Build (allocates: the first state, or the first after setPlan) ----
   // Before the first build, and after a new plan.
@@ -185,6 +203,13 @@ class Planner {
   terrain::Steppability steppability_;
   std::int64_t map_utime_ = 0;
   bool on_map_ = false;
+
+  // Jumps: a pattern per flight time (jump.min_flight, + jump.flight_step, ...), the jump under
+  // way (its take-off, touch-down and end on the plan clock) and what became of the last one.
+  std::vector<int> jump_pattern_;
+  bool jump_active_ = false;
+  double jump_lift_off_ = 0.0, jump_touch_down_ = 0.0, jump_end_ = 0.0;
+  JumpStatus jump_status_;
 };
 
 }  // namespace stride

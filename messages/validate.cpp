@@ -183,17 +183,19 @@ Reject checkCommandWire(const void* buf, int size) {
   std::int32_t len;  // the string's length field counts its terminating NUL
   if (!readInt32(buf, size, kHash + 32, len)) return Reject::Undecodable;
   if (len < 1 || len > kMaxGaitName + 1) return Reject::WrongSize;
-  return size == kHash + 32 + 4 + len + 8 ? Reject::None : Reject::WrongSize;
+  // utime, vx, vy, yaw_rate; gait; body_height, jump_id, jump[4].
+  return size == kHash + 32 + 4 + len + 8 + 4 + 32 ? Reject::None : Reject::WrongSize;
 }
 
 Reject checkStatusWire(const void* buf, int size) {
   // mpc_status_t.lcm: the fixed fields before wrong_model_cause (type hash included), between it
-  // and gait, and after gait. lcm-gen's decoder takes a string's length minus one as the number of
-  // characters to copy: a length of -2^31 overflows (undefined behaviour, in practice 2^31 - 1
-  // characters read past the buffer) and 0 makes std::string throw.
-  constexpr long kBeforeCause = kHash + 158, kBetween = 48, kAfterGait = 57;
+  // and gait, between gait and jump_refusal, and after that. lcm-gen's decoder takes a string's
+  // length minus one as the number of characters to copy: a length of -2^31 overflows (undefined
+  // behaviour, in practice 2^31 - 1 characters read past the buffer) and 0 makes std::string
+  // throw.
+  constexpr long kBeforeCause = kHash + 158, kBetween = 48, kAfterGait = 37, kAfterRefusal = 41;
   long at = kBeforeCause;
-  for (const long fixed_after : {kBetween, kAfterGait}) {
+  for (const long fixed_after : {kBetween, kAfterGait, kAfterRefusal}) {
     std::int32_t len;  // counts the terminating NUL, which must be there
     if (!readInt32(buf, size, at, len)) return Reject::Undecodable;
     if (len < 1 || len > size - at - 4) return Reject::WrongSize;
@@ -259,9 +261,10 @@ Reject checkPlan(const contact_plan_t& m) {
 }
 
 Reject checkCommand(const command_t& m) {
-  for (double x : {m.vx, m.vy, m.yaw_rate, m.body_height})
+  for (double x :
+       {m.vx, m.vy, m.yaw_rate, m.body_height, m.jump[0], m.jump[1], m.jump[2], m.jump[3]})
     if (!std::isfinite(x)) return Reject::NonFinite;
-  return m.utime >= 0 ? Reject::None : Reject::BadField;
+  return m.utime >= 0 && m.jump_id >= 0 ? Reject::None : Reject::BadField;
 }
 
 Reject checkTerrain(const terrain_t& m) {

@@ -80,9 +80,9 @@ Reject checkPlanWire(const void* buf, int size, int max_contacts, int max_phases
 // A command whose gait name has at most kMaxGaitName characters.
 constexpr int kMaxGaitName = 31;
 Reject checkCommandWire(const void* buf, int size);
-// A status whose two strings (wrong_model_cause, gait) have lengths inside the buffer, each
-// NUL-terminated, and the exact size they imply. It has no counts: this is all that keeps lcm-gen's
-// decoder from reading past the buffer.
+// A status whose three strings (wrong_model_cause, gait, jump_refusal) have lengths inside the
+// buffer, each NUL-terminated, and the exact size they imply. It has no counts: this is all that
+// keeps lcm-gen's decoder from reading past the buffer.
 Reject checkStatusWire(const void* buf, int size);
 // An elevation map: terrain_t's type fingerprint (a map is 40 kB of floats: another type's bytes
 // must not pass for one), rows and cols >= 1 with rows * cols <= max_cells (compared without

@@ -38,7 +38,7 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 command_t command(std::int64_t utime, double vx, double vy = 0.0, double yaw_rate = 0.0,
                   const std::string& gait = "trot", double height = 0.0) {
-  command_t m;
+  command_t m{};
   m.utime = utime;
   m.vx = vx;
   m.vy = vy;
@@ -79,7 +79,7 @@ TEST(CommandFilter, NeedsStandFirst) {
 TEST(CommandFilter, ClampsEachFieldCountingEachMessageOnce) {
   CommandFilter f(filterConfig(), kGaits);
   struct Case {
-    command_t m;
+    command_t m{};
     BodyCommand expected;
     int clamped;  // the counter after it
   };

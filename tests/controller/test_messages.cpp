@@ -591,7 +591,7 @@ TEST(NodeSigned, RefusesWhatIsNotSignedWithItsKey) {
 
   // Commands: unsigned, another key's, forged and replayed ones change nothing; a signed one is
   // taken.
-  command_t c;
+  command_t c{};
   c.utime = 7000;
   c.gait = "trot";
   c.vx = 0.3;

@@ -152,6 +152,24 @@ class Corpus {
     add(Channel::MpcCommand, "stand", encode(command(2006000, "stand", 0.0)));
     add(Channel::MpcCommand, "trot", encode(command(2007000, "trot", 0.5)));
     add(Channel::MpcCommand, "unknown_gait", encode(command(2008000, "gallop", 0.5)));
+    // Jumps (issue 45): one the robot makes, one beyond its reach, a NaN target, a negative id.
+    command_t jump = command(2009000, "stand", 0.0);
+    jump.jump_id = 1;
+    jump.jump[0] = 0.25;
+    jump.jump[3] = 0.5;
+    add(Channel::MpcCommand, "jump", encode(jump));
+    jump.utime = 2010000;
+    jump.jump_id = 2;
+    jump.jump[0] = 8.0;
+    add(Channel::MpcCommand, "jump_beyond_reach", encode(jump));
+    jump.utime = 2011000;
+    jump.jump_id = 3;
+    jump.jump[2] = kNaN;
+    add(Channel::MpcCommand, "jump_nan", encode(jump));
+    jump.utime = 2012000;
+    jump.jump_id = -4;
+    jump.jump[2] = 0.0;
+    add(Channel::MpcCommand, "jump_id_negative", encode(jump));
 
     // A policy of another controller on stride-mpc's policy channel.
     add(Channel::MpcPolicy, "rival", encode(policy(1000000, 2, 7)));
@@ -307,7 +325,7 @@ class Corpus {
   }
 
   static command_t command(std::int64_t utime, const std::string& gait, double vx) {
-    command_t m;
+    command_t m{};
     m.utime = utime;
     m.vx = vx;
     m.vy = 0.0;

@@ -53,7 +53,7 @@ double wallSeconds() {
 class Robot {
  public:
   void onCommand(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    stride::command_t m;
+    stride::command_t m{};
     const int size = static_cast<int>(rbuf->data_size);
     if (stride::msg::checkCommandWire(rbuf->data, size) != stride::msg::Reject::None ||
         m.decode(rbuf->data, 0, size) < 0 ||
@@ -126,7 +126,7 @@ int run(double duration, double rate, double speed, std::int64_t utime0) {
 
 struct LoggedCommand {
   std::int64_t utime;
-  stride::command_t m;
+  stride::command_t m{};
 };
 
 std::vector<LoggedCommand> readCommands(const std::string& path, std::set<std::int64_t>* states) {

@@ -74,7 +74,7 @@ std::string writeSession(const std::string& name, Robot robot) {
     s.ncontacts = 0;
     write(log, "STRIDE_STATE", s, utime);
     if (i % 5 == 0 && i < 900) {
-      stride::command_t c;
+      stride::command_t c{};
       c.utime = utime;
       c.vx = segment == 0 ? 0.0 : 0.5;
       c.vy = 0.0;

@@ -91,8 +91,8 @@ TEST(Feed, MalformedMessagesOnEveryChannelAreCountedAndDropped) {
   mpc_status_t st{};
   st.gait = "trot";
   std::vector<unsigned char> status = encode(st);
-  // gait: length, "trot\0", then 4 int64, an int8, a double and 2 int64 (the terrain fields)
-  poke32(status, status.size() - 57 - 5 - 4, 1000);
+  // jump_refusal: length, "\0", then 2 int64, an int8, a double and 2 int64 (the terrain fields)
+  poke32(status, status.size() - 41 - 1 - 4, 1000);
   take(feed, ch.status, status);
   st.utime = -1;
   take(feed, ch.status, encode(st));
@@ -394,9 +394,9 @@ TEST(Feed, AStateIsEstimatedWithThePolicyTheRobotApplied) {
   EXPECT_NE(real_time["forces"], forcesWith(c, 3000));
 }
 
-// mpc_status_t has no counts but two strings; lcm-gen's decoder reads 2^31 - 1 characters past the
-// buffer for a length of -2^31 (found by the fuzzer, tests/fuzz): the lengths are checked on the
-// bytes first (msg::checkStatusWire), whichever string and whatever the length.
+// mpc_status_t has no counts but three strings; lcm-gen's decoder reads 2^31 - 1 characters past
+// the buffer for a length of -2^31 (found by the fuzzer, tests/fuzz): the lengths are checked on
+// the bytes first (msg::checkStatusWire), whichever string and whatever the length.
 TEST(Feed, StatusStringLengthsAreCheckedOnTheBytes) {
   Feed feed(Channels{}, quadSource());
   const std::string& ch = Channels{}.status;
@@ -404,12 +404,15 @@ TEST(Feed, StatusStringLengthsAreCheckedOnTheBytes) {
   st.utime = 1000;
   st.wrong_model_cause = "cause";
   st.gait = "trot";
+  st.jump_refusal = "why";
   const std::vector<unsigned char> good = encode(st);
-  // wrong_model_cause's length field after 166 bytes of fixed fields (type hash included), gait's
-  // before its 5 bytes and the 57 bytes of fixed fields after it.
-  const std::size_t cause_at = 166, gait_at = good.size() - 57 - 5 - 4;
+  // wrong_model_cause's length field after 166 bytes of fixed fields (type hash included);
+  // jump_refusal's before its 4 bytes and the 41 bytes of fixed fields after it; gait's before its
+  // 5 bytes and the 37 fixed ones before jump_refusal's length.
+  const std::size_t cause_at = 166, refusal_at = good.size() - 41 - 4 - 4,
+                    gait_at = refusal_at - 37 - 5 - 4;
   long refused = 0;
-  for (const std::size_t at : {cause_at, gait_at}) {
+  for (const std::size_t at : {cause_at, gait_at, refusal_at}) {
     for (const std::int32_t len : {std::numeric_limits<std::int32_t>::min(), -1, 0, 1000,
                                    std::numeric_limits<std::int32_t>::max()}) {
       std::vector<unsigned char> bad = good;

@@ -135,7 +135,7 @@ Trace run() {
   msg::shape(state, model.nq, model.nv, kFeet);
   state.model_hash = modelHash(robot);
   Data data(model);
-  command_t command;
+  command_t command{};
   while (sim.time() < kDuration - 1e-9) {
     // One controller period, as tools/drive/closed_loop.cpp runs it: state, command, tick.
     node.publishState();

@@ -99,7 +99,7 @@ struct ClosedLoop {
   }
 
   ControllerConfig config;
-  command_t command;
+  command_t command{};
   lcm::LCM lcm;
   LcmPublisher publisher;
   MpcNode mpc;

@@ -99,7 +99,7 @@ Run run(const ControllerConfig& config, const Options& options) {
   if (!options.log.empty()) recorder = std::make_unique<Recorder>(lcm, options.log, &clock);
 
   Run r;
-  command_t command;
+  command_t command{};
   const bool loses = options.controller_lost_at >= 0.0;
   bool lost = false;
   // The last controller's figures, kept when it dies (the run reports the one alive at the end).
@@ -147,19 +147,14 @@ Run run(const ControllerConfig& config, const Options& options) {
     if (!options.script.empty() && t + 1e-9 < options.commands_until) {
       // The sim's time is a sum of steps (3.9999999999997 for 4): an entry at 4 s applies at 4 s.
       const ScriptedCommand& c = options.script[commandAt(options.script, t + 1e-9)];
-      command.utime = sim->utime();
-      command.vx = c.vx;
-      command.vy = c.vy;
-      command.yaw_rate = c.yaw_rate;
-      command.gait = c.gait;
-      command.body_height = c.body_height;
+      command = toCommand(c, sim->utime());
       const int size = command.getEncodedSize();
       command_bytes.resize(static_cast<std::size_t>(size) + msg::kSignatureSize);
       command.encode(command_bytes.data(), 0, size);
       const int n = teleop.send(config.command_channel.c_str(), command_bytes.data(), size,
                                 static_cast<int>(command_bytes.size()));
       lcm.publish(config.command_channel, command_bytes.data(), static_cast<unsigned>(n));
-      r.commands.push_back({t, c.vx, c.vy, c.yaw_rate, c.gait, c.body_height});
+      r.commands.push_back({t, c.vx, c.vy, c.yaw_rate, c.gait, c.body_height, c.jump_id});
     }
     if (options.on_bus) options.on_bus(lcm, t);
     drain(lcm);
@@ -182,6 +177,7 @@ Run run(const ControllerConfig& config, const Options& options) {
     if (mpc) {
       for (double k : mpc->mpc().policy().K[0]) k_max = std::max(k_max, std::abs(k));
       status = mpc->mpc().status();
+      logs::noteJump(r.jumps, status.jump_id, status.jump_state, status.jump_refusal, t);
     }
     Sample s{t,
              sim->simulator().q(),
@@ -262,6 +258,27 @@ std::vector<logs::BaseSample> Run::baseSamples() const {
 
 std::vector<logs::Segment> Run::segments(const logs::SegmentOptions& options) const {
   return logs::segmentCommands(commands, baseSamples(), options);
+}
+
+Run::Motion Run::motion(double t0, double t1) const {
+  auto at = [&](double t) {
+    return std::find_if(samples.begin(), samples.end(),
+                        [t](const Sample& s) { return s.t >= t - 1e-9; });
+  };
+  const auto a = at(t0), b = at(t1);
+  Motion m;
+  if (a == samples.end() || b == samples.end() || a->q.size() < 7) return m;
+  auto yawOf = [](const Eigen::VectorXd& q) {
+    return std::atan2(2.0 * (q[6] * q[5] + q[3] * q[4]), 1.0 - 2.0 * (q[4] * q[4] + q[5] * q[5]));
+  };
+  const double yaw0 = yawOf(a->q), c = std::cos(yaw0), s = std::sin(yaw0);
+  const double wx = b->q[0] - a->q[0], wy = b->q[1] - a->q[1];
+  m.valid = true;
+  m.dx = c * wx + s * wy;
+  m.dy = -s * wx + c * wy;
+  m.dz = b->q[2] - a->q[2];
+  m.yaw = std::remainder(yawOf(b->q) - yaw0, 2.0 * M_PI);
+  return m;
 }
 
 }  // namespace stride::drive

@@ -81,6 +81,7 @@ struct Run {
   std::vector<logs::CommandSample> commands;  // as sent (t: sim time)
   sim::SimNodeStats sim;
   MpcCounters mpc;
+  std::vector<logs::JumpOutcome> jumps;  // what the controller's statuses said of each jump
   CommandCounters command_counters;
   std::int64_t rejected = 0;
   std::int64_t rival_policies = 0;  // seen by the controller on its policy channel
@@ -112,6 +113,13 @@ struct Run {
   std::vector<logs::BaseSample> baseSamples() const;
   // One segment per run of identical commands (logs::segmentCommands).
   std::vector<logs::Segment> segments(const logs::SegmentOptions& options = {}) const;
+  // The base's motion from t0 to t1 (the samples at or just after each), in the heading frame it
+  // had at t0: how far a jump went, and how much it turned. Not valid without samples there.
+  struct Motion {
+    bool valid = false;
+    double dx = 0.0, dy = 0.0, dz = 0.0, yaw = 0.0;  // [m, m, m, rad]
+  };
+  Motion motion(double t0, double t1) const;
 };
 
 // Drives the robot of `config` (its robot YAML, at its default posture) for options.duration.

@@ -296,6 +296,23 @@ int main(int argc, char** argv) {
       else
         std::printf("%23s%s\n", "-", s.fell ? "  fell" : "");
     }
+    for (const stride::logs::JumpOutcome& j : run.jumps) {
+      std::printf("  jump #%d (asked at %.2f s): %s", j.id, j.t, stride::logs::describe(j).c_str());
+      // Where it went: from the base at the ask to the base at the end of its landing, in the
+      // heading it had at the ask, against the script's target.
+      const auto target =
+          std::find_if(options.script.begin(), options.script.end(),
+                       [&](const stride::ScriptedCommand& c) { return c.jump_id == j.id; });
+      const stride::drive::Run::Motion m = run.motion(j.t, j.t_landed + config.jump.landing);
+      if (j.t_landed >= 0.0 && m.valid && target != options.script.end())
+        std::printf(
+            "; moved %+.3f %+.3f m, %+.3f m up, turned %+.1f deg (target %+.3f %+.3f m, "
+            "%+.3f m, %+.1f deg): %.3f m from it",
+            m.dx, m.dy, m.dz, m.yaw * 180.0 / M_PI, target->jump.dx, target->jump.dy,
+            target->jump.dz, target->jump.yaw * 180.0 / M_PI,
+            std::hypot(m.dx - target->jump.dx, m.dy - target->jump.dy));
+      std::printf("\n");
+    }
     for (const stride::logs::TrackingMiss& m : misses) {
       if (m.kind == stride::logs::TrackingMiss::Kind::Component)
         std::printf("  segment %d: %s %.3f, commanded %.3f (tolerance %.3f)\n", m.segment,

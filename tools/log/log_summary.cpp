@@ -81,8 +81,9 @@ void printSegments(const std::vector<stride::logs::Segment>& segments, double se
     if (s.samples > 0)
       std::snprintf(achieved, sizeof achieved, "%+6.2f %+6.2f %+6.2f", s.achieved[0], s.achieved[1],
                     s.achieved[2]);
-    std::printf("  %2zu %7.2f %7.2f  %-6s      %+6.2f %+6.2f %+6.2f       %s  %7d%s\n", k, s.t0,
+    std::printf("  %2zu %7.2f %7.2f  %-6s      %+6.2f %+6.2f %+6.2f       %s  %7d%s%s\n", k, s.t0,
                 s.t1, s.gait.c_str(), s.command[0], s.command[1], s.command[2], achieved, s.samples,
+                s.jump_id > 0 ? ("  jump #" + std::to_string(s.jump_id)).c_str() : "",
                 s.fell ? "  FELL" : "");
   }
 }
@@ -341,6 +342,8 @@ int main(int argc, char** argv) {
     tracked = !fell;
   } else {
     printSegments(segments, segment_options.settle);
+    for (const stride::logs::JumpOutcome& j : s.jumps)
+      std::printf("jump #%d: %s\n", j.id, stride::logs::describe(j).c_str());
     tracked = reportTracking(segments, misses, tolerance);
     // A fall outside every segment (before the first command) fails the check too.
     if (fell && tracked) {

@@ -26,7 +26,7 @@ std::array<double, 3> apply(const Mat3& r, double a, double b, double c) {
 
 bool sameCommand(const CommandSample& a, const CommandSample& b) {
   return a.vx == b.vx && a.vy == b.vy && a.yaw_rate == b.yaw_rate && a.gait == b.gait &&
-         a.body_height == b.body_height;
+         a.body_height == b.body_height && a.jump_id == b.jump_id;
 }
 
 }  // namespace
@@ -68,6 +68,7 @@ std::vector<Segment> segmentCommands(const std::vector<CommandSample>& commands,
     s.command = {c.vx, c.vy, c.yaw_rate};
     s.gait = c.gait;
     s.body_height = c.body_height;
+    s.jump_id = c.jump_id;
     s.commands = 1;
     segments.push_back(s);
   }
@@ -110,7 +111,7 @@ std::vector<TrackingMiss> checkTracking(const std::vector<Segment>& segments,
       m.kind = TrackingMiss::Kind::Fell;
       misses.push_back(m);
     }
-    if (s.t1 - s.t0 < tolerance.min_duration) continue;
+    if (s.t1 - s.t0 < tolerance.min_duration || s.jump_id > 0) continue;
     if (s.samples == 0) {
       m.kind = TrackingMiss::Kind::NoSamples;
       misses.push_back(m);
@@ -196,6 +197,31 @@ Recovery recovery(const std::vector<Segment>& segments, const std::vector<BaseSa
     }
   }
   return r;
+}
+
+void noteJump(std::vector<JumpOutcome>& jumps, int id, int state, const std::string& refusal,
+              double t) {
+  if (id <= 0) return;
+  if (jumps.empty() || jumps.back().id != id) jumps.push_back({id, state, refusal, t, -1.0});
+  JumpOutcome& j = jumps.back();
+  j.state = state;
+  j.refusal = refusal;
+  if (state == 3 && j.t_landed < 0.0) j.t_landed = t;
+}
+
+std::string describe(const JumpOutcome& jump) {
+  switch (jump.state) {
+    case 1:
+      return "accepted, not made yet";
+    case 2:
+      return "in the air";
+    case 3:
+      return "landed";
+    case 4:
+      return "refused: " + jump.refusal;
+    default:
+      return "?";
+  }
 }
 
 }  // namespace stride::logs

@@ -34,6 +34,7 @@ struct CommandSample {
   double vx = 0.0, vy = 0.0, yaw_rate = 0.0;  // heading frame [m/s, m/s, rad/s]
   std::string gait;
   double body_height = 0.0;
+  int jump_id = 0;  // command_t.jump_id: a jump asked for (0: none)
 };
 
 // [vx, vy, yaw_rate] of the base in its heading frame: the world linear velocity turned back by
@@ -57,6 +58,7 @@ struct Segment {
   std::array<double, 3> command{};  // vx, vy, yaw_rate
   std::string gait;
   double body_height = 0.0;
+  int jump_id = 0;                   // a jump's segment (its command's jump_id; 0: none)
   int commands = 0;                  // command messages in the run
   int samples = 0;                   // states averaged into `achieved`
   std::array<double, 3> achieved{};  // mean heading-frame velocity (meaningful when samples > 0)
@@ -77,7 +79,8 @@ std::vector<Segment> segmentCommands(const std::vector<CommandSample>& commands,
 
 // Tracking check: a segment of at least min_duration misses a component when |achieved - command|
 // exceeds max(relative × |command|, the component's absolute floor); a fall fails its segment, and
-// so does a long segment without any state to measure.
+// so does a long segment without any state to measure. A jump's segment is not a velocity's: only
+// a fall fails it (what became of the jump is the controller's status, mpc_status_t).
 struct TrackingTolerance {
   double relative = 0.15;
   double linear = 0.05;       // [m/s], vx and vy
@@ -98,6 +101,21 @@ std::vector<TrackingMiss> checkTracking(const std::vector<Segment>& segments,
 
 // "vx", "vy", "yaw_rate".
 const char* componentName(int component);
+
+// What became of each jump asked for, as the controller's statuses said (mpc_status_t jump_id,
+// jump_state, jump_refusal): the last word on each id.
+struct JumpOutcome {
+  int id = 0;
+  int state = 0;  // mpc_status_t.jump_state: 1 accepted, 2 in the air, 3 landed, 4 refused
+  std::string refusal;
+  double t = 0.0;          // [s] the first status that named it
+  double t_landed = -1.0;  // [s] the first that said it landed (< 0: none)
+};
+// Records one status's jump fields (id 0: none).
+void noteJump(std::vector<JumpOutcome>& jumps, int id, int state, const std::string& refusal,
+              double t);
+// "landed", "refused: <why>", "in the air", "accepted" (and "?" for anything else).
+std::string describe(const JumpOutcome& jump);
 
 // Recovery after a fault that ended at fault_end [s] (issue 33): surviving is not recovering. Did
 // control come back? Every checked segment (at least tolerance.min_duration long) that starts

@@ -82,7 +82,7 @@ class StateReader {
 // A command from the log, accepted as the controller would accept it: sizes on the wire, then the
 // decoded content, then a stamp newer than the last accepted one. Rejects are counted, not fatal.
 void readCommand(const lcm::LogEvent& e, std::vector<std::int64_t>& utimes, Session& s) {
-  command_t m;
+  command_t m{};
   const int size = payloadSize(e);
   if (msg::checkCommandWire(e.data, size) != msg::Reject::None || m.decode(e.data, 0, size) < 0 ||
       msg::checkCommand(m) != msg::Reject::None || (!utimes.empty() && m.utime <= utimes.back())) {
@@ -96,6 +96,7 @@ void readCommand(const lcm::LogEvent& e, std::vector<std::int64_t>& utimes, Sess
   c.yaw_rate = m.yaw_rate;
   c.gait = m.gait;
   c.body_height = m.body_height;
+  c.jump_id = m.jump_id;
   s.commands.push_back(c);
 }
 
@@ -243,6 +244,7 @@ bool readSession(const std::string& path, const SessionChannels& channels, doubl
         }
       }
       s.last_status = st;
+      noteJump(s.jumps, st.jump_id, st.jump_state, st.jump_refusal, st.utime * 1e-6);
       if (st.policy_status >= 0) {
         if (policy_seen) {
           s.latency_ms.push_back(st.tick_ms);

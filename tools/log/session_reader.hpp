@@ -75,6 +75,7 @@ struct Session {
   Refusals refused_statuses;
   // Commands accepted as the controller accepts them, t on the first state's clock.
   std::vector<CommandSample> commands;
+  std::vector<JumpOutcome> jumps;  // each jump asked for, as the statuses tell it
   long command_rejects = 0;
   // Signed messages stamped further from the logger's clock than the receivers' freshness window
   // (msg::kFreshnessWindowMicros): a recording replayed on the bus, or a host whose clock is off.

@@ -138,6 +138,11 @@ KeyboardCommand::Event KeyboardCommand::key(char c) {
     case 'f':
     case 'F':
       return change(command_.body_height, -l.step_height, l.max_height);
+    case 'j':
+    case 'J':  // a discrete command: a new id is a new jump (the controller makes each id once)
+      ++command_.jump_id;
+      command_.jump = l.jump;
+      return Event::Changed;
     case ' ': {
       const TeleopCommand before = command_;
       stop();
@@ -152,10 +157,13 @@ KeyboardCommand::Event KeyboardCommand::key(char c) {
 }
 
 std::string statusLine(const TeleopCommand& c, long sent) {
-  char line[160];
-  std::snprintf(line, sizeof line,
-                "%-5s vx %+.2f m/s  vy %+.2f m/s  yaw %+.2f rad/s  height %+.2f m  [sent %ld]",
-                c.gait.c_str(), c.vx, c.vy, c.yaw_rate, c.body_height, sent);
+  char line[200];
+  const int n =
+      std::snprintf(line, sizeof line,
+                    "%-5s vx %+.2f m/s  vy %+.2f m/s  yaw %+.2f rad/s  height %+.2f m  [sent %ld]",
+                    c.gait.c_str(), c.vx, c.vy, c.yaw_rate, c.body_height, sent);
+  if (c.jump_id > 0 && n > 0 && n < static_cast<int>(sizeof line))
+    std::snprintf(line + n, sizeof line - n, "  jump #%d", c.jump_id);
   return line;
 }
 

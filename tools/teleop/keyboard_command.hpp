@@ -6,6 +6,7 @@
 //   W / Up, S / Down      vx ± step_vx          A / D            vy ± step_vy (left positive)
 //   Q / Left, E / Right   yaw_rate ± step_yaw   R / F            body height ± step_height
 //   space                 stop: zero velocity, gait stand (the body height stays)
+//   J                     jump: a new jump_id with the limits' jump target (sent until the next)
 //   1 .. 7                gait: stand trot walk pace pronk bound flying_trot (quadruped);
 //                         1 2 3: stand walk hop (biped)
 //   x, Ctrl-C             quit (the command becomes the stop command)
@@ -16,17 +17,22 @@
 #include <string>
 #include <vector>
 
+#include "locomotion/jump.hpp"
+
 namespace stride::teleop {
 
 struct TeleopCommand {
   double vx = 0.0, vy = 0.0, yaw_rate = 0.0;  // heading frame [m/s, m/s, rad/s]
   std::string gait = "stand";
   double body_height = 0.0;  // offset from the nominal posture [m]
+  int jump_id = 0;           // the last jump asked for (J), 0: none
+  JumpTarget jump;           // its target
 };
 
 struct KeyboardLimits {
   double step_vx = 0.1, step_vy = 0.05, step_yaw = 0.2, step_height = 0.01;
   double max_vx = 1.0, max_vy = 0.5, max_yaw_rate = 1.5, max_height = 0.1;
+  JumpTarget jump{0.2, 0.0, 0.0, 0.0};  // the J key's jump (stride-teleop --jump)
 };
 
 enum class GaitSet { Quadruped, Biped };

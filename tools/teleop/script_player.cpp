@@ -47,12 +47,7 @@ ScriptPlayer::Step ScriptPlayer::onState(std::int64_t utime) {
   step.entry = i;
   step.entry_started = i != last_entry_;
   last_entry_ = i;
-  step.command.utime = utime;
-  step.command.vx = c.vx;
-  step.command.vy = c.vy;
-  step.command.yaw_rate = c.yaw_rate;
-  step.command.gait = c.gait;
-  step.command.body_height = c.body_height;
+  step.command = toCommand(c, utime);
   ++published_;
   return step;
 }

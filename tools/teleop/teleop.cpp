@@ -87,13 +87,18 @@ class CommandSender {
 };
 
 stride::command_t toMessage(const stride::teleop::TeleopCommand& c, std::int64_t utime) {
-  stride::command_t m;
+  stride::command_t m{};
   m.utime = utime;
   m.vx = c.vx;
   m.vy = c.vy;
   m.yaw_rate = c.yaw_rate;
   m.gait = c.gait;
   m.body_height = c.body_height;
+  m.jump_id = c.jump_id;
+  m.jump[0] = c.jump.dx;
+  m.jump[1] = c.jump.dy;
+  m.jump[2] = c.jump.dz;
+  m.jump[3] = c.jump.yaw;
   return m;
 }
 
@@ -111,9 +116,10 @@ int runKeyboard(lcm::LCM& lcm, const std::string& channel, stride::msg::WireAuth
       "stride-teleop: publishing on '%s' at %.0f Hz\n"
       "  W/S or Up/Down: vx +-%.2f   A/D: vy +-%.2f   Q/E or Left/Right: yaw +-%.2f   "
       "R/F: height +-%.3f\n"
-      "  space: stop   gaits: %s   x or Ctrl-C: quit (sends a stand)\n",
+      "  space: stop   gaits: %s   J: jump (dx %.2f, dy %.2f, dz %.2f m, yaw %.2f rad)   x or "
+      "Ctrl-C: quit (sends a stand)\n",
       channel.c_str(), rate_hz, limits.step_vx, limits.step_vy, limits.step_yaw, limits.step_height,
-      gait_keys.c_str());
+      gait_keys.c_str(), limits.jump.dx, limits.jump.dy, limits.jump.dz, limits.jump.yaw);
   std::fflush(stdout);
 
   const auto period_us = static_cast<std::int64_t>(1e6 / rate_hz);
@@ -337,6 +343,11 @@ int main(int argc, char** argv) {
   app.add_option("--max-height", limits.max_height, "|body height offset| limit [m]")
       ->check(limit)
       ->capture_default_str();
+  std::vector<double> jump = {limits.jump.dx, limits.jump.dy, limits.jump.dz, limits.jump.yaw};
+  app.add_option("--jump", jump,
+                 "the J key's jump: DX DY DZ YAW (landing forward, left, higher [m], turn [rad])")
+      ->expected(4)
+      ->capture_default_str();
   app.add_option(
       "--commands", commands,
       "play this command script (controller/command_script.hpp) instead of the keyboard");
@@ -357,6 +368,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   if (const int status = stride::parseCommandLine(app, argc, argv); status >= 0) return status;
   script_options.rate_hz = rate_hz;
+  limits.jump = {jump[0], jump[1], jump[2], jump[3]};
   const GaitSet gaits = gaits_name == "biped" ? GaitSet::Biped : GaitSet::Quadruped;
 
   // LCM must never fall back to multicast on the host network by accident: the URL is explicit.

@@ -47,7 +47,7 @@ struct Feed::Messages {
   enum class PlanFrom : std::uint8_t { None, Horizon, Policy } plan = PlanFrom::None;
   mpc_status_t status, status_in;
   bool status_pending = false;
-  command_t command, command_in;
+  command_t command{}, command_in{};
   bool have_command = false;
   terrain_t terrain, terrain_in;
   bool terrain_pending = false;
