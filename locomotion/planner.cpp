@@ -155,6 +155,8 @@ bool Planner::requestJump(int id, const JumpTarget& target, double t) {
   const double at = gen_->timeline().switchTo(jump_pattern_[k], t);
   if (at == ContactTimeline::kNever) return refuse("the gait in force cannot be left for it");
   jump_active_ = true;
+  jump_active_id_ = id;
+  jump_phase_ = JumpState::Accepted;
   jump_lift_off_ = at + jl.push;
   jump_touch_down_ = jump_lift_off_ + plan.flight;
   jump_end_ = jump_touch_down_ + jl.landing;
@@ -169,13 +171,16 @@ MapChoice Planner::beginTick(double t, std::int64_t utime, std::optional<unsigne
   // A jump under way: in the air from its take-off, landed at its touch-down, over at its end
   // (the gait asked for comes back then).
   if (jump_active_) {
-    if (t >= jump_lift_off_ && jump_status_.state == JumpState::Accepted)
-      jump_status_.state = JumpState::InAir;
-    if (t >= jump_touch_down_ && jump_status_.state == JumpState::InAir) {
-      jump_status_.state = JumpState::Landed;
+    // (knot times carry rounding: kPlanTimeEpsilon, as the timeline's phase boundaries)
+    const double now = t + kPlanTimeEpsilon;
+    if (now >= jump_lift_off_ && jump_phase_ == JumpState::Accepted) jump_phase_ = JumpState::InAir;
+    if (now >= jump_touch_down_ && jump_phase_ == JumpState::InAir) {
+      jump_phase_ = JumpState::Landed;
       ++jump_status_.made;
     }
-    if (t >= jump_end_) {
+    // The status tells the last jump asked for: this one, unless another was refused since.
+    if (jump_status_.id == jump_active_id_) jump_status_.state = jump_phase_;
+    if (now >= jump_end_) {
       jump_active_ = false;
       gen_->clearJump();
     }

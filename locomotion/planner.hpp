@@ -208,6 +208,8 @@ class Planner {
   // way (its take-off, touch-down and end on the plan clock) and what became of the last one.
   std::vector<int> jump_pattern_;
   bool jump_active_ = false;
+  int jump_active_id_ = 0;
+  JumpState jump_phase_ = JumpState::None;  // of the jump under way
   double jump_lift_off_ = 0.0, jump_touch_down_ = 0.0, jump_end_ = 0.0;
   JumpStatus jump_status_;
 };

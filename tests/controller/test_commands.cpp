@@ -18,12 +18,14 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "controller/command.hpp"
+#include "controller/command_script.hpp"
 #include "controller/mpc_node.hpp"
 #include "controller_cases.hpp"
 #include "tools/drive/closed_loop.hpp"
@@ -304,6 +306,84 @@ TEST(CommandFilter, TimeNeverGoesBackwards) {
   EXPECT_NEAR(f.command().vx, 0.35, 1e-12);
 }
 
+// A jump is a discrete command (issue 45): taken once per id whatever the repeats, a new id (other
+// than the last message's) is a new jump, 0 is none; the velocity's limits do not touch it.
+TEST(CommandFilter, AJumpIsTakenOncePerId) {
+  CommandFilter f(filterConfig(), kGaits);
+  int id = 0;
+  JumpTarget target;
+  command_t m = command(1, 0.0, 0.0, 0.0, "stand");
+  ASSERT_TRUE(f.receive(m, 0.0));
+  EXPECT_FALSE(f.takeJump(id, target));
+  m.jump_id = 1;
+  m.jump[0] = 0.3;
+  m.jump[3] = 1.5;
+  for (int k = 0; k < 5; ++k) {  // a teleop repeats its command
+    m.utime = 2 + k;
+    ASSERT_TRUE(f.receive(m, 0.01 * (k + 1)));
+    EXPECT_EQ(f.takeJump(id, target), k == 0) << k;
+  }
+  EXPECT_EQ(id, 1);
+  EXPECT_EQ(target.dx, 0.3);
+  EXPECT_EQ(target.yaw, 1.5);
+  m.jump_id = 0;  // none; then the same id again: a restarted sender's first jump
+  ASSERT_TRUE(f.receive(m, 0.1));
+  EXPECT_FALSE(f.takeJump(id, target));
+  m.jump_id = 1;
+  m.jump[0] = 9.0;  // not clamped: the planner refuses it, with its reason
+  ASSERT_TRUE(f.receive(m, 0.11));
+  ASSERT_TRUE(f.takeJump(id, target));
+  EXPECT_EQ(target.dx, 9.0);
+  EXPECT_EQ(f.counters().clamped, 0);
+  m.jump_id = 2;
+  ASSERT_TRUE(f.receive(m, 0.12));
+  EXPECT_TRUE(f.takeJump(id, target));
+  EXPECT_EQ(id, 2);
+}
+
+// A script's jump is its entry's own (not carried to the next), with the entry's number + 1 as its
+// id; its keys are checked.
+TEST(CommandScript, AJumpIsItsEntrysOwn) {
+  const std::string path = ::testing::TempDir() + "/stride_jumps.yaml";
+  std::ofstream(path) << "- {at: 0.0, gait: stand}\n"
+                         "- {at: 1.0, jump: {dx: 0.3, dz: 0.1, yaw: 1.57}}\n"
+                         "- {at: 2.0, gait: trot, vx: 0.2}\n"
+                         "- {at: 3.0, jump: {}}\n";
+  const std::vector<ScriptedCommand> script = loadCommandScript(path);
+  ASSERT_EQ(script.size(), 4u);
+  EXPECT_EQ(script[0].jump_id, 0);
+  EXPECT_EQ(script[1].jump_id, 2);
+  EXPECT_EQ(script[1].jump.dx, 0.3);
+  EXPECT_EQ(script[1].jump.dy, 0.0);
+  EXPECT_EQ(script[1].jump.dz, 0.1);
+  EXPECT_EQ(script[1].jump.yaw, 1.57);
+  EXPECT_EQ(script[1].gait, "stand");  // the other fields carry on as always
+  EXPECT_EQ(script[2].jump_id, 0);     // not carried
+  EXPECT_EQ(script[2].jump.dx, 0.0);
+  EXPECT_EQ(script[3].jump_id, 4);  // a hop in place
+  EXPECT_EQ(script[3].vx, 0.2);
+  const command_t m = toCommand(script[1], 1234);
+  EXPECT_EQ(m.utime, 1234);
+  EXPECT_EQ(m.jump_id, 2);
+  EXPECT_EQ(m.jump[2], 0.1);
+  auto error = [&](const std::string& text) {
+    std::ofstream(path) << text;
+    try {
+      loadCommandScript(path);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_NE(error("- {at: 0.0, jump: {dx: 0.3, height: 0.1}}\n")
+                .find("entry 0: jump: unknown key 'height' (known: dx, dy, dz, yaw)"),
+            std::string::npos);
+  EXPECT_NE(error("- {at: 0.0, jump: 0.3}\n").find("jump must be a mapping {dx, dy, dz, yaw}"),
+            std::string::npos);
+  EXPECT_NE(error("- {at: 0.0, jump: {dx: .nan}}\n").find("jump.dx must be finite"),
+            std::string::npos);
+}
+
 // ============================================================================ MpcNode::onCommand
 
 std::vector<unsigned char> encode(const command_t& m) {
@@ -346,6 +426,64 @@ class NodeCommands : public ::testing::Test {
   robot_state_t state_;
   std::vector<unsigned char> state_bytes_;
 };
+
+// Jumps through the node (stride_quad, config/controller/stride_quad.yaml's jump limits): a NaN
+// target or a negative id is malformed; one beyond the robot's reach is refused with the reason in
+// the status; one it can make is accepted, then in the air, then landed; the ticks that take
+// them allocate nothing.
+TEST_F(NodeCommands, AJumpsOutcomeIsInTheStatus) {
+  const std::int64_t period = 5000;
+  std::int64_t utime = period, stamp = 0;
+  tick(utime);  // start-up
+  command_t m = command(++stamp, 0.0, 0.0, 0.0, "stand");
+  m.jump_id = 1;
+  m.jump[2] = kNaN;
+  feed(encode(m));
+  m.utime = ++stamp;
+  m.jump[2] = 0.0;
+  m.jump_id = -1;
+  feed(encode(m));
+  EXPECT_EQ(node_.commandsMalformed(), 2);
+  // Beyond the reach: refused at the next tick, the reason in the status.
+  m.utime = ++stamp;
+  m.jump_id = 1;
+  m.jump[0] = 0.5;
+  const std::vector<unsigned char> far = encode(m);
+  EXPECT_EQ(allocations([&] {
+              feed(far);
+              tick(utime += period);
+            }),
+            0);
+  EXPECT_EQ(status().jump_id, 1);
+  EXPECT_EQ(status().jump_state, 4);
+  EXPECT_EQ(status().jump_refusal,
+            "a jump of 0.50 m is beyond the robot's reach (jump.max_distance 0.30 m)");
+  EXPECT_EQ(status().jumps_refused, 1);
+  // 20 cm forward: accepted (from the stand at once), in the air after the 0.3 s push, landed.
+  m.jump_id = 2;
+  m.jump[0] = 0.2;
+  int8_t seen = 0;
+  for (int k = 0; k < 200; ++k) {
+    m.utime = ++stamp;
+    const std::vector<unsigned char> b = encode(m);
+    EXPECT_EQ(allocations([&] {
+                feed(b);
+                tick(utime += period);
+              }),
+              0)
+        << "tick " << k;
+    EXPECT_EQ(status().jump_id, 2);
+    EXPECT_GE(status().jump_state, seen) << "in order";
+    seen = status().jump_state;
+    if (k == 0) {
+      EXPECT_EQ(seen, 1);
+      EXPECT_EQ(status().jump_refusal, "");
+    }
+  }
+  EXPECT_EQ(seen, 3);
+  EXPECT_EQ(status().jumps_made, 1);
+  EXPECT_EQ(status().jumps_refused, 1);
+}
 
 TEST_F(NodeCommands, RefusedCommandsAreCountedAcceptedOnesReachTheStatus) {
   using msg::Reject;

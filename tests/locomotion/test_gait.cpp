@@ -1,14 +1,18 @@
 // The gaits as contact patterns (locomotion/gait.hpp): each gait's phases for a quadruped and a
-// biped (with flights too), the gaits refused for the contacts or the timing; a contact plan file
-// and its errors. What the controller makes of a plan file: tests/controller/test_mpc.cpp.
+// biped (with flights too); a jump's flight and its refusals (locomotion/jump.hpp); the gaits
+// refused for the contacts or the timing; a contact plan file and its errors. What the controller
+// makes of a plan file: tests/controller/test_mpc.cpp.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <string>
 #include <vector>
 
 #include "config/robot_config.hpp"
 #include "locomotion/gait.hpp"
+#include "locomotion/jump.hpp"
 
 namespace stride {
 namespace test_gait {
@@ -95,6 +99,78 @@ TEST(Gait, PlanFile) {
     EXPECT_NE(std::string(e.what()).find("phase 0"), std::string::npos) << e.what();
   }
   EXPECT_THROW(loadContactPlan("/nonexistent/plan.yaml"), ConfigError);
+}
+
+// A jump's flight (issue 45): the flight time that needs the least take-off speed, on the flight
+// step's grid, and a take-off velocity whose ballistic arc lands on the target.
+JumpLimits solo12Jumps() {  // config/controller/solo12.yaml's
+  JumpLimits j;
+  j.max_distance = 0.3;
+  j.max_rise = 0.12;
+  j.max_turn = 1.6;
+  j.max_speed = 2.0;
+  j.min_flight = 0.15;
+  j.max_flight = 0.35;
+  return j;
+}
+
+TEST(Jump, TheTakeOffVelocityLandsOnTheTarget) {
+  const double g = 9.81;
+  char why[192];
+  JumpPlan plan;
+  for (const JumpTarget& target :
+       {JumpTarget{0.3, 0.0, 0.0, 0.0}, JumpTarget{0.2, -0.1, 0.1, 1.5},
+        JumpTarget{0.0, 0.0, 0.0, 1.57}, JumpTarget{0.1, 0.0, -0.1, 0.0}}) {
+    ASSERT_TRUE(planJump(target, solo12Jumps(), plan, why, sizeof why)) << why;
+    EXPECT_STREQ(why, "");
+    const double T = plan.flight;
+    // The ballistic point: where the take-off velocity carries the base after T.
+    EXPECT_NEAR(plan.vx * T, target.dx, 1e-12);
+    EXPECT_NEAR(plan.vy * T, target.dy, 1e-12);
+    EXPECT_NEAR(plan.vz * T - 0.5 * g * T * T, target.dz, 1e-12);
+    EXPECT_NEAR(plan.speed, std::sqrt(plan.vx * plan.vx + plan.vy * plan.vy + plan.vz * plan.vz),
+                1e-12);
+    // On the grid, within the limits, and nearest the least-speed time T⁴ = 4 (d² + dz²) / g².
+    EXPECT_GE(T, 0.15 - 1e-12);
+    EXPECT_LE(T, 0.35 + 1e-12);
+    EXPECT_NEAR(std::remainder(T - 0.15, 0.01), 0.0, 1e-9);
+    const double d2 = target.dx * target.dx + target.dy * target.dy + target.dz * target.dz;
+    const double best = std::clamp(std::sqrt(2.0 * std::sqrt(d2) / g), 0.15, 0.35);
+    EXPECT_LE(std::abs(T - best), 0.005 + 1e-9);
+  }
+  // 30 cm forward: 0.25 s in the air, 1.2 m/s forward and 1.23 m/s up.
+  ASSERT_TRUE(planJump({0.3, 0.0, 0.0, 0.0}, solo12Jumps(), plan, why, sizeof why));
+  EXPECT_NEAR(plan.flight, 0.25, 1e-12);
+  EXPECT_NEAR(plan.vx, 1.2, 1e-12);
+  EXPECT_NEAR(plan.vz, 0.5 * g * 0.25, 1e-12);
+}
+
+TEST(Jump, ARefusalSaysWhichLimitAndItsValue) {
+  char why[192];
+  JumpPlan plan;
+  auto refused = [&](const JumpTarget& target, const JumpLimits& limits) {
+    EXPECT_FALSE(planJump(target, limits, plan, why, sizeof why));
+    return std::string(why);
+  };
+  EXPECT_EQ(refused({0.1, 0.0, 0.0, 0.0}, JumpLimits{}),
+            "this robot does not jump (no jump: section in its controller YAML)");
+  EXPECT_EQ(refused({0.4, 0.0, 0.0, 0.0}, solo12Jumps()),
+            "a jump of 0.40 m is beyond the robot's reach (jump.max_distance 0.30 m)");
+  EXPECT_EQ(refused({0.1, 0.0, 0.2, 0.0}, solo12Jumps()),
+            "a landing 0.20 m higher is beyond the robot's rise (jump.max_rise 0.12 m)");
+  EXPECT_EQ(refused({0.0, 0.0, 0.0, -2.0}, solo12Jumps()),
+            "a turn of -2.00 rad in the air is beyond the robot's (jump.max_turn 1.60 rad)");
+  JumpLimits weak = solo12Jumps();
+  weak.max_speed = 1.0;
+  EXPECT_EQ(refused({0.3, 0.0, 0.0, 0.0}, weak),
+            "the jump needs a take-off speed of 1.72 m/s, more than the robot's legs give "
+            "(jump.max_speed 1.00 m/s)");
+  EXPECT_EQ(refused({std::nan(""), 0.0, 0.0, 0.0}, solo12Jumps()),
+            "the jump's target is not finite");
+  // A buffer too short is cut, still terminated.
+  char shortbuf[8];
+  EXPECT_FALSE(planJump({0.4, 0.0, 0.0, 0.0}, solo12Jumps(), plan, shortbuf, sizeof shortbuf));
+  EXPECT_EQ(std::string(shortbuf), "a jump ");
 }
 
 }  // namespace test_gait

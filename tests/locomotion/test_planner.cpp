@@ -1,5 +1,6 @@
 // The planner the controller drives every tick (locomotion/planner.hpp): gait switches wait for
-// every foot to be down, a map too old is not planned on, maps come in stamp order, and a knot
+// every foot to be down, a jump is made (push, flight, landing, the gait again) or refused with
+// its reason, a map too old is not planned on, maps come in stamp order, and a knot
 // that lifts a foot the warm start had down is re-seeded with the torques that hold its posture.
 // stride_quad (config/robots), the gaits' default timing: trot = all feet 0.1 s, FL-HR swing
 // 0.2 s, all feet 0.1 s, FR-HL swing 0.2 s.
@@ -24,8 +25,16 @@ struct Quad {
   PlannerOptions options;
   std::unique_ptr<Planner> planner;
   Eigen::VectorXd x;  // the default posture at rest
-  explicit Quad(double max_map_age = 0.5) {
+  explicit Quad(double max_map_age = 0.5, bool jumps = false) {
     options.locomotion.knots = 40;  // 0.4 s of 10 ms
+    if (jumps) {                    // config/controller/stride_quad.yaml's limits
+      options.jump.max_distance = 0.3;
+      options.jump.max_rise = 0.12;
+      options.jump.max_turn = 1.6;
+      options.jump.max_speed = 2.0;
+      options.jump.min_flight = 0.15;
+      options.jump.max_flight = 0.35;
+    }
     options.terrain.max_map_age = max_map_age;
     options.terrain.max_cells = 100;
     planner = std::make_unique<Planner>(robot, options, "test");
@@ -173,6 +182,68 @@ TEST(Planner, TouchDownsAfterTheStateByContactThenTime) {
   int n = 0;
   p.touchDowns(0.0, 2.0, 4, 8, [&](int, const GaitGenerator::Stance&) { return ++n < 3; });
   EXPECT_EQ(n, 3);
+}
+
+// A jump (issue 45): asked at 1.0 s while trotting, it starts at the trot's next all-feet phase
+// with a 0.3 s push, flies 0.25 s (30 cm forward: jump.hpp), lands for 0.4 s, and the trot comes
+// back; its states in order, the velocity command held meanwhile; a second one asked in the air
+// is refused, as are jumps beyond the limits, with their reasons.
+TEST(Planner, AJumpIsMadeOnceThenTheGaitComesBack) {
+  Quad q(0.5, true);
+  Planner& p = *q.planner;
+  JumpTarget forward{0.3, 0.0, 0.0, 0.0};
+  EXPECT_FALSE(p.requestJump(1, forward, 0.0));  // before the first state: nothing to plan on
+  EXPECT_EQ(p.jumpStatus().state, JumpState::Refused);
+  EXPECT_STREQ(p.jumpStatus().refusal, "the controller has no state yet");
+  p.build(0);
+  BodyCommand walk;
+  walk.vx = 0.3;
+  p.setCommand(walk, q.gait("trot"));
+  p.beginTick(0.0, 0, std::nullopt);
+  ASSERT_EQ(p.gaitAt(0.0), "trot");
+  // At 1.0 s the trot (0.6 s cycle) is in its FL-HR swing (0.1-0.3 of the cycle, from 0.6 s): its
+  // next all-feet phase starts at 1.2 s.
+  ASSERT_TRUE(p.requestJump(2, forward, 1.0));
+  EXPECT_EQ(p.jumpStatus().id, 2);
+  EXPECT_EQ(p.jumpStatus().state, JumpState::Accepted);
+  EXPECT_STREQ(p.jumpStatus().refusal, "");
+  const double push = 1.2, lift_off = push + 0.3, touch_down = lift_off + 0.25;
+  const double end = touch_down + 0.4;
+  p.beginTick(1.0, 1000000, std::nullopt);
+  EXPECT_EQ(p.gaitAt(1.1), "trot");
+  EXPECT_EQ(p.gaitAt(push + 0.01), "jump");
+  EXPECT_EQ(p.mask(push + 0.01), kAllFeet);
+  EXPECT_EQ(p.mask(lift_off + 0.01), 0u);  // in the air
+  EXPECT_EQ(p.mask(touch_down - 0.01), 0u);
+  EXPECT_EQ(p.mask(touch_down + 0.01), kAllFeet);
+  EXPECT_EQ(p.mask(end - 0.01), kAllFeet);
+  EXPECT_TRUE(p.generator().jumping());
+  EXPECT_EQ(p.generator().command().vx, 0.0);  // the velocity waits for the jump
+  // In the air: a second jump is refused, the first goes on.
+  p.beginTick(lift_off + 0.1, 1600000, std::nullopt);
+  EXPECT_EQ(p.jumpStatus().state, JumpState::InAir);
+  EXPECT_FALSE(p.requestJump(3, forward, lift_off + 0.1));
+  EXPECT_STREQ(p.jumpStatus().refusal, "another jump is under way");
+  EXPECT_EQ(p.jumpStatus().refused, 2);
+  EXPECT_EQ(p.mask(touch_down + 0.01), kAllFeet);  // (the first's landing stays planned)
+  p.beginTick(touch_down + 0.01, 1760000, std::nullopt);
+  EXPECT_EQ(p.jumpStatus().id, 3);  // the status tells the last one asked for
+  EXPECT_EQ(p.jumpStatus().state, JumpState::Refused);
+  EXPECT_EQ(p.jumpStatus().made, 1);  // and counts the first's landing
+  // Its end: the trot again, and the velocity.
+  p.beginTick(end, static_cast<std::int64_t>(end * 1e6), std::nullopt);
+  EXPECT_FALSE(p.generator().jumping());
+  EXPECT_EQ(p.generator().command().vx, 0.3);
+  EXPECT_EQ(p.gaitAt(end + 0.01), "trot");
+  EXPECT_NE(p.mask(end + 0.15), kAllFeet);  // stepping
+  // Beyond the limits: refused, nothing changes.
+  EXPECT_FALSE(p.requestJump(4, {0.5, 0.0, 0.0, 0.0}, end + 0.1));
+  EXPECT_STREQ(p.jumpStatus().refusal,
+               "a jump of 0.50 m is beyond the robot's reach (jump.max_distance 0.30 m)");
+  EXPECT_EQ(p.jumpStatus().id, 4);
+  EXPECT_EQ(p.jumpStatus().made, 1);
+  EXPECT_EQ(p.jumpStatus().refused, 3);
+  EXPECT_EQ(p.gaitAt(end + 0.5), "trot");
 }
 
 }  // namespace test_planner
