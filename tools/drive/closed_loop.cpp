@@ -260,25 +260,4 @@ std::vector<logs::Segment> Run::segments(const logs::SegmentOptions& options) co
   return logs::segmentCommands(commands, baseSamples(), options);
 }
 
-Run::Motion Run::motion(double t0, double t1) const {
-  auto at = [&](double t) {
-    return std::find_if(samples.begin(), samples.end(),
-                        [t](const Sample& s) { return s.t >= t - 1e-9; });
-  };
-  const auto a = at(t0), b = at(t1);
-  Motion m;
-  if (a == samples.end() || b == samples.end() || a->q.size() < 7) return m;
-  auto yawOf = [](const Eigen::VectorXd& q) {
-    return std::atan2(2.0 * (q[6] * q[5] + q[3] * q[4]), 1.0 - 2.0 * (q[4] * q[4] + q[5] * q[5]));
-  };
-  const double yaw0 = yawOf(a->q), c = std::cos(yaw0), s = std::sin(yaw0);
-  const double wx = b->q[0] - a->q[0], wy = b->q[1] - a->q[1];
-  m.valid = true;
-  m.dx = c * wx + s * wy;
-  m.dy = -s * wx + c * wy;
-  m.dz = b->q[2] - a->q[2];
-  m.yaw = std::remainder(yawOf(b->q) - yaw0, 2.0 * M_PI);
-  return m;
-}
-
 }  // namespace stride::drive

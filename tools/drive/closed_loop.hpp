@@ -113,13 +113,9 @@ struct Run {
   std::vector<logs::BaseSample> baseSamples() const;
   // One segment per run of identical commands (logs::segmentCommands).
   std::vector<logs::Segment> segments(const logs::SegmentOptions& options = {}) const;
-  // The base's motion from t0 to t1 (the samples at or just after each), in the heading frame it
-  // had at t0: how far a jump went, and how much it turned. Not valid without samples there.
-  struct Motion {
-    bool valid = false;
-    double dx = 0.0, dy = 0.0, dz = 0.0, yaw = 0.0;  // [m, m, m, rad]
-  };
-  Motion motion(double t0, double t1) const;
+  // The base's motion from t0 to t1 (logs::motion): how far a jump went, how much it turned.
+  using Motion = logs::Motion;
+  Motion motion(double t0, double t1) const { return logs::motion(baseSamples(), t0, t1); }
 };
 
 // Drives the robot of `config` (its robot YAML, at its default posture) for options.duration.

@@ -342,8 +342,20 @@ int main(int argc, char** argv) {
     tracked = !fell;
   } else {
     printSegments(segments, segment_options.settle);
-    for (const stride::logs::JumpOutcome& j : s.jumps)
-      std::printf("jump #%d: %s\n", j.id, stride::logs::describe(j).c_str());
+    // Each jump's segment: what the controller said of it, and where the base went in it.
+    for (const stride::logs::JumpOutcome& j : s.jumps) {
+      std::printf("jump #%d: %s", j.id, stride::logs::describe(j).c_str());
+      for (const stride::logs::Segment& seg : segments)
+        if (seg.jump_id == j.id) {
+          const stride::logs::Motion m = stride::logs::motion(s.base_samples, seg.t0, seg.t1);
+          if (m.valid)
+            std::printf(
+                "; in its segment (%.2f .. %.2f s) the base moved %+.3f %+.3f m, %+.3f m "
+                "up, turned %+.1f deg",
+                seg.t0, seg.t1, m.dx, m.dy, m.dz, m.yaw * 180.0 / M_PI);
+        }
+      std::printf("\n");
+    }
     tracked = reportTracking(segments, misses, tolerance);
     // A fall outside every segment (before the first command) fails the check too.
     if (fell && tracked) {

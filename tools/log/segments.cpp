@@ -199,6 +199,24 @@ Recovery recovery(const std::vector<Segment>& segments, const std::vector<BaseSa
   return r;
 }
 
+Motion motion(const std::vector<BaseSample>& states, double t0, double t1) {
+  auto at = [&](double t) {
+    return std::find_if(states.begin(), states.end(),
+                        [t](const BaseSample& s) { return s.t >= t - 1e-9; });
+  };
+  const auto a = at(t0), b = at(t1);
+  Motion m;
+  if (a == states.end() || b == states.end()) return m;
+  const double yaw0 = yaw(a->q), c = std::cos(yaw0), s = std::sin(yaw0);
+  const double wx = b->q[0] - a->q[0], wy = b->q[1] - a->q[1];
+  m.valid = true;
+  m.dx = c * wx + s * wy;
+  m.dy = -s * wx + c * wy;
+  m.dz = b->q[2] - a->q[2];
+  m.yaw = std::remainder(yaw(b->q) - yaw0, 2.0 * M_PI);
+  return m;
+}
+
 void noteJump(std::vector<JumpOutcome>& jumps, int id, int state, const std::string& refusal,
               double t) {
   if (id <= 0) return;

@@ -111,6 +111,15 @@ struct JumpOutcome {
   double t = 0.0;          // [s] the first status that named it
   double t_landed = -1.0;  // [s] the first that said it landed (< 0: none)
 };
+// The base's motion from t0 to t1 (the states at or just after each, in time order), in the
+// heading frame it had at t0: how far a jump went and how much it turned. Not valid without states
+// there.
+struct Motion {
+  bool valid = false;
+  double dx = 0.0, dy = 0.0, dz = 0.0, yaw = 0.0;  // [m, m, m, rad]
+};
+Motion motion(const std::vector<BaseSample>& states, double t0, double t1);
+
 // Records one status's jump fields (id 0: none).
 void noteJump(std::vector<JumpOutcome>& jumps, int id, int state, const std::string& refusal,
               double t);

@@ -29,6 +29,7 @@
 #include "messages/validate.hpp"
 #include "messages/wire_auth.hpp"
 #include "solver/contact/contact_set.hpp"
+#include "stride/mpc_status_t.hpp"
 #include "tools/teleop/keyboard_command.hpp"
 #include "tools/teleop/raw_terminal.hpp"
 #include "tools/teleop/script_player.hpp"
@@ -102,12 +103,50 @@ stride::command_t toMessage(const stride::teleop::TeleopCommand& c, std::int64_t
   return m;
 }
 
+// ---- what became of the jumps ------------------------------------------------------------------
+
+// The controller's statuses (mpc_status_t, on the status channel; with a key, signed with it): each
+// jump asked for is said when refused (with the controller's reason) and when landed, on a line of
+// its own (issue 45: a jump the robot cannot make is refused before take-off, and the operator is
+// told why).
+class JumpWatcher {
+ public:
+  explicit JumpWatcher(stride::msg::WireAuth& auth) : auth_(auth) {}
+  void handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const int size =
+        auth_.receive(kSlot, channel.c_str(), static_cast<const std::uint8_t*>(rbuf->data),
+                      static_cast<int>(rbuf->data_size), rbuf->recv_utime);
+    if (size < 0 || stride::msg::checkStatusWire(rbuf->data, size) != stride::msg::Reject::None ||
+        status_.decode(rbuf->data, 0, size) < 0)
+      return;
+    auth_.accept(kSlot);
+    if (status_.jump_id <= 0 || (status_.jump_id == id_ && status_.jump_state == state_)) return;
+    id_ = status_.jump_id;
+    state_ = status_.jump_state;
+    if (state_ == 4)
+      std::printf("\nstride-teleop: jump #%d refused: %s\n", id_, status_.jump_refusal.c_str());
+    else if (state_ == 3)
+      std::printf("\nstride-teleop: jump #%d landed\n", id_);
+    std::fflush(stdout);
+  }
+
+ private:
+  static constexpr int kSlot = 1;  // the state channel's is 0 (ScriptInput)
+  stride::msg::WireAuth& auth_;
+  stride::mpc_status_t status_{};
+  int id_ = 0;
+  std::int8_t state_ = 0;
+};
+
 // ---- keyboard -----------------------------------------------------------------------------------
 
-int runKeyboard(lcm::LCM& lcm, const std::string& channel, stride::msg::WireAuth& auth,
-                GaitSet gaits, const stride::teleop::KeyboardLimits& limits, double rate_hz) {
+int runKeyboard(lcm::LCM& lcm, const std::string& channel, const std::string& status_channel,
+                stride::msg::WireAuth& auth, GaitSet gaits,
+                const stride::teleop::KeyboardLimits& limits, double rate_hz) {
   stride::teleop::KeyboardCommand keys(gaits, limits);
   CommandSender sender(lcm, channel, auth);
+  JumpWatcher jumps(auth);
+  lcm.subscribe(status_channel, &JumpWatcher::handle, &jumps);
   std::string gait_keys;
   const auto& names = stride::teleop::gaitNames(gaits);
   for (std::size_t i = 0; i < names.size(); ++i)
@@ -143,9 +182,11 @@ int runKeyboard(lcm::LCM& lcm, const std::string& channel, stride::msg::WireAuth
         // burst.
         next = std::max(next + period_us, now);
       }
-      pollfd in{STDIN_FILENO, POLLIN, 0};
+      pollfd in[2] = {{STDIN_FILENO, POLLIN, 0}, {lcm.getFileno(), POLLIN, 0}};
       const auto wait_ms = static_cast<int>((next - monotonicMicros() + 999) / 1000);
-      if (poll(&in, 1, std::max(wait_ms, 0)) <= 0) continue;  // timeout or a signal
+      if (poll(in, 2, std::max(wait_ms, 0)) <= 0) continue;  // timeout or a signal
+      if (in[1].revents & POLLIN) lcm.handleTimeout(0);      // the controller's statuses
+      if (!(in[0].revents & POLLIN)) continue;
       char bytes[64];
       const ssize_t n = read(STDIN_FILENO, bytes, sizeof bytes);
       if (n == 0 || (n < 0 && errno != EINTR && errno != EAGAIN)) break;  // the terminal closed
@@ -257,11 +298,13 @@ class ScriptInput {
 };
 
 int runScript(lcm::LCM& lcm, const std::string& channel, const std::string& state_channel,
-              stride::msg::WireAuth& auth, const std::string& path,
-              std::vector<stride::ScriptedCommand> script,
+              const std::string& status_channel, stride::msg::WireAuth& auth,
+              const std::string& path, std::vector<stride::ScriptedCommand> script,
               const stride::teleop::ScriptPlayerOptions& options) {
   stride::teleop::ScriptPlayer player(std::move(script), options);
   CommandSender sender(lcm, channel, auth);
+  JumpWatcher jumps(auth);
+  lcm.subscribe(status_channel, &JumpWatcher::handle, &jumps);
   ScriptInput input(player, sender, auth,
                     options.duration > 0.0 ? "SIGINT/SIGTERM or --duration" : "SIGINT/SIGTERM");
   lcm::Subscription* sub = lcm.subscribe(state_channel, &ScriptInput::handle, &input);
@@ -305,7 +348,7 @@ int main(int argc, char** argv) {
       "script played on the robot's clock"};
   stride::commandLineConventions(app, "stride-teleop");
   std::string key_file, url, channel = "STRIDE_COMMAND", state_channel = "STRIDE_STATE",
-                             gaits_name = "quadruped", commands;
+                             status_channel = "STRIDE_STATUS", gaits_name = "quadruped", commands;
   stride::teleop::KeyboardLimits limits;
   stride::teleop::ScriptPlayerOptions script_options;
   double rate_hz = 20.0;
@@ -357,6 +400,9 @@ int main(int argc, char** argv) {
                  "unauthenticated");
   app.add_option("--state-channel", state_channel, "script: the robot's clock comes from here")
       ->capture_default_str();
+  app.add_option("--status-channel", status_channel,
+                 "the controller's statuses: what became of each jump (refused, and why; landed)")
+      ->capture_default_str();
   app.add_option("--hold", script_options.hold,
                  "script: the last entry lasts this long [s], then the script is done (and the "
                  "last entry repeats)")
@@ -403,9 +449,9 @@ int main(int argc, char** argv) {
     stride::msg::WireAuth auth =
         key ? stride::msg::WireAuth(*key, "stride-teleop") : stride::msg::WireAuth();
     if (!commands.empty())
-      return runScript(lcm, channel, state_channel, auth, commands, std::move(script),
-                       script_options);
-    return runKeyboard(lcm, channel, auth, gaits, limits, rate_hz);
+      return runScript(lcm, channel, state_channel, status_channel, auth, commands,
+                       std::move(script), script_options);
+    return runKeyboard(lcm, channel, status_channel, auth, gaits, limits, rate_hz);
   } catch (const std::exception& e) {  // unwinding restores the terminal
     std::fprintf(stderr, "\nstride-teleop: %s\n", e.what());
     return 1;
