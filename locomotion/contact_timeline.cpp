@@ -40,6 +40,7 @@ bool ContactTimeline::standing(int id) const {
 void ContactTimeline::reset(int id, double t) {
   segments_[0].begin = t;
   segments_[0].pattern = id;
+  segments_[0].retime = false;
   std::fill(segments_[0].join, segments_[0].join + kMaxContacts, t);
   n_ = 1;
 }
@@ -154,6 +155,7 @@ double ContactTimeline::switchTo(int id, double t) {
   Segment& added = segments_[n_++];
   added.begin = at;
   added.pattern = id;
+  added.retime = false;
   for (int c = 0; c < nc_; ++c) {
     added.join[c] = join[c];
     // A contact that had not joined an earlier segment by now never will.
@@ -182,16 +184,42 @@ double ContactTimeline::nextChange(int contact, double t) const {
 }
 
 double ContactTimeline::lastChange(int contact, double t) const {
-  const int s = segmentAt(contact, t);
-  const Segment& seg = segments_[s];
-  const ContactSchedule& sched = patterns_[seg.pattern];
-  const double joined = s == 0 ? seg.begin : seg.join[contact];
-  const long g = sched.phaseAt(t - seg.begin);
-  const bool state = sched.closed(contact, g);
-  for (long k = g; k > 0 && g - k < sched.phases(); --k)
-    if (sched.closed(contact, k - 1) != state)
-      return std::max(seg.begin + sched.phaseStart(k), joined);
-  return joined;
+  for (int guard = 0; guard < kMaxSegments; ++guard) {
+    const int s = segmentAt(contact, t);
+    const Segment& seg = segments_[s];
+    const ContactSchedule& sched = patterns_[seg.pattern];
+    const double joined = s == 0 ? seg.begin : seg.join[contact];
+    const long g = sched.phaseAt(t - seg.begin);
+    const bool state = sched.closed(contact, g);
+    for (long k = g; k > 0 && g - k < sched.phases(); --k)
+      if (sched.closed(contact, k - 1) != state) {
+        if (seg.begin + sched.phaseStart(k) > joined) return seg.begin + sched.phaseStart(k);
+        break;
+      }
+    // A retime changes no contact where its state goes on: look back across it.
+    if (!seg.retime || s == 0) return joined;
+    const double before = joined - kPlanTimeEpsilon;
+    if (closedIn(segmentAt(contact, before), contact, before) != state) return joined;
+    t = before;
+  }
+  return t;
+}
+
+bool ContactTimeline::retimeFrom(double t, double shift) {
+  const int last = n_ - 1;
+  if (segments_[last].begin > t + kPlanTimeEpsilon) return false;  // a switch pending
+  for (int c = 0; c < nc_; ++c)
+    if (segmentAt(c, t) != last) return false;  // a foot still finishing a step of the one before
+  if (n_ == kMaxSegments) {
+    for (int i = 1; i < n_; ++i) segments_[i - 1] = segments_[i];
+    --n_;
+  }
+  Segment moved = segments_[n_ - 1];
+  moved.begin += shift;
+  moved.retime = true;
+  for (int c = 0; c < nc_; ++c) moved.join[c] = t;
+  segments_[n_++] = moved;
+  return true;
 }
 
 void ContactTimeline::forget(double t) {

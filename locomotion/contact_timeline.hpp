@@ -24,7 +24,7 @@ namespace stride {
 
 class ContactTimeline {
  public:
-  static constexpr int kMaxSegments = 8;
+  static constexpr int kMaxSegments = 16;
   static constexpr double kNever = std::numeric_limits<double>::infinity();
 
   explicit ContactTimeline(const ContactSet& contacts);
@@ -65,6 +65,12 @@ class ContactTimeline {
   // segment it plays at t (which is returned when the contact has not changed since).
   double lastChange(int contact, double t) const;
 
+  // From t on, the pattern in force plays `shift` seconds later (earlier when negative), every
+  // contact at once: a touch-down measured before or after the clock had it (Planner,
+  // "landing as it happens"). False, and nothing changes, while a switch is pending or a contact
+  // still plays an earlier pattern at t. A contact's last change looks back across it.
+  bool retimeFrom(double t, double shift);
+
   // Forgets segments that ended before t (the controller's clock only moves forward).
   void forget(double t);
 
@@ -75,6 +81,7 @@ class ContactTimeline {
     // When each contact starts playing it (>= begin); kNever: a later segment took the contact
     // before it joined this one, so it never plays it.
     double join[kMaxContacts] = {};
+    bool retime = false;  // made by retimeFrom: the same pattern, moved in time
   };
   int segmentAt(double t) const;  // the segment whose clock has started by t (the first one before)
   int segmentAt(int contact, double t) const;  // the segment contact plays at t

@@ -527,13 +527,25 @@ bool GaitGenerator::plan(double t, const Eigen::Ref<const Eigen::VectorXd>& x, d
 
 void GaitGenerator::planFlights(double t_from, double t_end) {
   // The flights that ended within a landing's braking and return before t_from stay (the landing
-  // in progress needs its speed); those still ahead are found again (a gait switch may have moved
-  // them).
+  // in progress needs its speed), and so does one in the air at t_from, with its touch-down as the
+  // timeline has it now (the planner moves it to the measured one: Planner, "landing as it
+  // happens"); those still ahead are found again (a gait switch may have moved them).
+  const bool in_air = timeline_.mask(t_from) == 0u;
   int kept = 0;
-  for (int k = 0; k < n_flights_; ++k)
-    if (flights_[k].touch_down <= t_from + kPlanTimeEpsilon &&
-        flights_[k].touch_down > t_from - 2.0 * kPushTime)
-      flights_[kept++] = flights_[k];
+  for (int k = 0; k < n_flights_; ++k) {
+    Flight f = flights_[k];
+    if (f.lift_off >= t_from) continue;
+    if (f.touch_down > t_from + kPlanTimeEpsilon) {  // in the air at the last plan
+      f.touch_down = ContactTimeline::kNever;
+      for (int c = 0; c < nc_; ++c)
+        f.touch_down =
+            std::min(f.touch_down, in_air                        ? timeline_.nextChange(c, t_from)
+                                   : timeline_.closed(c, t_from) ? timeline_.lastChange(c, t_from)
+                                                                 : ContactTimeline::kNever);
+      if (f.touch_down == ContactTimeline::kNever) continue;
+    }
+    if (f.touch_down > t_from - 2.0 * kPushTime) flights_[kept++] = f;
+  }
   n_flights_ = kept;
   // A flight starts when the last foot lifts: at some foot's lift-off (or before t_from, when the
   // robot is in the air there), and ends at the first touch-down after it.
@@ -552,7 +564,10 @@ void GaitGenerator::planFlights(double t_from, double t_end) {
     for (; k > 0 && flights_[k - 1].lift_off > lift_off; --k) flights_[k] = flights_[k - 1];
     flights_[k] = {lift_off, touch_down, rise};
   };
-  if (timeline_.mask(t_from) == 0u) {
+  bool known = false;  // the flight in progress, from the last plan
+  for (int k = 0; k < n_flights_; ++k)
+    known = known || (flights_[k].lift_off < t_from && flights_[k].touch_down > t_from);
+  if (in_air && !known) {
     double lift_off = -ContactTimeline::kNever;
     for (int c = 0; c < nc_; ++c) lift_off = std::max(lift_off, timeline_.lastChange(c, t_from));
     add(lift_off);

@@ -20,6 +20,12 @@ constexpr double kContactDamping = 50.0;
 // The planned centre of pressure stays in this fraction of the sole: at the edge, the slightest
 // disturbance tips the foot.
 constexpr double kSoleMargin = 0.8;
+// Landing as it happens (Planner::landOnMeasuredContacts): a foot loaded after this share of a
+// flight has landed; a flight the clock ends with no foot loaded goes on by kLateStep at a time,
+// at most kMaxLate in all [s].
+constexpr double kEarlyShare = 0.5;
+constexpr double kLateStep = 0.02;
+constexpr double kMaxLate = 0.15;
 // A map this much older than the one in use is a restarted robot's clock, not one out of order.
 constexpr std::int64_t kMapClockRestartUs = 1000000;
 
@@ -156,6 +162,7 @@ bool Planner::requestJump(int id, const JumpTarget& target, double t) {
   if (at == ContactTimeline::kNever) return refuse("the gait in force cannot be left for it");
   jump_active_ = true;
   jump_active_id_ = id;
+  jump_target_ = target;
   jump_phase_ = JumpState::Accepted;
   jump_lift_off_ = at + jl.push;
   jump_touch_down_ = jump_lift_off_ + plan.flight;
@@ -164,6 +171,46 @@ bool Planner::requestJump(int id, const JumpTarget& target, double t) {
   s.state = JumpState::Accepted;
   s.refusal[0] = '\0';
   return true;
+}
+
+void Planner::landOnMeasuredContacts(double t, unsigned loaded) {
+  ContactTimeline& tl = gen_->timeline();
+  const int nc = tl.contacts();
+  double shift = 0.0;
+  if (loaded != 0u) late_since_ = -1.0;  // a foot down: a late flight has landed
+  if (tl.mask(t) == 0u) {                // in the air by the clock
+    if (loaded == 0u) return;
+    double lift_off = -ContactTimeline::kNever, touch_down = ContactTimeline::kNever;
+    for (int c = 0; c < nc; ++c) {
+      lift_off = std::max(lift_off, tl.lastChange(c, t));
+      touch_down = std::min(touch_down, tl.nextChange(c, t));
+    }
+    // A foot loaded in the second half: landed (a take-off's push still loads them early on).
+    if (touch_down == ContactTimeline::kNever ||
+        t - lift_off < kEarlyShare * (touch_down - lift_off))
+      return;
+    shift = t - touch_down;
+    if (!tl.retimeFrom(t, shift)) return;
+    ++early_landings_;
+  } else {  // on the ground by the clock
+    if (loaded != 0u) return;
+    // Just after a flight the clock ended (its first touch-down), no foot feels the ground yet.
+    double touch_down = ContactTimeline::kNever;
+    for (int c = 0; c < nc; ++c)
+      if (tl.closed(c, t)) touch_down = std::min(touch_down, tl.lastChange(c, t));
+    if (!(t - touch_down <= kLateStep) || tl.mask(touch_down - kLateStep) != 0u) return;
+    if (late_since_ < 0.0) late_since_ = touch_down;
+    if (t + kLateStep - late_since_ > kMaxLate) return;  // then the clock's: it lands where it is
+    shift = t + kLateStep - touch_down;
+    if (!tl.retimeFrom(t, shift)) return;
+    if (late_since_ == touch_down) ++late_landings_;
+  }
+  // A jump's touch-down and end move with it.
+  if (jump_active_ && t > jump_lift_off_ && t < jump_end_) {
+    jump_touch_down_ += shift;
+    jump_end_ += shift;
+    gen_->setJump(jump_target_, jump_lift_off_, jump_touch_down_);
+  }
 }
 
 MapChoice Planner::beginTick(double t, std::int64_t utime, std::optional<unsigned> loaded) {
@@ -185,6 +232,7 @@ MapChoice Planner::beginTick(double t, std::int64_t utime, std::optional<unsigne
       gen_->clearJump();
     }
   }
+  if (loaded) landOnMeasuredContacts(t, *loaded);
   // The gait asked for: switched to foot by foot (ContactTimeline), after the jump under way.
   if (!have_plan_ && !jump_active_ && timeline.lastPattern() != gait_pattern_[gait_])
     timeline.switchTo(gait_pattern_[gait_], t);

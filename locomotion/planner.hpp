@@ -118,6 +118,10 @@ class Planner {
   // again. The velocity command waits meanwhile. Allocation-free.
   bool requestJump(int id, const JumpTarget& target, double t);
   const JumpStatus& jumpStatus() const { return jump_status_; }
+  // Flights whose touch-down the measured contacts moved (landing as it happens, beginTick):
+  // landed before the clock had it, and after (the flight held a step at a time).
+  std::int64_t earlyLandings() const { return early_landings_; }
+  std::int64_t lateLandings() const { return late_landings_; }
 
   // ---- Build (allocates: the first state, or the first after setPlan) ----
   // Before the first build, and after a new plan.
@@ -134,7 +138,10 @@ class Planner {
   double planTime(std::int64_t utime) const { return (utime - plan_start_utime_) * 1e-6; }
   // A new state at plan time t (stamp utime): the gait asked for is scheduled (at the timeline's
   // next instant every foot is down), the command taken, the map chosen (fresh at utime, else
-  // blind), and the estimator's loaded contacts (bit c: contact c; none: not reported).
+  // blind), and the estimator's loaded contacts (bit c: contact c; none: not reported). With them
+  // a flight lands as it happens: a foot loaded in the second half of a flight ends it now (the
+  // pattern goes on from its touch-down), and a flight the clock ends with no foot loaded goes on
+  // by 20 ms at a time, at most 0.15 s (ContactTimeline::retimeFrom).
   MapChoice beginTick(double t, std::int64_t utime, std::optional<unsigned> loaded);
   // Re-plans the references from the state x at plan time t for the horizon from t_warm (the warm
   // start's knot 0, on the knot grid), rewrites every knot for them, and carries the solver's
@@ -206,11 +213,16 @@ class Planner {
 
   // Jumps: a pattern per flight time (jump.min_flight, + jump.flight_step, ...), the jump under
   // way (its take-off, touch-down and end on the plan clock) and what became of the last one.
+  // Landing as it happens (beginTick): a flight's touch-down moved to the measured one.
+  void landOnMeasuredContacts(double t, unsigned loaded);
+  std::int64_t early_landings_ = 0, late_landings_ = 0;
+  double late_since_ = -1.0;  // the clock's touch-down of the flight held late (< 0: none)
   std::vector<int> jump_pattern_;
   bool jump_active_ = false;
   int jump_active_id_ = 0;
   JumpState jump_phase_ = JumpState::None;  // of the jump under way
   double jump_lift_off_ = 0.0, jump_touch_down_ = 0.0, jump_end_ = 0.0;
+  JumpTarget jump_target_;
   JumpStatus jump_status_;
 };
 

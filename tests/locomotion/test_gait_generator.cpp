@@ -367,10 +367,11 @@ TEST(ContactTimeline, ManySwitchesWithoutForget) {
     EXPECT_EQ(tl.lastPattern(), to);
     EXPECT_EQ(tl.patternAt(expected + 0.01), to);
   }
-  // The last: trot at 1 + 22, stand at 23.3.
-  EXPECT_FALSE(tl.closed(FL, 23.2));
-  EXPECT_TRUE(tl.closed(FL, 23.4));
-  EXPECT_NEAR(tl.nextChange(FL, 23.2), 23.3, kTime);
+  // The last two: a trot at 3K - 1, a stand from 3K - 0.7 (K segments kept).
+  const double trot_at = 3.0 * ContactTimeline::kMaxSegments - 1.0;
+  EXPECT_FALSE(tl.closed(FL, trot_at + 0.2));
+  EXPECT_TRUE(tl.closed(FL, trot_at + 0.4));
+  EXPECT_NEAR(tl.nextChange(FL, trot_at + 0.2), trot_at + 0.3, kTime);
 }
 
 // ============================================================================ GaitGenerator

@@ -246,5 +246,52 @@ TEST(Planner, AJumpIsMadeOnceThenTheGaitComesBack) {
   EXPECT_EQ(p.gaitAt(end + 0.5), "trot");
 }
 
+// Landing as it happens (issue 45): stride_quad pronks (the default timing: 0.1 s on every foot,
+// 0.15 s in the air). A foot loaded in the second half of a flight lands it then, and the pronk
+// goes on from that touch-down; a flight the clock ends while no foot is loaded goes on by 20 ms
+// at a time until a foot is, at most 0.15 s.
+TEST(Planner, AFlightLandsOnTheMeasuredContacts) {
+  Quad q;
+  Planner& p = *q.planner;
+  p.build(0);
+  p.setCommand(BodyCommand{}, q.gait("pronk"));
+  p.beginTick(0.0, 0, kAllFeet);
+  ASSERT_EQ(p.mask(0.05), kAllFeet);
+  ASSERT_EQ(p.mask(0.15), 0u);  // in the air from 0.1 to 0.25
+  // Early: loaded at 0.2, the flight's second half (0.175 on).
+  p.beginTick(0.16, 160000, kAllFeet);  // its first half: a push's load, not a landing
+  EXPECT_EQ(p.mask(0.2), 0u);
+  p.beginTick(0.2, 200000, kAllFeet);
+  EXPECT_EQ(p.earlyLandings(), 1);
+  EXPECT_EQ(p.mask(0.2 + 1e-6), kAllFeet);
+  EXPECT_EQ(p.mask(0.29), kAllFeet);  // 0.1 s down from the touch-down
+  EXPECT_EQ(p.mask(0.31), 0u);        // the next flight, 0.05 s earlier than the clock had it
+  EXPECT_NEAR(p.generator().timeline().lastChange(0, 0.25), 0.2, 1e-9);
+  EXPECT_NEAR(p.generator().timeline().lastChange(0, 0.35), 0.3, 1e-9);
+  // Late: the next flight ends at 0.45 by the clock; no foot loaded then, nor 20 ms later.
+  p.beginTick(0.35, 350000, 0u);
+  p.beginTick(0.45, 450000, 0u);
+  EXPECT_EQ(p.lateLandings(), 1);
+  EXPECT_EQ(p.mask(0.45 + 1e-6), 0u);  // still in the air
+  EXPECT_EQ(p.mask(0.47 + 1e-6), kAllFeet);
+  p.beginTick(0.47, 470000, 0u);
+  EXPECT_EQ(p.mask(0.47 + 1e-6), 0u);
+  p.beginTick(0.49, 490000, kAllFeet);  // down
+  EXPECT_EQ(p.mask(0.49 + 1e-6), kAllFeet);
+  EXPECT_EQ(p.mask(0.58), kAllFeet);
+  EXPECT_EQ(p.mask(0.6), 0u);      // the pronk goes on from that touch-down
+  EXPECT_EQ(p.lateLandings(), 1);  // one flight
+  // A flight that never meets the ground by the measure is held 0.15 s at most.
+  const double lift_off = 0.59, clock_touch_down = lift_off + 0.15;
+  double t = clock_touch_down;
+  for (int k = 0; k < 20; ++k, t += 0.01) p.beginTick(t, static_cast<std::int64_t>(t * 1e6), 0u);
+  EXPECT_EQ(p.lateLandings(), 2);
+  double landed = clock_touch_down;
+  while (p.mask(landed) == 0u) landed += 0.001;
+  EXPECT_GE(landed, clock_touch_down + 0.1);
+  EXPECT_LE(landed, clock_touch_down + 0.15 + 1e-3);
+  EXPECT_EQ(p.earlyLandings(), 1);
+}
+
 }  // namespace test_planner
 }  // namespace stride
