@@ -13,6 +13,10 @@
 // controller_tick/anymal_c_stairs: the same on the shipped stairs (config/terrain/
 // stairs_anymal_c.yaml) with the mock robot's maps, from 5.5 s of robot time (at the first stair)
 // over the 2 s of climbing that follow.
+// controller_tick/<robot>_jump/{push,flight,landing} (issue 45): the same, the robot standing and
+// jumping 20 cm forward every 1.5 s (the first at 1 s), each benchmark timing only the ticks of its
+// phase of the jump (mpc_status_t.jump_state: accepted and pushing, in the air, landed): the
+// period's work in every phase of a flight.
 // The public robots are read from the package view of ../shared (build/robot_packages); without
 // it they are skipped with a message.
 // controller_tick/config:NAME and tick_parts/config:NAME/*: the same on any configuration,
@@ -42,8 +46,11 @@ namespace {
 // at once, walking forward (the hard ticks are the stepping ones).
 struct ClosedLoop {
   // terrain: a name in config/terrain/ (the mock robot publishes its maps), or null: flat ground.
-  explicit ClosedLoop(const ControllerSource& source, const char* terrain = nullptr)
-      : config(loadController(source)),
+  // jumping: standing, a 20 cm jump every 1.5 s from 1 s on, instead of the gait.
+  explicit ClosedLoop(const ControllerSource& source, const char* terrain = nullptr,
+                      bool jumping = false)
+      : jumping(jumping),
+        config(loadController(source)),
         lcm("memq://"),
         publisher(lcm),
         mpc(config, publisher, TimeSource::Stamps),
@@ -76,8 +83,15 @@ struct ClosedLoop {
   bool period(double& tick_seconds, double& prepare_seconds, double& handle_seconds) {
     sim.publishState();
     command.utime = sim.utime();
-    command.gait = mpc.mpc().gaits().size() > 2 ? "trot" : "walk";
-    command.vx = sim.simulator().time() > 0.5 ? 0.3 : 0.0;
+    if (jumping) {
+      command.gait = "stand";
+      const double t = sim.simulator().time();
+      command.jump_id = t >= 1.0 ? 1 + static_cast<int>((t - 1.0) / 1.5) : 0;
+      command.jump[0] = 0.2;
+    } else {
+      command.gait = mpc.mpc().gaits().size() > 2 ? "trot" : "walk";
+      command.vx = sim.simulator().time() > 0.5 ? 0.3 : 0.0;
+    }
     lcm.publish(config.command_channel, &command);
     const auto t_in = std::chrono::steady_clock::now();
     while (lcm.handleTimeout(0) > 0) {
@@ -98,6 +112,7 @@ struct ClosedLoop {
     return period(a, b, c);
   }
 
+  bool jumping = false;
   ControllerConfig config;
   command_t command{};
   lcm::LCM lcm;
@@ -106,11 +121,13 @@ struct ClosedLoop {
   sim::SimNode sim;
 };
 
+// jump_phase: time only the ticks whose status says this jump_state (jumping: every 1.5 s), or
+// -1: every tick (walking).
 void controllerTick(benchmark::State& state, const ControllerSource& source, double warmup,
-                    const char* terrain) {
+                    const char* terrain, int jump_phase) {
   std::unique_ptr<ClosedLoop> made;
   try {
-    made = std::make_unique<ClosedLoop>(source, terrain);
+    made = std::make_unique<ClosedLoop>(source, terrain, jump_phase >= 0);
   } catch (const std::exception& e) {
     state.SkipWithError(e.what());  // a public robot whose description is not here
     return;
@@ -125,8 +142,12 @@ void controllerTick(benchmark::State& state, const ControllerSource& source, dou
   work.reserve(state.max_iterations);
   const Solver& solver = *loop.mpc.mpc().solver();
   for (auto _ : state) {
-    if (!loop.period(seconds, prepare, handle))
-      loop.reset();  // fell: start again, the timing is what matters
+    // (jumping: the periods of the other phases run, untimed)
+    for (int guard = 0; guard < 100000; ++guard) {
+      if (!loop.period(seconds, prepare, handle))
+        loop.reset();  // fell: start again, the timing is what matters
+      if (jump_phase < 0 || loop.mpc.mpc().status().jump_state == jump_phase) break;
+    }
     state.SetIterationTime(seconds);
     prepare_total += prepare;
     work.push_back(handle + seconds + prepare);
@@ -208,15 +229,25 @@ const bool registered = [] {
                                                  {"talos_reduced", 100}};
   for (const auto& [robot, ticks] : configs)
     benchmark::RegisterBenchmark((std::string("controller_tick/") + robot).c_str(), controllerTick,
-                                 shippedController(robot), 1.5, nullptr)
+                                 shippedController(robot), 1.5, nullptr, -1)
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond)
         ->Iterations(ticks);
   benchmark::RegisterBenchmark("controller_tick/anymal_c_stairs", controllerTick,
-                               shippedController("anymal_c"), 5.5, "stairs_anymal_c")
+                               shippedController("anymal_c"), 5.5, "stairs_anymal_c", -1)
       ->UseManualTime()
       ->Unit(benchmark::kMillisecond)
       ->Iterations(400);
+  // The robots that jump, per phase of their jumps (jump_state 1, 2, 3).
+  const std::pair<const char*, int> phases[] = {{"push", 1}, {"flight", 2}, {"landing", 3}};
+  for (const char* robot : {"stride_quad", "solo12", "anymal_c"})
+    for (const auto& [phase, state] : phases)
+      benchmark::RegisterBenchmark(
+          (std::string("controller_tick/") + robot + "_jump/" + phase).c_str(), controllerTick,
+          shippedController(robot), 0.5, nullptr, state)
+          ->UseManualTime()
+          ->Unit(benchmark::kMillisecond)
+          ->Iterations(200);
   return true;
 }();
 
@@ -229,7 +260,7 @@ void registerControllerBenchmarks(const ControllerSource& source, const std::str
   const auto ticks = std::max<benchmark::IterationCount>(
       1, static_cast<benchmark::IterationCount>(std::lround(2.0 * config.rate_hz)));
   benchmark::RegisterBenchmark(("controller_tick/" + name).c_str(), controllerTick, source, 1.5,
-                               nullptr)
+                               nullptr, -1)
       ->UseManualTime()
       ->Unit(benchmark::kMillisecond)
       ->Iterations(ticks);
