@@ -17,17 +17,14 @@
 #include <string>
 #include <vector>
 
+#include "controller/command_script.hpp"
 #include "locomotion/jump.hpp"
 
 namespace stride::teleop {
 
-struct TeleopCommand {
-  double vx = 0.0, vy = 0.0, yaw_rate = 0.0;  // heading frame [m/s, m/s, rad/s]
-  std::string gait = "stand";
-  double body_height = 0.0;  // offset from the nominal posture [m]
-  int jump_id = 0;           // the last jump asked for (J), 0: none
-  JumpTarget jump;           // its target
-};
+// What the keys ask for: a command script's entry without its time (its jump_id: the last jump
+// asked for with J, 0 none), sent as such (stride::toCommand).
+using TeleopCommand = ScriptedCommand;
 
 struct KeyboardLimits {
   double step_vx = 0.1, step_vy = 0.05, step_yaw = 0.2, step_height = 0.01;

@@ -87,22 +87,6 @@ class CommandSender {
   long sent_ = 0, failures_ = 0;
 };
 
-stride::command_t toMessage(const stride::teleop::TeleopCommand& c, std::int64_t utime) {
-  stride::command_t m{};
-  m.utime = utime;
-  m.vx = c.vx;
-  m.vy = c.vy;
-  m.yaw_rate = c.yaw_rate;
-  m.gait = c.gait;
-  m.body_height = c.body_height;
-  m.jump_id = c.jump_id;
-  m.jump[0] = c.jump.dx;
-  m.jump[1] = c.jump.dy;
-  m.jump[2] = c.jump.dz;
-  m.jump[3] = c.jump.yaw;
-  return m;
-}
-
 // ---- what became of the jumps ------------------------------------------------------------------
 
 // The controller's statuses (mpc_status_t, on the status channel; with a key, signed with it): each
@@ -167,7 +151,7 @@ int runKeyboard(lcm::LCM& lcm, const std::string& channel, const std::string& st
   // take the next one.
   const auto send = [&] {
     last_stamp = std::max(monotonicMicros(), last_stamp + 1);
-    sender.send(toMessage(keys.command(), last_stamp));
+    sender.send(stride::toCommand(keys.command(), last_stamp));
     std::printf("\r%s", stride::teleop::statusLine(keys.command(), sender.sent()).c_str());
     std::fflush(stdout);
   };
