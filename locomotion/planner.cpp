@@ -139,18 +139,15 @@ void Planner::build(std::int64_t utime) {
 bool Planner::requestJump(int id, const JumpTarget& target, double t) {
   JumpStatus& s = jump_status_;
   s.id = id;
+  // why: the reason, or null when planJump wrote it already.
   auto refuse = [&](const char* why) {
-    std::snprintf(s.refusal, sizeof s.refusal, "%s", why);
+    if (why) std::snprintf(s.refusal, sizeof s.refusal, "%s", why);
     s.state = JumpState::Refused;
     ++s.refused;
     return false;
   };
   JumpPlan plan;
-  if (!planJump(target, options_.jump, plan, s.refusal, sizeof s.refusal)) {
-    s.state = JumpState::Refused;
-    ++s.refused;
-    return false;
-  }
+  if (!planJump(target, options_.jump, plan, s.refusal, sizeof s.refusal)) return refuse(nullptr);
   if (!gen_) return refuse("the controller has no state yet");
   if (have_plan_) return refuse("a contact plan replaces the gaits");
   if (jump_active_) return refuse("another jump is under way");
